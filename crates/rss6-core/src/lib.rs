@@ -1,0 +1,39 @@
+#![doc = include_str!("../README.md")]
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+// Textbook names (j_ad, m_tilde, chi_d …) mirror the thesis's symbols.
+#![allow(non_snake_case)]
+
+#[cfg(feature = "std")]
+extern crate std;
+
+mod dynamics;
+mod error;
+mod fk;
+mod ik;
+mod jacobian;
+mod params;
+mod pose;
+mod regressor;
+mod types;
+mod workspace;
+
+pub use crate::error::{CoreError, Result, SingularKind};
+pub use crate::fk::{fk, fk_theta_newton, FkOptions, FkSolution};
+pub use crate::ik::{ik, ik_leg, ik_reading, platform_joints_in_base, wrap_angle, wrench_tips};
+pub use crate::jacobian::{
+    jacobian_a1, jacobian_a2, jacobian_ad, jacobian_stewart, jacobian_theta, LegGeometry,
+    TYPE_I_TOLERANCE,
+};
+pub use crate::params::{
+    home_pose, leg_side, Body, DynamicParams, KinematicParams, BASE_RADIUS, ETA_NOMINAL, HOME_Z,
+    N_DYN, N_KIN_ERRORS, PAIR_HALF_SPACING, PLATFORM_HALF_ANGLE_DEG, PLATFORM_RADIUS, THETA0_DEG,
+    WRENCH_LENGTH,
+};
+pub use crate::pose::{
+    check_pose, compose, euler_from_rotation, euler_rate_jacobian, euler_rate_jacobian_dot,
+    inverse as pose_inverse, isometry_to_pose, pose_rotation, pose_to_isometry, rotation, twist,
+    twist_dot, twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse,
+};
+pub use crate::types::{LegJacobian, Mat3, Mat3x6, Mat6, Vec3, Vec6, LEGS};

@@ -1,0 +1,139 @@
+//! Pose χ = [x, y, z, α, β, γ] and its rotation R = Rx(α)·Ry(β)·Rz(γ) (eq. 3.2); the Euler-rate
+//! Jacobian J_e (eq. 3.22), J_s (eq. 3.23), their time derivatives and the angular acceleration of
+//! eq. 5.12.
+
+use crate::error::{check_finite, CoreError, Result, SingularKind};
+use crate::types::{Mat3, Mat6, Vec3, Vec6};
+use libm::{asin, atan2, cos, sin};
+use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion};
+
+/// Rotation matrix R = Rx(α)·Ry(β)·Rz(γ) (eq. 3.2). Angles in rad.
+pub fn rotation(alpha: f64, beta: f64, gamma: f64) -> Mat3 {
+    let (sa, ca) = (sin(alpha), cos(alpha));
+    let (sb, cb) = (sin(beta), cos(beta));
+    let (sg, cg) = (sin(gamma), cos(gamma));
+    Mat3::new(
+        cb * cg,
+        -cb * sg,
+        sb,
+        ca * sg + cg * sb * sa,
+        -sb * sa * sg + ca * cg,
+        -cb * sa,
+        sa * sg - ca * cg * sb,
+        ca * sb * sg + cg * sa,
+        cb * ca,
+    )
+}
+
+/// Rotation of a pose χ (uses χ[3..6]).
+pub fn pose_rotation(pose: &Vec6) -> Mat3 {
+    rotation(pose[3], pose[4], pose[5])
+}
+
+/// Euler angles [α, β, γ] of a rotation matrix, inverse of [`rotation`], with β ∈ [−π/2, π/2].
+pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
+    let sb = r[(0, 2)].clamp(-1.0, 1.0);
+    let beta = asin(sb);
+    let alpha = atan2(-r[(1, 2)], r[(2, 2)]);
+    let gamma = atan2(-r[(0, 1)], r[(0, 0)]);
+    Vec3::new(alpha, beta, gamma)
+}
+
+/// The Euler-rate Jacobian J_e(α, β) with ω = J_e·[α̇, β̇, γ̇] (eq. 3.22); ω in the base frame.
+pub fn euler_rate_jacobian(alpha: f64, beta: f64) -> Mat3 {
+    let (sa, ca) = (sin(alpha), cos(alpha));
+    let (sb, cb) = (sin(beta), cos(beta));
+    Mat3::new(1.0, 0.0, sb, 0.0, ca, -cb * sa, 0.0, sa, cb * ca)
+}
+
+/// Time derivative J̇_e given the Euler angles and their rates.
+pub fn euler_rate_jacobian_dot(alpha: f64, beta: f64, alpha_dot: f64, beta_dot: f64) -> Mat3 {
+    let (sa, ca) = (sin(alpha), cos(alpha));
+    let (sb, cb) = (sin(beta), cos(beta));
+    Mat3::new(
+        0.0,
+        0.0,
+        cb * beta_dot,
+        0.0,
+        -sa * alpha_dot,
+        sb * sa * beta_dot - cb * ca * alpha_dot,
+        0.0,
+        ca * alpha_dot,
+        -sb * ca * beta_dot - cb * sa * alpha_dot,
+    )
+}
+
+/// J_s = diag(I₃, J_e): maps χ̇ to the twist v_E = [Ė; ω] (eq. 3.23).
+pub fn twist_jacobian(pose: &Vec6) -> Mat6 {
+    let mut js = Mat6::identity();
+    js.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&euler_rate_jacobian(pose[3], pose[4]));
+    js
+}
+
+/// J̇_s = diag(0, J̇_e).
+pub fn twist_jacobian_dot(pose: &Vec6, pose_dot: &Vec6) -> Mat6 {
+    let mut js = Mat6::zeros();
+    js.fixed_view_mut::<3, 3>(3, 3).copy_from(&euler_rate_jacobian_dot(
+        pose[3],
+        pose[4],
+        pose_dot[3],
+        pose_dot[4],
+    ));
+    js
+}
+
+/// Inverse of J_s; fails at the Euler singularity cos β = 0.
+pub fn twist_jacobian_inverse(pose: &Vec6) -> Result<Mat6> {
+    let je_inv = euler_rate_jacobian(pose[3], pose[4])
+        .try_inverse()
+        .ok_or(CoreError::Singular(SingularKind::Euler))?;
+    if cos(pose[4]).abs() < 1e-9 {
+        return Err(CoreError::Singular(SingularKind::Euler));
+    }
+    let mut js = Mat6::identity();
+    js.fixed_view_mut::<3, 3>(3, 3).copy_from(&je_inv);
+    Ok(js)
+}
+
+/// Twist v_E = J_s·χ̇ (eq. 3.23).
+pub fn twist(pose: &Vec6, pose_dot: &Vec6) -> Vec6 {
+    twist_jacobian(pose) * pose_dot
+}
+
+/// Twist acceleration v̇_E = J_s·χ̈ + J̇_s·χ̇; its angular part is ω̇ = J_e φ̈ + J̇_e φ̇ (eq. 5.12).
+pub fn twist_dot(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> Vec6 {
+    twist_jacobian(pose) * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot
+}
+
+/// The rigid transform of a pose (rotation R of eq. 3.2, translation [x, y, z]).
+pub fn pose_to_isometry(pose: &Vec6) -> Isometry3<f64> {
+    let rot = Rotation3::from_matrix_unchecked(pose_rotation(pose));
+    Isometry3::from_parts(
+        Translation3::new(pose[0], pose[1], pose[2]),
+        UnitQuaternion::from_rotation_matrix(&rot),
+    )
+}
+
+/// Pose χ of a rigid transform (β ∈ [−π/2, π/2]).
+pub fn isometry_to_pose(iso: &Isometry3<f64>) -> Vec6 {
+    let r = iso.rotation.to_rotation_matrix().into_inner();
+    let e = euler_from_rotation(&r);
+    let t = iso.translation.vector;
+    Vec6::new(t[0], t[1], t[2], e[0], e[1], e[2])
+}
+
+/// Composition of poses: the pose of `b` expressed through `a` (ᵃχ ∘ ᵇχ, i.e. M_a·M_b).
+pub fn compose(a: &Vec6, b: &Vec6) -> Vec6 {
+    isometry_to_pose(&(pose_to_isometry(a) * pose_to_isometry(b)))
+}
+
+/// Inverse pose: M⁻¹.
+pub fn inverse(a: &Vec6) -> Vec6 {
+    isometry_to_pose(&pose_to_isometry(a).inverse())
+}
+
+/// `Err(NonFinite)` unless all six components are finite.
+pub fn check_pose(pose: &Vec6) -> Result<()> {
+    check_finite(pose.as_slice())
+}

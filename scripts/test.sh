@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The whole test suite, exactly as CI runs it (.ci/run calls this script).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TERM_COLOR=never
+step() { printf '\n==> %s\n' "$*"; }
+
+step "cargo fmt --all --check"
+cargo fmt --all --check
+step "cargo clippy --workspace --all-targets -- -D warnings"
+cargo clippy --workspace --all-targets -- -D warnings
+step "cargo doc --no-deps (warnings are errors)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --exclude rss6-py
+step "cargo test --workspace (rss6-py is tested through pytest below)"
+cargo test --workspace --exclude rss6-py
+step "install the Python package from this checkout"
+bash scripts/setup.sh
+step "mypy stubtest rss6._rss6"
+python3 -m mypy.stubtest rss6._rss6 --ignore-missing-stub
+step "pytest"
+python3 -m pytest python/tests -q
