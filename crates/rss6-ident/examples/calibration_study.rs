@@ -1,4 +1,10 @@
 //! The simulation study of §4.4 (thesis Tables 4.3–4.5) over many random robots.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
 //!
 //! ```text
 //! cargo run --release -p rss6-ident --example calibration_study [-- --robots 24 --seed 0]
@@ -36,7 +42,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.1.to_degrees(),
         t.elapsed().as_secs_f64()
     );
-    let sel = SelectionOptions { stroke: Some(s), ..SelectionOptions::default() };
+    let sel = SelectionOptions {
+        stroke: Some(s),
+        ..SelectionOptions::default()
+    };
     let t = Instant::now();
     let sel_r = select_configurations_with(&nominal, Method::Rpba, seed, &sel)?;
     let sel_i = select_configurations_with(&nominal, Method::Implicit, seed, &sel)?;
@@ -72,7 +81,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for g in &res.gauge_directions {
         println!("    gauge: {g}");
     }
-    println!("    not individually identifiable: {}", res.unidentifiable.join(" "));
+    println!(
+        "    not individually identifiable: {}",
+        res.unidentifiable.join(" ")
+    );
 
     let opts = StudyOptions {
         robots,
@@ -111,40 +123,66 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("  {label:<44} {a:>11.4e} / {a95:<11.4e} {b:>11.4e} / {b95:<11.4e}");
     };
     println!("\nTable 4.3 (implicit, 72 parameters)            before calibration          after calibration");
-    pr("‖S⁻¹(b_I − b_I^n)‖, gauge removed (σ units)", &|r| r.implicit_param_error.0, &|r| {
-        r.implicit_param_error.1
+    pr(
+        "‖S⁻¹(b_I − b_I^n)‖, gauge removed (σ units)",
+        &|r| r.implicit_param_error.0,
+        &|r| r.implicit_param_error.1,
+    );
+    pr(
+        "‖b_I − b_I^n‖₂, gauge removed (SI)",
+        &|r| r.implicit_param_error_si.0,
+        &|r| r.implicit_param_error_si.1,
+    );
+    pr("Σ_l ‖Φ_I^l‖ (m)", &|r| r.implicit_residual.0, &|r| {
+        r.implicit_residual.1
     });
-    pr("‖b_I − b_I^n‖₂, gauge removed (SI)", &|r| r.implicit_param_error_si.0, &|r| {
-        r.implicit_param_error_si.1
-    });
-    pr("Σ_l ‖Φ_I^l‖ (m)", &|r| r.implicit_residual.0, &|r| r.implicit_residual.1);
     let (tn, tn95) = stat(&|r| r.implicit_residual.2);
-    println!("  {:<44} {tn:>11.4e} / {tn95:<11.4e}", "Σ_l ‖Φ_I^l‖ at the true parameters");
+    println!(
+        "  {:<44} {tn:>11.4e} / {tn95:<11.4e}",
+        "Σ_l ‖Φ_I^l‖ at the true parameters"
+    );
     println!("  [thesis: 3.273 → 0.8197; 0.00109929 → 2.94235e-05]");
     println!("\nTable 4.4 (RPBA, 66 parameters)                before calibration          after calibration");
-    pr("‖S⁻¹(b_R − b_R^n)‖, gauge removed (σ units)", &|r| r.rpba_param_error.0, &|r| {
-        r.rpba_param_error.1
-    });
-    pr("‖b_R − b_R^n‖₂, gauge removed (SI)", &|r| r.rpba_param_error_si.0, &|r| {
-        r.rpba_param_error_si.1
-    });
-    pr("Σ_l ‖Φ_R^l‖ (m, rad mixed)", &|r| r.rpba_residual.0, &|r| r.rpba_residual.1);
+    pr(
+        "‖S⁻¹(b_R − b_R^n)‖, gauge removed (σ units)",
+        &|r| r.rpba_param_error.0,
+        &|r| r.rpba_param_error.1,
+    );
+    pr(
+        "‖b_R − b_R^n‖₂, gauge removed (SI)",
+        &|r| r.rpba_param_error_si.0,
+        &|r| r.rpba_param_error_si.1,
+    );
+    pr(
+        "Σ_l ‖Φ_R^l‖ (m, rad mixed)",
+        &|r| r.rpba_residual.0,
+        &|r| r.rpba_residual.1,
+    );
     let (tn, tn95) = stat(&|r| r.rpba_residual.2);
-    println!("  {:<44} {tn:>11.4e} / {tn95:<11.4e}", "Σ_l ‖Φ_R^l‖ at the true parameters");
+    println!(
+        "  {:<44} {tn:>11.4e} / {tn95:<11.4e}",
+        "Σ_l ‖Φ_R^l‖ at the true parameters"
+    );
     println!("  [thesis: 3.1630 → 0.6616; 0.00542206 → 2.38881e-05]");
     let (ii, _) = stat(&|r| r.iterations.0 as f64);
     let (ir, _) = stat(&|r| r.iterations.1 as f64);
     println!("  mean LM iterations: implicit {ii:.1} [thesis 11], RPBA {ir:.1} [thesis 4]");
     println!(
         "  ranks: implicit {:?}, RPBA {:?}",
-        rows.iter().map(|r| r.ranks.0).collect::<std::collections::BTreeSet<_>>(),
-        rows.iter().map(|r| r.ranks.1).collect::<std::collections::BTreeSet<_>>()
+        rows.iter()
+            .map(|r| r.ranks.0)
+            .collect::<std::collections::BTreeSet<_>>(),
+        rows.iter()
+            .map(|r| r.ranks.1)
+            .collect::<std::collections::BTreeSet<_>>()
     );
 
     println!("\nTable 4.5 RMS relative pose errors on 100 random test configurations (mean / p95 over robots)");
     println!("  axis      uncalibrated              implicit                  RPBA                      thesis RPBA  target met (p95)");
     let thesis = [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5];
-    let names = ["x (mm)", "y (mm)", "z (mm)", "α (rad)", "β (rad)", "γ (rad)"];
+    let names = [
+        "x (mm)", "y (mm)", "z (mm)", "α (rad)", "β (rad)", "γ (rad)",
+    ];
     for k in 0..6 {
         let unit = if k < 3 { 1e3 } else { 1.0 };
         let (u, u95) = stat(&|r| r.rms_uncalibrated[k]);

@@ -1,8 +1,6 @@
 //! The simulation study of §4.4.3 (Tables 4.3–4.5), repeated over random robots in parallel (rayon).
 
-use crate::calibrate::{
-    implicit, parameter_vector, residual_norm_sum, rpba, CalibrationOptions,
-};
+use crate::calibrate::{implicit, parameter_vector, residual_norm_sum, rpba, CalibrationOptions};
 use crate::data::{collect, RobotSource};
 use crate::error::{Method, Result};
 use crate::generator::{
@@ -69,12 +67,11 @@ pub struct StudyRow {
 
 /// Runs the study for one robot: draw the truth, collect both data sets from the analytic generator,
 /// calibrate with both methods, evaluate Tables 4.3–4.5.
-pub fn run_robot(
-    nominal: &KinematicParams,
-    opts: &StudyOptions,
-    robot: usize,
-) -> Result<StudyRow> {
-    let seed = opts.seed.wrapping_add(robot as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+pub fn run_robot(nominal: &KinematicParams, opts: &StudyOptions, robot: usize) -> Result<StudyRow> {
+    let seed = opts
+        .seed
+        .wrapping_add(robot as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let truth = TrueRobot::draw(nominal, &mut rng);
     let mut source = AnalyticRobot::new(truth, *nominal, opts.noise, seed ^ 0xDA7A);
@@ -94,7 +91,10 @@ pub fn run_robot_with_source(
     let data_i = collect(source, &opts.implicit_thetas, opts.dwell)?;
     let target0 = Vec6::from(NOMINAL_TARGET_IN_EFFECTOR);
     let sensor_guess = perturb_external(&truth.sensor_in_base, rng);
-    let solver = CalibrationOptions { target_guess: target0.into(), ..opts.solver };
+    let solver = CalibrationOptions {
+        target_guess: target0.into(),
+        ..opts.solver
+    };
     let res_i = implicit(&data_i, nominal, &sensor_guess, &solver)?;
     let res_r = rpba(&data_r, nominal, &solver)?;
 
@@ -123,10 +123,21 @@ pub fn run_robot_with_source(
         res_i.sensor_in_base.as_ref(),
         &res_i.target_in_effector,
     );
-    let (rpba_param_error, rpba_param_error_si) =
-        param_errors(Method::Rpba, None, &res_r.params, None, &res_r.target_in_effector);
+    let (rpba_param_error, rpba_param_error_si) = param_errors(
+        Method::Rpba,
+        None,
+        &res_r.params,
+        None,
+        &res_r.target_in_effector,
+    );
     let implicit_residual = (
-        residual_norm_sum(Method::Implicit, &data_i, nominal, Some(&sensor_guess), &target0)?,
+        residual_norm_sum(
+            Method::Implicit,
+            &data_i,
+            nominal,
+            Some(&sensor_guess),
+            &target0,
+        )?,
         residual_norm_sum(
             Method::Implicit,
             &data_i,
@@ -144,8 +155,20 @@ pub fn run_robot_with_source(
     );
     let rpba_residual = (
         residual_norm_sum(Method::Rpba, &data_r, nominal, None, &target0)?,
-        residual_norm_sum(Method::Rpba, &data_r, &res_r.params, None, &res_r.target_in_effector)?,
-        residual_norm_sum(Method::Rpba, &data_r, &truth.kp, None, &truth.target_in_effector)?,
+        residual_norm_sum(
+            Method::Rpba,
+            &data_r,
+            &res_r.params,
+            None,
+            &res_r.target_in_effector,
+        )?,
+        residual_norm_sum(
+            Method::Rpba,
+            &data_r,
+            &truth.kp,
+            None,
+            &truth.target_in_effector,
+        )?,
     );
     let rel = |kp: &KinematicParams, target: &Vec6| {
         relative_pose_errors(
@@ -177,7 +200,10 @@ pub fn run_robot_with_source(
 
 /// Runs [`run_robot`] for robots 0..`opts.robots` in parallel.
 pub fn run_study(nominal: &KinematicParams, opts: &StudyOptions) -> Vec<Result<StudyRow>> {
-    (0..opts.robots).into_par_iter().map(|r| run_robot(nominal, opts, r)).collect()
+    (0..opts.robots)
+        .into_par_iter()
+        .map(|r| run_robot(nominal, opts, r))
+        .collect()
 }
 
 /// Mean and 95th percentile (nearest rank) of `values`.
