@@ -57,6 +57,9 @@ pub struct CalibrationOptions {
     pub rank_tolerance: f64,
     /// Starting value of ᴱχ_t (m, rad); default [`crate::NOMINAL_TARGET_IN_EFFECTOR`].
     pub target_guess: [f64; 6],
+    /// Implicit only: hold ᴼχ_C at its (rough) guess instead of estimating it, as when the base frame
+    /// is taken from a separate, rough measurement. Default `false`.
+    pub fix_sensor_pose: bool,
 }
 
 impl Default for CalibrationOptions {
@@ -73,6 +76,7 @@ impl Default for CalibrationOptions {
             leg_weight: 1.0 / sp,
             rank_tolerance: 1e-9,
             target_guess: crate::generator::NOMINAL_TARGET_IN_EFFECTOR,
+            fix_sensor_pose: false,
         }
     }
 }
@@ -496,7 +500,12 @@ fn solve(
     };
 
     let s = layout.scales();
-    let q = layout.free_basis(&x0);
+    let fixed_sensor = opts.fix_sensor_pose && method == Method::Implicit;
+    let q = if fixed_sensor {
+        layout.free_basis_fixed_sensor(&x0)
+    } else {
+        layout.free_basis(&x0)
+    };
     let names = layout.names();
     let reduce = |j: &DMatrix<f64>| {
         let mut js = j.clone();

@@ -170,6 +170,30 @@ impl Layout {
         }
         complement_basis(&g)
     }
+
+    /// Free basis when the sensor pose ᴼχ_C is held fixed (implicit only): the base-frame gauge is
+    /// then resolved by the fixed sensor, leaving the 6 end-effector gauge directions and the 6 pinned
+    /// coordinates to remove (n − 12 free directions).
+    pub(crate) fn free_basis_fixed_sensor(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        let Some(o) = self.sensor_offset() else {
+            return self.free_basis(x);
+        };
+        let s = self.scales();
+        let g = self.gauge_basis(x);
+        let mut m = DMatrix::zeros(self.n(), 12);
+        for k in 0..6 {
+            let mut col = g.column(4 + k).into_owned();
+            for j in 0..self.n() {
+                col[j] /= s[j];
+            }
+            for j in o..o + 6 {
+                col[j] = 0.0;
+            }
+            m.set_column(k, &col);
+            m[(o + k, 6 + k)] = 1.0;
+        }
+        complement_basis(&m)
+    }
 }
 
 /// Orthonormal basis of the orthogonal complement of the column span of `g` (n × k, full column rank).
