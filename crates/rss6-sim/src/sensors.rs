@@ -85,15 +85,15 @@ pub struct CmmConfig {
 }
 
 impl CmmConfig {
-    /// Default stereo head: baseline 0.8 m, f = 2400 px, 2048 × 2048 images, both cameras toed in to
+    /// Default stereo head: baseline 0.8 m, f = 4000 px, 2048 × 2048 images, both cameras toed in to
     /// converge at 2.05 m (where the robot is, see [`crate::default_sensor_in_base`]); 6 reflectors on
-    /// a 3 cm target; pixel noise chosen so the pose noise matches Table 4.1 (see `docs/sim.md`).
+    /// a 2.3 cm-radius target (±1 cm in depth); pixel noise chosen so the pose noise matches Table 4.1 (see `docs/sim.md`).
     pub fn c_track() -> Self {
         let (b, d): (f64, f64) = (0.8, 2.05);
         let toe = (0.5 * b / d).atan();
         let cam = |x: f64, yaw: f64| Camera {
             pose_in_sensor: [x, 0.0, 0.0, 0.0, yaw, 0.0],
-            focal: 2400.0,
+            focal: 4000.0,
             principal: [1024.0, 1024.0],
             size: [2048.0, 2048.0],
         };
@@ -129,9 +129,9 @@ impl CmmConfig {
 }
 
 /// Radius of the default reflector target (m).
-pub const TARGET_RADIUS: f64 = 0.03;
+pub const TARGET_RADIUS: f64 = 0.023;
 /// Default pixel noise (px), tuned so the pose noise matches Table 4.1.
-pub const DEFAULT_PIXEL_NOISE: f64 = 0.05;
+pub const DEFAULT_PIXEL_NOISE: f64 = 0.021;
 
 /// Closest-approach midpoint of two rays (o + s d).
 fn triangulate(o1: &Vec3, d1: &Vec3, o2: &Vec3, d2: &Vec3) -> Option<Vec3> {

@@ -54,6 +54,8 @@ pub struct DiffSample {
     pub angle: f64,
     /// Plant loop-closure gap (m).
     pub loop_closure: f64,
+    /// Distance of robot `a`'s platform from the home position (m): shows the motion is real.
+    pub excursion: f64,
 }
 
 /// Position and orientation distance between two poses (m, rad).
@@ -90,6 +92,7 @@ pub fn compare<P: Physics, Q: Physics>(
                 position,
                 angle,
                 loop_closure: a.loop_closure_error().max(b.loop_closure_error()),
+                excursion: pose_distance(&a.true_pose(), &home_pose()).0,
             });
         }
     }
