@@ -3,9 +3,7 @@
 use crate::calibrate::{implicit, parameter_vector, residual_norm_sum, rpba, CalibrationOptions};
 use crate::data::{collect, RobotSource};
 use crate::error::{Method, Result};
-use crate::generator::{
-    perturb_external, AnalyticRobot, NoiseModel, TrueRobot, NOMINAL_TARGET_IN_EFFECTOR,
-};
+use crate::generator::{perturb_external, AnalyticRobot, NoiseModel, TrueRobot};
 use crate::model::gauge_aligned_error;
 use crate::validate::relative_pose_errors;
 use rand::SeedableRng;
@@ -34,6 +32,9 @@ pub struct StudyOptions {
     pub stroke: (f64, f64),
     /// Solver options for both methods.
     pub solver: CalibrationOptions,
+    /// Nominal ᴱχ_t: the starting guess of both methods and the uncalibrated model's target
+    /// ([`crate::NOMINAL_TARGET_IN_EFFECTOR`] for the analytic generator, the simulator's default on the plant).
+    pub target_nominal: [f64; 6],
 }
 
 /// One robot's results: Tables 4.3, 4.4 and 4.5 entries.
@@ -91,7 +92,7 @@ pub fn run_robot_with_source(
 ) -> Result<StudyRow> {
     let data_r = collect(source, &opts.rpba_thetas, opts.dwell)?;
     let data_i = collect(source, &opts.implicit_thetas, opts.dwell)?;
-    let target0 = Vec6::from(NOMINAL_TARGET_IN_EFFECTOR);
+    let target0 = Vec6::from(opts.target_nominal);
     let sensor_guess = perturb_external(&truth.sensor_in_base, rng);
     let solver = CalibrationOptions {
         target_guess: target0.into(),
@@ -208,6 +209,23 @@ pub fn run_robot_with_source(
         iterations: (res_i.iterations, res_r.iterations),
         ranks: (res_i.rank, res_r.rank),
     })
+}
+
+/// [`run_robot`] on the rapier plant: the truth is drawn the same way (Table 4.2 around `nominal`,
+/// external poses around the simulator's defaults) and the data come from the plant's PID, potentiometers
+/// and stereo CMM through [`crate::Stepped`]. Set `opts.target_nominal` to [`crate::plant_nominal_target`].
+pub fn run_plant_robot(
+    nominal: &KinematicParams,
+    opts: &StudyOptions,
+    robot: usize,
+) -> Result<StudyRow> {
+    let seed = opts
+        .seed
+        .wrapping_add(robot as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut source, truth) = crate::plant::random_plant(nominal, &mut rng, seed ^ 0xDA7A)?;
+    run_robot_with_source(nominal, opts, robot, &truth, &mut source, &mut rng)
 }
 
 /// Runs [`run_robot`] for robots 0..`opts.robots` in parallel.

@@ -183,6 +183,7 @@ fn light_study_meets_table_4_5_for_rpba_and_improves_both_methods() {
         test_configurations: 40,
         stroke: (-0.45, 0.45),
         solver: CalibrationOptions::default(),
+        target_nominal: NOMINAL_TARGET_IN_EFFECTOR,
     };
     let thesis = [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5];
     for row in run_study(&nominal(), &opts) {
