@@ -108,6 +108,8 @@ pub struct CalibrationResult {
     pub method: Method,
     /// Calibrated kinematic parameters.
     pub params: KinematicParams,
+    /// The parameters the calibration started from (the nominal model; b is relative to them).
+    pub reference: KinematicParams,
     /// Calibrated error vector b relative to the parameters passed in (DESIGN.md order).
     pub errors: [f64; N_KIN_ERRORS],
     /// Calibrated ᴱχ_t (m, rad).
@@ -659,6 +661,7 @@ fn solve(
     Ok(CalibrationResult {
         method,
         params: layout.kp(&x),
+        reference: layout.reference,
         errors: layout.errors(&x),
         target_in_effector: layout.target(&x),
         sensor_in_base: layout.sensor(&x),

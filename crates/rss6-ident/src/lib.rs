@@ -52,4 +52,6 @@ pub use crate::selection::{
 pub use crate::study::{
     mean_p95, run_plant_robot, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow,
 };
-pub use crate::validate::{relative_pose_errors, test_configurations, RelativePoseErrors};
+pub use crate::validate::{
+    relative_pose_errors, result_relative_pose_errors, test_configurations, RelativePoseErrors,
+};

@@ -35,6 +35,26 @@ pub fn test_configurations(n: usize, seed: u64, stroke: (f64, f64)) -> Vec<Vec6>
         .collect()
 }
 
+/// [`relative_pose_errors`] of a calibration result on `truth`, with its starting parameters as the
+/// nominal model and the test configurations drawn inside [`crate::stroke`] of them.
+pub fn result_relative_pose_errors(
+    result: &crate::CalibrationResult,
+    truth: &TrueRobot,
+    n: usize,
+    seed: u64,
+) -> Result<RelativePoseErrors> {
+    let stroke = crate::stroke(&result.reference)?;
+    relative_pose_errors(
+        &result.params,
+        &result.target_in_effector,
+        truth,
+        &result.reference,
+        n,
+        seed,
+        stroke,
+    )
+}
+
 /// RMS relative pose errors (Table 4.5) of the model (`params`, `target_in_effector`) on the true
 /// robot, over `n` random test configurations drawn with `seed` inside `stroke` (rad). The initial
 /// configuration is θ = 0 in the convention of `nominal`.

@@ -147,6 +147,13 @@ fn noise_free_data_recover_the_true_robot_up_to_gauge() {
     )
     .unwrap();
     assert!(e.rms.iter().all(|&v| v < 1e-9), "{:?}", e.rms);
+    assert_eq!(r.reference, nominal());
+    let e = result_relative_pose_errors(&r, &truth, 20, 3).unwrap();
+    assert!(
+        e.rms.iter().all(|&v| v < 1e-9) && e.errors.len() + e.skipped == 20,
+        "{:?}",
+        e.rms
+    );
 
     let mut rng = ChaCha8Rng::seed_from_u64(77);
     let guess = perturb_external(&truth.sensor_in_base, &mut rng);
