@@ -361,7 +361,7 @@ fn inverse_dynamics_matches_matrix_form() {
         let lhs = t.j_theta.transpose() * tau;
         worst = worst.max((lhs - rhs).norm() / rhs.norm());
         // one-pass terms equal the individual functions
-        assert_eq!(t.m, mass_matrix(&kp, &dp, &p).unwrap());
+        assert!((t.m - mass_matrix(&kp, &dp, &p).unwrap()).amax() <= 1e-13 * t.m.amax());
         assert!((t.c - coriolis(&kp, &dp, &p, &pd).unwrap()).amax() <= 1e-12 * t.c.amax());
         assert!((t.g - gravity(&kp, &dp, &p).unwrap()).amax() <= 1e-12 * t.g.amax());
         assert!((t.f - friction(&kp, &dp, &p, &pd).unwrap()).amax() <= 1e-12 * t.f.amax());
@@ -540,5 +540,54 @@ fn errors_are_typed() {
     assert_eq!(
         forward_dynamics(&kp, &dp, &nan, &Vec6::zeros(), &Vec6::zeros()),
         Err(CoreError::NonFinite)
+    );
+}
+
+/// Eq. 6.2 read literally omits J_a,iᵀ M_w,i J_a,i J̇_s (and the link analogue) from C̃. This test
+/// documents that the literal form breaks Property 2 whenever the Euler angles move, while the
+/// library's C̃ (which keeps those terms) satisfies it — the reason for the deviation.
+#[test]
+fn literal_eq_6_2_coriolis_breaks_property2() {
+    let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+    let mut r = rng(13);
+    let p = random_pose(&mut r);
+    let pd = random_rate(&mut r);
+    let js = twist_jacobian(&p);
+    let js_dot = twist_jacobian_dot(&p, &pd);
+    let v = js * pd;
+    let legs = leg_jacobians(&kp, &p, &pd).unwrap();
+    let ip = platform_inertia(&pose_rotation(&p), &dp.platform);
+    let mut mp = Mat6::zeros();
+    mp.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Mat3::identity() * dp.platform.mass));
+    mp.fixed_view_mut::<3, 3>(3, 3).copy_from(&ip);
+    let mut cp = Mat6::zeros();
+    let omega = Vec3::new(v[3], v[4], v[5]);
+    cp.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(omega.cross_matrix() * ip));
+    let mut c_lit = js.transpose() * (mp * js_dot + cp * js);
+    for (i, lj) in legs.iter().enumerate() {
+        let mut mw = Mat6::zeros();
+        mw.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Mat3::identity() * dp.wrenches[i].mass));
+        mw[(5, 5)] = wrench_axial_inertia(&dp.wrenches[i]);
+        let mut ml = Mat6::zeros();
+        ml.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Mat3::identity() * dp.links[i].mass));
+        ml.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(Mat3::identity() * link_transverse_inertia(&dp.links[i])));
+        c_lit += js.transpose() * lj.j_a.transpose() * mw * lj.j_a_dot * js
+            + js.transpose() * lj.j_b.transpose() * ml * lj.j_b_dot * js;
+    }
+    let m_dot = d4(|t| mass_matrix(&kp, &dp, &(p + pd * t)).unwrap(), 2e-5);
+    let c = coriolis(&kp, &dp, &p, &pd).unwrap();
+    // the literal form differs from ours exactly by Σ J_sᵀ J_kᵀ M_k J_k J̇_s over the legs
+    let lit_err = (m_dot - c_lit - c_lit.transpose()).amax() / m_dot.amax();
+    let our_err = (m_dot - c - c.transpose()).amax() / m_dot.amax();
+    println!("Property 2 residual: literal eq. 6.2 {lit_err:.3e}, library {our_err:.3e}");
+    assert!(our_err < 1e-8);
+    assert!(
+        lit_err > 1e-3,
+        "literal form unexpectedly satisfies Property 2: {lit_err}"
     );
 }
