@@ -11,11 +11,18 @@ fn main() {
     let pd = Vec6::new(0.1, -0.2, 0.05, 0.3, 0.1, -0.2);
     let pdd = Vec6::new(1.0, 0.5, -0.3, -2.0, 1.0, 0.4);
     let which = std::env::args().nth(1).unwrap_or_else(|| "id".into());
-    let n: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(10_000);
+    let n: usize = std::env::args()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000);
     let mut sink = 0.0;
     for _ in 0..n {
         sink += match which.as_str() {
-            "geom" => LegGeometry::at_pose(black_box(&kp), black_box(&p)).unwrap().t[0][0],
+            "geom" => {
+                LegGeometry::at_pose(black_box(&kp), black_box(&p))
+                    .unwrap()
+                    .t[0][0]
+            }
             "mm" => mass_matrix(black_box(&kp), &dp, black_box(&p)).unwrap()[(0, 0)],
             "fd" => forward_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd).unwrap()[0],
             "reg" => regressor(black_box(&kp), black_box(&p), &pd, &pdd).unwrap()[(0, 0)],
