@@ -625,3 +625,57 @@ fn literal_eq_6_2_coriolis_breaks_property2() {
         "literal form unexpectedly satisfies Property 2: {lit_err}"
     );
 }
+
+/// Structural identifiability of Ξ from τ_a = ΓΞ (nominal robot). Of 64 columns:
+/// * 18 are identically zero (wrench I_x, I_y; link I_z) and link I_x, I_y share one column (−6);
+/// * with vertical gravity each wrench's mass column is (l_TB/2)² times its I_z column, since
+///   ŝ × c_w ⊥ g: only m (l_TB/2)² + I_z about the axis is seen (−6);
+/// * a link of mass m is kinetically m/4 at T_i + m/4 at A_i plus a tumbling term in the same
+///   direction as its I_t column, and its gravity is m/2 at A_i. Point masses μ_i at the coplanar
+///   platform joints A'_i (z = 0) look exactly like platform mass and diagonal inertia whenever
+///   Σ μ_i A'_i = 0 (2 conditions) and Σ μ_i x_i y_i = 0 (1 condition): a 3-dimensional family (−3).
+///
+/// So 64 − 18 − 6 − 6 − 3 = 31 identifiable combinations, and 37 on a tilted base (wrench masses
+/// separable). The gap in the singular values must be clean.
+#[test]
+fn regressor_rank_is_31_with_vertical_gravity() {
+    let kp = KinematicParams::nominal();
+    let mut r = rng(14);
+    let rank_of = |g: &Vec3, r: &mut ChaCha8Rng| {
+        // Gram matrix HᵀH of the stacked regressor (no heap matrices in this no-alloc nalgebra)
+        let mut gram = nalgebra::SMatrix::<f64, 64, 64>::zeros();
+        for _ in 0..120 {
+            let (p, pd, pdd) = (random_pose(r), random_rate(r), random_acc(r));
+            let gamma = regressor_with_gravity(&kp, &p, &pd, &pdd, g).unwrap();
+            gram += gamma.transpose() * gamma;
+        }
+        // column scaling so that the rank does not depend on units
+        let d = nalgebra::SVector::<f64, 64>::from_fn(|i, _| {
+            let x = gram[(i, i)];
+            if x > 0.0 {
+                1.0 / x.sqrt()
+            } else {
+                0.0
+            }
+        });
+        let scaled = nalgebra::SMatrix::<f64, 64, 64>::from_fn(|i, j| gram[(i, j)] * d[i] * d[j]);
+        let ev = scaled.symmetric_eigen().eigenvalues;
+        // σ_k² = λ_k: keep singular values above 1e-6 σ_max
+        let tol = 1e-12 * ev.max();
+        let mut sv: Vec<f64> = ev.iter().map(|&l| l.max(0.0).sqrt()).collect();
+        sv.sort_by(|a, b| b.partial_cmp(a).unwrap());
+        (ev.iter().filter(|&&l| l > tol).count(), sv)
+    };
+    let (rank, sv) = rank_of(&GRAVITY, &mut r);
+    let (rank_tilt, sv_t) = rank_of(&Vec3::new(0.5, 0.3, -9.8), &mut r);
+    println!(
+        "regressor rank: {rank} (vertical g; σ around the cut {:.2e} {:.2e}), {rank_tilt} (tilted g; {:.2e} {:.2e})",
+        sv[rank - 1] / sv[0],
+        sv[rank] / sv[0],
+        sv_t[rank_tilt - 1] / sv_t[0],
+        sv_t[rank_tilt] / sv_t[0]
+    );
+    assert_eq!(rank, 31);
+    assert_eq!(rank_tilt, 37);
+    assert!(sv[rank] / sv[rank - 1] < 1e-5 && sv_t[rank_tilt] / sv_t[rank_tilt - 1] < 1e-5);
+}
