@@ -26,6 +26,21 @@ fn main() {
             "mm" => mass_matrix(black_box(&kp), &dp, black_box(&p)).unwrap()[(0, 0)],
             "fd" => forward_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd).unwrap()[0],
             "reg" => regressor(black_box(&kp), black_box(&p), &pd, &pdd).unwrap()[(0, 0)],
+            "terms" => {
+                dynamics_terms(black_box(&kp), &dp, black_box(&p), &pd)
+                    .unwrap()
+                    .m[(0, 0)]
+            }
+            "legs" => leg_jacobians(black_box(&kp), black_box(&p), &pd).unwrap()[0].j_a[(0, 0)],
+            "rk4" => {
+                let s = ModelState {
+                    pose: p,
+                    pose_dot: pd,
+                };
+                rk4_step(black_box(&kp), &dp, black_box(&s), &pdd, 1e-3)
+                    .unwrap()
+                    .pose[0]
+            }
             _ => inverse_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd).unwrap()[0],
         };
     }
