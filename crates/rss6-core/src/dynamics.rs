@@ -369,6 +369,21 @@ pub fn friction(
 /// J_sᵀ J_adᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3) with g = [`GRAVITY`].
 ///
 /// Errors: IK errors, [`CoreError::Singular`] (type I or II), [`CoreError::NonFinite`].
+///
+/// ```
+/// use rss6_core::*;
+/// let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+/// let pose = Vec6::new(0.01, -0.01, 0.12, 0.02, 0.0, -0.03);
+/// let (pd, pdd) = (Vec6::new(0.1, 0.0, 0.0, 0.0, 0.5, 0.0), Vec6::new(0.0, 0.0, 1.0, 2.0, 0.0, 0.0));
+/// let tau = inverse_dynamics(&kp, &dp, &pose, &pd, &pdd).unwrap();
+/// // the forward dynamics gives the acceleration back
+/// let acc = forward_dynamics(&kp, &dp, &pose, &pd, &tau).unwrap();
+/// assert!((acc - pdd).amax() < 1e-9);
+/// // and J_θᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3)
+/// let t = dynamics_terms(&kp, &dp, &pose, &pd).unwrap();
+/// let rhs = t.m * pdd + t.c * pd + t.g + t.f;
+/// assert!((t.j_theta.transpose() * tau - rhs).amax() < 1e-9 * rhs.amax());
+/// ```
 pub fn inverse_dynamics(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -532,6 +547,16 @@ pub struct ModelState {
     pub pose: Vec6,
     /// χ̇.
     pub pose_dot: Vec6,
+}
+
+impl ModelState {
+    /// The robot at rest at `pose` (χ̇ = 0).
+    pub fn at_rest(pose: &Vec6) -> Self {
+        ModelState {
+            pose: *pose,
+            pose_dot: Vec6::zeros(),
+        }
+    }
 }
 
 /// One classical fourth-order Runge–Kutta step of length `dt` (s) of the forward dynamics with the
