@@ -679,3 +679,63 @@ fn regressor_rank_is_31_with_vertical_gravity() {
     assert_eq!(rank_tilt, 37);
     assert!(sv[rank] / sv[rank - 1] < 1e-5 && sv_t[rank_tilt] / sv_t[rank_tilt - 1] < 1e-5);
 }
+
+/// Instantaneous power balance with a constant torque (friction off): along the RK4 trajectory,
+/// dE/dt from a 4th-order difference of E over consecutive steps equals θ̇ᵀτ_a at every step.
+#[test]
+fn instantaneous_power_balance_constant_torque() {
+    let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+    let tau = inverse_dynamics(&kp, &dp, &home_pose(), &Vec6::zeros(), &Vec6::zeros()).unwrap()
+        + Vec6::new(0.4, -0.3, 0.2, 0.5, -0.1, 0.3);
+    let energy = |s: &ModelState| {
+        kinetic_energy(&kp, &dp, &s.pose, &s.pose_dot).unwrap()
+            + potential_energy_with_gravity(&kp, &dp, &s.pose, &GRAVITY).unwrap()
+    };
+    let dt = 1e-3;
+    let mut states = vec![ModelState::at_rest(&home_pose())];
+    for _ in 0..200 {
+        let s = rk4_step(&kp, &dp, states.last().unwrap(), &tau, dt).unwrap();
+        states.push(s);
+    }
+    let e: Vec<f64> = states.iter().map(energy).collect();
+    let mut worst: f64 = 0.0;
+    let mut p_max: f64 = 0.0;
+    for k in 2..states.len() - 2 {
+        let de = (e[k - 2] - e[k + 2] + 8.0 * (e[k + 1] - e[k - 1])) / (12.0 * dt);
+        let th_dot = jacobian_theta(&kp, &states[k].pose).unwrap() * states[k].pose_dot;
+        let p = th_dot.dot(&tau);
+        p_max = p_max.max(p.abs());
+        worst = worst.max((de - p).abs());
+    }
+    let rel_err = worst / p_max;
+    println!("instantaneous power: max |dE/dt − θ̇ᵀτ| = {worst:.3e} W, max |θ̇ᵀτ| = {p_max:.3e} W, rel {rel_err:.3e}");
+    assert!(p_max > 1e-2, "the run must do work");
+    assert!(rel_err < 1e-6, "{rel_err}");
+}
+
+/// RK4 is 4th order: halving dt divides the error at t = 0.1 s by ≈ 16.
+#[test]
+fn rk4_converges_at_fourth_order() {
+    let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+    let tau = inverse_dynamics(&kp, &dp, &home_pose(), &Vec6::zeros(), &Vec6::zeros()).unwrap()
+        + Vec6::new(1.0, -0.5, 0.8, 0.2, -0.6, 0.4);
+    let run = |n: usize| {
+        let dt = 0.1 / n as f64;
+        let mut s = ModelState::at_rest(&home_pose());
+        for _ in 0..n {
+            s = rk4_step(&kp, &dp, &s, &tau, dt).unwrap();
+        }
+        s
+    };
+    let reference = run(400);
+    let errs: Vec<f64> = [10usize, 20, 40]
+        .iter()
+        .map(|&n| (run(n).pose - reference.pose).amax())
+        .collect();
+    let (r1, r2) = (errs[0] / errs[1], errs[1] / errs[2]);
+    println!("RK4 errors {errs:?}, ratios {r1:.2} {r2:.2}");
+    assert!(
+        (12.0..20.0).contains(&r1) && (12.0..20.0).contains(&r2),
+        "{r1} {r2}"
+    );
+}
