@@ -305,6 +305,13 @@ fn twist_terms(geom: &LegGeometry, dp: &DynamicParams, v: &Vec6, g: &Vec3) -> Re
 /// Mass matrix M̃(χ) (eq. 6.2, χ coordinates), 6 × 6, symmetric positive definite in the workspace.
 /// Units: kg (translation block), kg·m (coupling), kg·m² (rotation block).
 ///
+/// Bodies (13): the platform (centre of mass E, inertia R·diag(I_x, I_y, I_z)·Rᵀ, [`platform_inertia`]);
+/// wrench i (centre of mass at the midpoint of B_i T_i, only I_z about the axis through it parallel
+/// to ŝ enters, [`wrench_axial_inertia`]); link i (centre of mass at the midpoint of T_i A_i, no spin
+/// about its axis (Assumption 2), only the transverse moment (I_x + I_y)/2 enters,
+/// [`link_transverse_inertia`]). M̃ = J_sᵀ M J_s with M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i)
+/// (eq. 3.47); see `docs/dynamics.md`.
+///
 /// ```
 /// use rss6_core::{mass_matrix, home_pose, DynamicParams, KinematicParams};
 /// let m = mass_matrix(&KinematicParams::nominal(), &DynamicParams::nominal(), &home_pose()).unwrap();
@@ -318,8 +325,12 @@ pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Res
     Ok(js.transpose() * m * js)
 }
 
-/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2 with the J_a,i J̇_s terms, see module docs): the
-/// velocity force is C̃·χ̇, and xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2).
+/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2): the velocity force is C̃·χ̇, and
+/// xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2), indeed dM̃/dt = C̃ + C̃ᵀ.
+///
+/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = [0 0; 0 [ω]× I_p]. Unlike eq. 6.2 as
+/// printed, the legs' J_a,iᵀ M_w,i J_a,i J̇_s terms (and the links') are kept: d(J_a,i J_s)/dt needs
+/// them, and without them Property 2 fails whenever the Euler angles move.
 pub fn coriolis(
     kp: &KinematicParams,
     dp: &DynamicParams,
