@@ -328,7 +328,7 @@ pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Res
 /// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2): the velocity force is C̃·χ̇, and
 /// xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2), indeed dM̃/dt = C̃ + C̃ᵀ.
 ///
-/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = [0 0; 0 [ω]× I_p]. Unlike eq. 6.2 as
+/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = `[0 0; 0 [ω]× I_p]`. Unlike eq. 6.2 as
 /// printed, the legs' J_a,iᵀ M_w,i J_a,i J̇_s terms (and the links') are kept: d(J_a,i J_s)/dt needs
 /// them, and without them Property 2 fails whenever the Euler angles move.
 pub fn coriolis(
