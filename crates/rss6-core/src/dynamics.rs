@@ -376,6 +376,50 @@ pub fn friction(
     Ok(j_theta.transpose() * joint_friction(dp, &(j_theta * pose_dot)))
 }
 
+// ---------------------------------------------------------------------------------------------
+// Twist-coordinate form (eq. 3.41, 3.47, 3.48): τ_g = J_adᵀ τ_a = M v̇_E + C v_E + G + τ_f.
+
+/// Mass matrix M(χ) of eq. 3.41/3.47 in twist coordinates v_E = [Ė; ω]: M̃ = J_sᵀ M J_s.
+pub fn mass_matrix_twist(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    twist_mass_matrix(&LegGeometry::at_pose(kp, pose)?, dp)
+}
+
+/// Coriolis matrix C(χ, v_E) of eq. 3.41/3.47 for the twist `v_e` = [Ė; ω] (m/s, rad/s):
+/// C = C_p + Σ (J_a,iᵀ M_w,i J̇_a,i + J_b,iᵀ M_l,i J̇_b,i). dM/dt − 2C is skew-symmetric.
+pub fn coriolis_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Mat6> {
+    check_finite(v_e.as_slice())?;
+    Ok(twist_terms(&LegGeometry::at_pose(kp, pose)?, dp, v_e, &GRAVITY)?.c)
+}
+
+/// Gravity G(χ) of eq. 3.41/3.47 in twist coordinates (N, N·m) for gravity `g` (m/s²): G̃ = J_sᵀ G.
+pub fn gravity_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    Ok(twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?.0)
+}
+
+/// Friction τ_f = J_adᵀ [f_c,i sign(θ̇_i) + f_v,i θ̇_i] of eq. 3.48 for the twist `v_e` (θ̇ = J_ad v_E).
+pub fn friction_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Vec6> {
+    check_finite(v_e.as_slice())?;
+    let j_ad = LegGeometry::at_pose(kp, pose)?.j_ad()?;
+    Ok(j_ad.transpose() * joint_friction(dp, &(j_ad * v_e)))
+}
+
 /// Actuator torques τ_a (N·m) for the motion (χ, χ̇, χ̈) (m, rad; /s; /s²), solving
 /// J_sᵀ J_adᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3) with g = [`GRAVITY`].
 ///
