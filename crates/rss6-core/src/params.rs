@@ -181,9 +181,7 @@ impl KinematicParams {
             return Err(CoreError::InvalidParameter("link length must be > 0"));
         }
         if self.eta.iter().any(|&e| e == 0.0) {
-            return Err(CoreError::InvalidParameter(
-                "potentiometer gain eta must be non-zero",
-            ));
+            return Err(CoreError::InvalidParameter("potentiometer gain eta must be non-zero"));
         }
         Ok(())
     }
@@ -211,10 +209,7 @@ pub struct Body {
 impl Body {
     /// A body from its mass and principal moments.
     pub const fn new(mass: f64, ix: f64, iy: f64, iz: f64) -> Self {
-        Body {
-            mass,
-            inertia: Vec3::new(ix, iy, iz),
-        }
+        Body { mass, inertia: Vec3::new(ix, iy, iz) }
     }
 }
 
@@ -292,20 +287,11 @@ impl DynamicParams {
                 return Err(CoreError::InvalidParameter("body mass must be > 0"));
             }
             if b.inertia.iter().any(|&i| i < 0.0) {
-                return Err(CoreError::InvalidParameter(
-                    "moments of inertia must be >= 0",
-                ));
+                return Err(CoreError::InvalidParameter("moments of inertia must be >= 0"));
             }
         }
-        if self
-            .coulomb
-            .iter()
-            .chain(self.viscous.iter())
-            .any(|&f| f < 0.0)
-        {
-            return Err(CoreError::InvalidParameter(
-                "friction coefficients must be >= 0",
-            ));
+        if self.coulomb.iter().chain(self.viscous.iter()).any(|&f| f < 0.0) {
+            return Err(CoreError::InvalidParameter("friction coefficients must be >= 0"));
         }
         Ok(())
     }
