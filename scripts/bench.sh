@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every criterion bench target in benches/ (short measurement times) and prints a Markdown table
-# of medians, then the mean FK iteration counts of both FK methods on the same pose sets.
+# of medians, then the mean FK iteration counts of both FK methods on the same pose sets and the CPU
+# time per call of the kinematic hot paths (criterion measures wall time, which a loaded machine inflates).
 #
 #   scripts/bench.sh                 # all benches
 #   scripts/bench.sh kinematics/fk   # only benchmarks whose id matches the criterion filter
@@ -29,8 +30,8 @@ MARKER="$CRITERION_DIR/.bench-sh-start"
 touch "$MARKER"
 sleep 1 # file times have 1 s resolution on some filesystems
 
-# --benches: only the criterion targets (the lib's libtest harness would reject criterion's flags).
-cargo bench -p rss6-benches --benches -- --warm-up-time "$WARM_UP" --measurement-time "$MEASUREMENT" \
+# --bench '*': every bench target, not the lib's libtest harness (it would reject criterion's flags).
+cargo bench -p rss6-benches --bench '*' -- --warm-up-time "$WARM_UP" --measurement-time "$MEASUREMENT" \
     --noplot "$@" >&2
 
 echo
@@ -73,3 +74,8 @@ echo
 echo "FK iteration counts (same pose sets for both methods):"
 echo
 cargo run --release -q -p rss6-benches --example fk_iterations
+
+echo
+echo "CPU time per call of the kinematic hot paths (process CPU time, insensitive to other load):"
+echo
+cargo run --release -q -p rss6-benches --example kin_cpu

@@ -12,10 +12,10 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::ik::{ik, wrench_tips};
-use crate::jacobian::{jacobian_stewart, LegGeometry};
+use crate::jacobian::{stewart_with_rotation, LegGeometry};
 use crate::params::KinematicParams;
-use crate::pose::euler_rate_jacobian;
-use crate::types::{Vec3, Vec6};
+use crate::pose::EulerTrig;
+use crate::types::{Vec3, Vec6, LEGS};
 
 /// Stopping rules of the iterative FK solvers (step 1 of §3.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,14 +59,23 @@ fn check_inputs(theta: &Vec6, guess: &Vec6, opts: &FkOptions) -> Result<()> {
     Ok(())
 }
 
-/// Converts a twist-space step [ΔE; Δω] into a pose step [ΔE; Δφ] (Δφ = J_e⁻¹ Δω).
-fn twist_step_to_pose_step(pose: &Vec6, dv: &Vec6) -> Result<Vec6> {
-    let je = euler_rate_jacobian(pose[3], pose[4]);
-    let dphi = je
-        .lu()
-        .solve(&Vec3::new(dv[3], dv[4], dv[5]))
+/// Converts a twist-space step [ΔE; Δω] into a pose step [ΔE; Δφ] (Δφ = J_e⁻¹ Δω, eq. 3.22).
+fn twist_step_to_pose_step(trig: &EulerTrig, dv: &Vec6) -> Result<Vec6> {
+    let dphi = trig
+        .euler_rates(&Vec3::new(dv[3], dv[4], dv[5]))
         .ok_or(CoreError::Singular(SingularKind::Euler))?;
     Ok(Vec6::new(dv[0], dv[1], dv[2], dphi[0], dphi[1], dphi[2]))
+}
+
+/// J' and the leg lengths at `pose` (one evaluation of sin/cos shared by R and J_e).
+fn stewart_at(
+    kp: &KinematicParams,
+    pose: &Vec6,
+    tips: &[Vec3; LEGS],
+) -> Result<(EulerTrig, crate::types::Mat6, Vec6)> {
+    let trig = EulerTrig::of_pose(pose);
+    let (jp, len) = stewart_with_rotation(kp, &trig.rotation(), pose, tips)?;
+    Ok((trig, jp, len))
 }
 
 /// Quasi-Stewart forward kinematics (§3.4): pose χ from physical joint angles θ (rad), starting at
@@ -94,7 +103,7 @@ pub fn fk(
     let mut pose = *guess;
     let mut iterations = 0;
     loop {
-        let (jp, len) = jacobian_stewart(kp, &pose, &tips)?;
+        let (trig, jp, len) = stewart_at(kp, &pose, &tips)?;
         let dl = target - len;
         let residual = dl.amax();
         if !residual.is_finite() {
@@ -117,11 +126,11 @@ pub fn fk(
             .lu()
             .solve(&dl)
             .ok_or(CoreError::Singular(SingularKind::StewartJacobian))?;
-        let step = twist_step_to_pose_step(&pose, &dv)?;
+        let step = twist_step_to_pose_step(&trig, &dv)?;
         pose += step;
         iterations += 1;
         if step.amax() < opts.eps_p {
-            let (_, len) = jacobian_stewart(kp, &pose, &tips)?;
+            let (_, _, len) = stewart_at(kp, &pose, &tips)?;
             let residual = (target - len).amax();
             return Ok(FkSolution {
                 pose,
