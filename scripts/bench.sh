@@ -76,6 +76,7 @@ echo
 cargo run --release -q -p rss6-benches --example fk_iterations
 
 echo
-echo "CPU time per call of the kinematic hot paths (process CPU time, insensitive to other load):"
+echo "Time per call of the kinematic hot paths in short rounds (median and fastest of 400 rounds of 256 calls;
+echo "a round is shorter than a scheduler time slice, so this is robust to other load):"
 echo
 cargo run --release -q -p rss6-benches --example kin_cpu
