@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every criterion bench target in benches/ (short measurement times) and prints a Markdown table
-# of medians, then the mean FK iteration counts of both FK methods on the same pose sets and the CPU
-# time per call of the kinematic hot paths (criterion measures wall time, which a loaded machine inflates).
+# of medians, then the mean FK iteration counts of both FK methods on the same pose sets and the time
+# per call of the kinematic hot paths in short rounds (criterion's long samples absorb other processes'
+# time slices on a loaded machine; short rounds mostly run undisturbed).
 #
 #   scripts/bench.sh                 # all benches
 #   scripts/bench.sh kinematics/fk   # only benchmarks whose id matches the criterion filter
@@ -76,7 +77,7 @@ echo
 cargo run --release -q -p rss6-benches --example fk_iterations
 
 echo
-echo "Time per call of the kinematic hot paths in short rounds (median and fastest of 400 rounds of 256 calls;
-echo "a round is shorter than a scheduler time slice, so this is robust to other load):"
+echo "Time per call of the kinematic hot paths in short rounds (median and fastest of 400 rounds of 256"
+echo "calls; a round is shorter than a scheduler time slice, so this is robust to other load):"
 echo
 cargo run --release -q -p rss6-benches --example kin_cpu
