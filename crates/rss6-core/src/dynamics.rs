@@ -49,7 +49,7 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::{leg_kin, leg_m, LegKin, S_HAT};
+use crate::leg_jacobians::{leg_kin, leg_m, leg_static, LegKin, S_HAT};
 use crate::params::{Body, DynamicParams, KinematicParams};
 use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
 use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
@@ -186,14 +186,14 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
 }
 
 /// Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g): the twist-space generalised force, i.e. J_adᵀ(τ_a − τ_f).
-/// Also returns θ̇.
+/// Also returns θ̇ and J_adᵀ (its columns are the rows J_ad,i).
 fn twist_force(
     geom: &LegGeometry,
     dp: &DynamicParams,
     v: &Vec6,
     v_dot: &Vec6,
     g: &Vec3,
-) -> Result<(Vec6, Vec6)> {
+) -> Result<(Vec6, Vec6, Mat6)> {
     let omega = Vec3::new(v[3], v[4], v[5]);
     let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
     let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
@@ -202,9 +202,11 @@ fn twist_force(
     let f_ang = ip * omega_dot + omega.cross(&(ip * omega));
     let mut f = Vec6::new(f_lin[0], f_lin[1], f_lin[2], f_ang[0], f_ang[1], f_ang[2]);
     let mut theta_dot = Vec6::zeros();
+    let mut j_ad_t = Mat6::zeros();
     for i in 0..LEGS {
         let k = leg_acc(geom, i, v, v_dot)?;
         theta_dot[i] = k.theta_dot;
+        j_ad_t.set_column(i, &k.r);
         let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
         let q_w = wb.mass * k.s_cw.dot(&(k.cw_acc - g)) + wrench_axial_inertia(wb) * k.theta_ddot;
         let f_l = (k.cl_acc - g) * lb.mass;
@@ -212,14 +214,12 @@ fn twist_force(
         let cl = k.l * 0.5;
         f += k.r * (q_w + S_HAT.dot(&k.w.cross(&f_l))) + k.jbd_t(&(cl.cross(&f_l) + n_l));
     }
-    Ok((f, theta_dot))
+    Ok((f, theta_dot, j_ad_t))
 }
 
 /// Solves J_adᵀ x = f (x = actuator torques that produce twist-space force f).
-fn solve_j_ad_t(geom: &LegGeometry, f: &Vec6) -> Result<Vec6> {
-    let j_ad = geom.j_ad()?;
-    let x = j_ad
-        .transpose()
+fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
+    let x = j_ad_t
         .lu()
         .solve(f)
         .ok_or(CoreError::Singular(SingularKind::TypeII))?;
@@ -243,14 +243,28 @@ struct TwistTerms {
     theta_dot: Vec6,
 }
 
+/// Twist-coordinate mass matrix M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i) (eq. 3.47).
+fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Result<Mat6> {
+    let mut m = Mat6::zeros();
+    for k in 0..3 {
+        m[(k, k)] = dp.platform.mass;
+    }
+    m.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&platform_inertia(&geom.rot, &dp.platform));
+    for i in 0..LEGS {
+        let k = leg_static(geom, i)?;
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        // J_auᵀ J_au = |ŝ × c_w|² J_ad,iᵀ J_ad,i: the wrench is one rank-1 term.
+        let iw = wb.mass * k.s_cw.norm_squared() + wrench_axial_inertia(wb);
+        m += k.r * k.r.transpose() * iw
+            + k.jbu.transpose() * k.jbu * lb.mass
+            + k.jbd.transpose() * k.jbd * link_transverse_inertia(lb);
+    }
+    Ok(m)
+}
+
 /// M, C (twist coordinates) and G from the per-leg Jacobian blocks.
-fn twist_terms(
-    geom: &LegGeometry,
-    dp: &DynamicParams,
-    v: &Vec6,
-    g: &Vec3,
-    want_c: bool,
-) -> Result<TwistTerms> {
+fn twist_terms(geom: &LegGeometry, dp: &DynamicParams, v: &Vec6, g: &Vec3) -> Result<TwistTerms> {
     let ip = platform_inertia(&geom.rot, &dp.platform);
     let mut m = Mat6::zeros();
     let mut c = Mat6::zeros();
@@ -259,10 +273,8 @@ fn twist_terms(
     }
     m.fixed_view_mut::<3, 3>(3, 3).copy_from(&ip);
     let omega = Vec3::new(v[3], v[4], v[5]);
-    if want_c {
-        c.fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(&(omega.cross_matrix() * ip));
-    }
+    c.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(omega.cross_matrix() * ip));
     let gp = -g * dp.platform.mass;
     let mut gv = Vec6::new(gp[0], gp[1], gp[2], 0.0, 0.0, 0.0);
     let mut theta_dot = Vec6::zeros();
@@ -276,12 +288,10 @@ fn twist_terms(
             + k.r * k.r.transpose() * iw
             + k.jbu.transpose() * k.jbu * ml
             + k.jbd.transpose() * k.jbd * il;
-        if want_c {
-            c += k.jau.transpose() * k.jau_dot * mw
-                + k.r * k.r_dot.transpose() * iw
-                + k.jbu.transpose() * k.jbu_dot * ml
-                + k.jbd.transpose() * k.jbd_dot * il;
-        }
+        c += k.jau.transpose() * k.jau_dot * mw
+            + k.r * k.r_dot.transpose() * iw
+            + k.jbu.transpose() * k.jbu_dot * ml
+            + k.jbd.transpose() * k.jbd_dot * il;
         gv -= k.jau.transpose() * g * mw + k.jbu.transpose() * g * ml;
     }
     Ok(TwistTerms {
@@ -303,9 +313,9 @@ fn twist_terms(
 /// ```
 pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let t = twist_terms(&geom, dp, &Vec6::zeros(), &GRAVITY, false)?;
+    let m = twist_mass_matrix(&geom, dp)?;
     let js = twist_jacobian(pose);
-    Ok(js.transpose() * t.m * js)
+    Ok(js.transpose() * m * js)
 }
 
 /// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2 with the J_a,i J̇_s terms, see module docs): the
@@ -320,7 +330,7 @@ pub fn coriolis(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let t = twist_terms(&geom, dp, &v, &GRAVITY, true)?;
+    let t = twist_terms(&geom, dp, &v, &GRAVITY)?;
     Ok(js.transpose() * (t.m * twist_jacobian_dot(pose, pose_dot) + t.c * js))
 }
 
@@ -338,7 +348,7 @@ pub fn gravity_with(
 ) -> Result<Vec6> {
     check_finite(g.as_slice())?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let (f, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
+    let (f, _, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
     Ok(twist_jacobian(pose).transpose() * f)
 }
 
@@ -384,8 +394,8 @@ pub fn inverse_dynamics_with_gravity(
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
     let v_dot = js * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot;
-    let (f, theta_dot) = twist_force(&geom, dp, &v, &v_dot, g)?;
-    Ok(solve_j_ad_t(&geom, &f)? + joint_friction(dp, &theta_dot))
+    let (f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, g)?;
+    Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
 }
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
@@ -414,15 +424,14 @@ pub fn forward_dynamics_with_gravity(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let t = twist_terms(&geom, dp, &v, g, false)?;
+    let m = twist_mass_matrix(&geom, dp)?;
     // Velocity and gravity forces at zero twist acceleration.
-    let (bias, theta_dot) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
-    let j_ad = geom.j_ad()?;
-    let rhs = j_ad.transpose() * (tau_a - joint_friction(dp, &theta_dot)) - bias;
-    let v_dot =
-        t.m.cholesky()
-            .ok_or(CoreError::Singular(SingularKind::Matrix))?
-            .solve(&rhs);
+    let (bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
+    let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
+    let v_dot = m
+        .cholesky()
+        .ok_or(CoreError::Singular(SingularKind::Matrix))?
+        .solve(&rhs);
     let chi_ddot =
         twist_jacobian_inverse(pose)? * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
     check_finite(chi_ddot.as_slice())?;
@@ -471,7 +480,7 @@ pub fn dynamics_terms_with_gravity(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let j_s = twist_jacobian(pose);
     let v = j_s * pose_dot;
-    let t = twist_terms(&geom, dp, &v, g, true)?;
+    let t = twist_terms(&geom, dp, &v, g)?;
     let j_ad = geom.j_ad()?;
     let j_theta = j_ad * j_s;
     let js_t = j_s.transpose();
