@@ -74,6 +74,16 @@ impl JointPid {
         self.integral
     }
 
+    /// The previous error e_{k−1} = θ_d − θ (rad) per joint, used by the derivative term.
+    pub fn prev_error(&self) -> [f64; LEGS] {
+        self.prev_error
+    }
+
+    /// `false` until the first tick (the first tick has no derivative term).
+    pub fn is_primed(&self) -> bool {
+        self.primed
+    }
+
     /// One tick: joint torques (N·m) from the commanded and measured angles (rad).
     pub fn step(&mut self, theta_cmd: &Vec6, theta_meas: &Vec6) -> Vec6 {
         let mut tau = Vec6::zeros();
