@@ -46,12 +46,16 @@ impl TorqueToPosition {
             return Err(CtrlError::NonFinite);
         }
         if gains.lp < 0.0 || gains.li < 0.0 || gains.ld < 0.0 || gains.lp + gains.ld <= 0.0 {
-            return Err(CtrlError::InvalidParameter("PID gains must be >= 0 with l_p + l_d > 0"));
+            return Err(CtrlError::InvalidParameter(
+                "PID gains must be >= 0 with l_p + l_d > 0",
+            ));
         }
         if torque_limit.is_nan() || torque_limit <= 0.0 {
             return Err(CtrlError::InvalidParameter("torque limit must be > 0"));
         }
-        Ok(TorqueToPosition { shadow: JointPid::new(gains, dt, torque_limit) })
+        Ok(TorqueToPosition {
+            shadow: JointPid::new(gains, dt, torque_limit),
+        })
     }
 
     /// A converter mirroring an existing drive PID, including its current integral and derivative memory.
@@ -82,7 +86,10 @@ impl TorqueToPosition {
             // Stay a hair inside the limit so the drive never saturates on an exact request.
             let t = tau[i].clamp(-lim, lim) * (1.0 - 1e-12);
             let (num, den) = if primed {
-                (t - g.li * integral[i] + g.ld * prev[i] / dt, g.lp + g.li * dt + g.ld / dt)
+                (
+                    t - g.li * integral[i] + g.ld * prev[i] / dt,
+                    g.lp + g.li * dt + g.ld / dt,
+                )
             } else {
                 (t - g.li * integral[i], g.lp + g.li * dt)
             };
@@ -110,10 +117,18 @@ impl TorqueToPosition {
             return Err(CtrlError::Faulted(FaultReason::NonFiniteCommand));
         }
         let request = theta + self.error_for_torque(tau_a);
-        let Guarded { command, stroke_limited, rate_limited } =
-            guard.apply(&request, self.shadow.dt)?;
+        let Guarded {
+            command,
+            stroke_limited,
+            rate_limited,
+        } = guard.apply(&request, self.shadow.dt)?;
         let tau_expected = self.shadow.step(&command, theta);
-        Ok(ConverterOutput { theta_cmd: command, tau_expected, stroke_limited, rate_limited })
+        Ok(ConverterOutput {
+            theta_cmd: command,
+            tau_expected,
+            stroke_limited,
+            rate_limited,
+        })
     }
 
     /// Advances the shadow PID with a command sent by someone else (e.g. a held command in a fault, or a

@@ -14,10 +14,10 @@
 //! K_r/ε inside, no jump. The Lyapunov argument of eq. 6.35–6.36 only uses the outside-the-layer branch,
 //! so Theorem 1's ultimate bound |F_i| ≤ ε is unchanged.
 
+use crate::dyn_shim::dynamics_terms;
 use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
-use crate::dyn_shim::dynamics_terms;
 use rss6_core::{DynamicParams, KinematicParams, Vec6};
 
 /// DSMC gains, diagonal per pose axis (x, y, z in SI translational units, α, β, γ in rotational ones).
@@ -52,7 +52,14 @@ impl DsmcGains {
 
     /// Checks finiteness, λ, K ≥ 0 and ε > 0.
     pub fn validate(&self) -> Result<()> {
-        let all = [self.lambda, self.kp, self.ki, self.kr, self.epsilon, self.integral_limit];
+        let all = [
+            self.lambda,
+            self.kp,
+            self.ki,
+            self.kr,
+            self.epsilon,
+            self.integral_limit,
+        ];
         if !all.iter().all(|v| all_finite(v.as_slice())) {
             return Err(CtrlError::NonFinite);
         }
@@ -60,7 +67,9 @@ impl DsmcGains {
             return Err(CtrlError::InvalidParameter("DSMC gains must be >= 0"));
         }
         if self.epsilon.iter().any(|&x| x <= 0.0) {
-            return Err(CtrlError::InvalidParameter("DSMC boundary layer epsilon must be > 0"));
+            return Err(CtrlError::InvalidParameter(
+                "DSMC boundary layer epsilon must be > 0",
+            ));
         }
         Ok(())
     }
@@ -99,7 +108,11 @@ pub struct Dsmc {
 
 impl Dsmc {
     /// A DSMC on the model (kinematics `kp_model`, dynamics `dp_model` = M̃0, C̃0, G̃0, τ̃_f0).
-    pub fn new(kp_model: KinematicParams, dp_model: DynamicParams, gains: DsmcGains) -> Result<Self> {
+    pub fn new(
+        kp_model: KinematicParams,
+        dp_model: DynamicParams,
+        gains: DsmcGains,
+    ) -> Result<Self> {
         kp_model.validate()?;
         dp_model.validate()?;
         gains.validate()?;
@@ -161,8 +174,12 @@ impl Dsmc {
         let f = e_dot + g.lambda.component_mul(&e);
         let chi_r_dot = reference.pose_dot + g.lambda.component_mul(&e);
         let chi_r_ddot = reference.pose_ddot + g.lambda.component_mul(&e_dot);
-        let terms = match dynamics_terms(&self.kp_model, &self.dp_model, &estimate.pose, &estimate.pose_dot)
-        {
+        let terms = match dynamics_terms(
+            &self.kp_model,
+            &self.dp_model,
+            &estimate.pose,
+            &estimate.pose_dot,
+        ) {
             Ok(t) => t,
             Err(err) => return Err(self.fault.trip(FaultReason::Model(err))),
         };
@@ -182,8 +199,13 @@ impl Dsmc {
             _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
         };
         self.integral = integral;
-        let out =
-            DsmcOutput { tau_a, sliding: f, generalized: u, tau_model, in_boundary_layer: inside };
+        let out = DsmcOutput {
+            tau_a,
+            sliding: f,
+            generalized: u,
+            tau_model,
+            in_boundary_layer: inside,
+        };
         self.last = Some(out);
         Ok(out)
     }

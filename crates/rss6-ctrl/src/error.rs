@@ -69,7 +69,9 @@ impl fmt::Display for CtrlError {
         match self {
             CtrlError::Faulted(r) => write!(f, "controller faulted: {r}"),
             CtrlError::NonFinite => write!(f, "input contains NaN or infinity"),
-            CtrlError::InvalidTimeStep(dt) => write!(f, "time step must be > 0 and finite, got {dt}"),
+            CtrlError::InvalidTimeStep(dt) => {
+                write!(f, "time step must be > 0 and finite, got {dt}")
+            }
             CtrlError::InvalidParameter(what) => write!(f, "invalid parameter: {what}"),
             CtrlError::Core(e) => write!(f, "rss6-core: {e}"),
         }

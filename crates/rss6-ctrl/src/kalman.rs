@@ -45,7 +45,7 @@ impl KalmanConfig {
         let sp = 0.0096e-3;
         let sa = 0.0261_f64.to_radians();
         KalmanConfig {
-            q_jerk: Vec6::new(1.0, 1.0, 1.0, 10.0, 10.0, 10.0),
+            q_jerk: Vec6::new(1e-5, 1e-5, 1e-5, 1e-3, 1e-3, 1e-3),
             q_vel: Vec6::zeros(),
             r: Vec6::new(sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa),
             p0_std: [1e-3, 1e-2, 1e-1],
@@ -63,11 +63,20 @@ impl KalmanConfig {
         {
             return Err(CtrlError::NonFinite);
         }
-        if self.q_jerk.iter().chain(self.q_vel.iter()).any(|&q| q < 0.0) {
-            return Err(CtrlError::InvalidParameter("Kalman process noise must be >= 0"));
+        if self
+            .q_jerk
+            .iter()
+            .chain(self.q_vel.iter())
+            .any(|&q| q < 0.0)
+        {
+            return Err(CtrlError::InvalidParameter(
+                "Kalman process noise must be >= 0",
+            ));
         }
         if self.r.iter().any(|&r| r <= 0.0) {
-            return Err(CtrlError::InvalidParameter("Kalman measurement variance must be > 0"));
+            return Err(CtrlError::InvalidParameter(
+                "Kalman measurement variance must be > 0",
+            ));
         }
         check_dt(self.nominal_dt)
     }
@@ -216,7 +225,11 @@ impl PoseKalman {
     /// The current estimate without stepping.
     pub fn estimate(&self) -> PoseEstimate {
         let get = |k: usize| Vec6::from_fn(|i, _| self.axes.get(i).map_or(f64::NAN, |a| a.s[k]));
-        PoseEstimate { pose: get(0), pose_dot: get(1), pose_ddot: get(2) }
+        PoseEstimate {
+            pose: get(0),
+            pose_dot: get(1),
+            pose_ddot: get(2),
+        }
     }
 
     /// One step: predict over `dt` (s, time since the previous step), then update with `measurement`

@@ -144,7 +144,9 @@ pub struct VisualPid {
 impl VisualPid {
     /// Same arguments as [`Kcsc::new`]; [`CartesianPidGains::thesis`] are the thesis's gains.
     pub fn new(kp_model: KinematicParams, gains: CartesianPidGains, bias: &Vec6) -> Result<Self> {
-        Ok(VisualPid { inner: Kcsc::new(kp_model, gains, bias)? })
+        Ok(VisualPid {
+            inner: Kcsc::new(kp_model, gains, bias)?,
+        })
     }
 
     /// The latched fault, if any.
@@ -170,7 +172,11 @@ impl VisualPid {
         pose_dot: &Vec6,
         dt: f64,
     ) -> Result<JointCommand> {
-        let est = PoseEstimate { pose: *pose, pose_dot: *pose_dot, pose_ddot: Vec6::zeros() };
+        let est = PoseEstimate {
+            pose: *pose,
+            pose_dot: *pose_dot,
+            pose_ddot: Vec6::zeros(),
+        };
         self.inner.step(reference, &est, dt)
     }
 }

@@ -28,7 +28,12 @@ pub struct JointSpaceGains {
 impl JointSpaceGains {
     /// The same numbers as the Cartesian baseline: k_p = 0.3, k_i = 2.4 1/s, k_d = 0.001 s.
     pub fn thesis() -> Self {
-        JointSpaceGains { kp: 0.3, ki: 2.4, kd: 0.001, integral_limit: 1.0 }
+        JointSpaceGains {
+            kp: 0.3,
+            ki: 2.4,
+            kd: 0.001,
+            integral_limit: 1.0,
+        }
     }
 }
 

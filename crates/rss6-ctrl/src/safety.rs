@@ -19,7 +19,11 @@ impl CommandLimits {
     /// ±57.1° (the singularity-free wrench range of §5.4) and 3 rad/s.
     pub fn nominal() -> Self {
         let lim = 57.1_f64.to_radians();
-        CommandLimits { min: Vec6::repeat(-lim), max: Vec6::repeat(lim), max_rate: 3.0 }
+        CommandLimits {
+            min: Vec6::repeat(-lim),
+            max: Vec6::repeat(lim),
+            max_rate: 3.0,
+        }
     }
 
     /// Checks finiteness, min < max and a positive rate.
@@ -82,7 +86,8 @@ impl CommandGuard {
     /// Restarts the rate limiter from `command` (clamped into the stroke).
     pub fn reset(&mut self, command: &Vec6) {
         if all_finite(command.as_slice()) {
-            self.last = Vec6::from_fn(|i, _| command[i].clamp(self.limits.min[i], self.limits.max[i]));
+            self.last =
+                Vec6::from_fn(|i, _| command[i].clamp(self.limits.min[i], self.limits.max[i]));
         }
     }
 
@@ -94,8 +99,11 @@ impl CommandGuard {
             return Err(CtrlError::Faulted(FaultReason::NonFiniteCommand));
         }
         let step = self.limits.max_rate * dt;
-        let mut out =
-            Guarded { command: self.last, stroke_limited: false, rate_limited: false };
+        let mut out = Guarded {
+            command: self.last,
+            stroke_limited: false,
+            rate_limited: false,
+        };
         for i in 0..6 {
             let (lo, hi) = (self.limits.min[i], self.limits.max[i]);
             let mut c = request[i];

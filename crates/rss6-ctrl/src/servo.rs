@@ -184,7 +184,13 @@ impl Servo {
         self.fault.trip(r)
     }
 
-    fn run_scheme(&mut self, reference: &Reference, est: &PoseEstimate, theta: &Vec6, dt: f64) -> Result<()> {
+    fn run_scheme(
+        &mut self,
+        reference: &Reference,
+        est: &PoseEstimate,
+        theta: &Vec6,
+        dt: f64,
+    ) -> Result<()> {
         match &mut self.scheme {
             Scheme::Dsmc(d) => {
                 let out = d.step(reference, est, dt)?;
@@ -281,7 +287,12 @@ impl Servo {
             Scheme::Dsmc(_) => Some((self.held_tau, self.held_sliding)),
             _ => None,
         };
-        Ok(ServoTick { theta_cmd, frame, estimate: camera_step.map(|(e, _)| e), dsmc })
+        Ok(ServoTick {
+            theta_cmd,
+            frame,
+            estimate: camera_step.map(|(e, _)| e),
+            dsmc,
+        })
     }
 }
 
@@ -344,7 +355,11 @@ where
     T: Trajectory + ?Sized,
     F: FnMut(&TickRecord, &P),
 {
-    let mut summary = RunSummary { ticks: 0, frames: 0, first_fault: None };
+    let mut summary = RunSummary {
+        ticks: 0,
+        frames: 0,
+        first_fault: None,
+    };
     for _ in 0..ticks {
         let t = plant.time();
         let reference = trajectory.sample(t - t0);
@@ -366,7 +381,17 @@ where
         }
         plant.step_joint_command(&theta_cmd)?;
         summary.ticks += 1;
-        observe(&TickRecord { t, reference, camera, theta_cmd, tick, fault }, plant);
+        observe(
+            &TickRecord {
+                t,
+                reference,
+                camera,
+                theta_cmd,
+                tick,
+                fault,
+            },
+            plant,
+        );
     }
     Ok(summary)
 }

@@ -22,7 +22,11 @@ pub struct Reference {
 impl Reference {
     /// A constant reference (zero rates) at `pose`.
     pub fn hold(pose: &Vec6) -> Self {
-        Reference { pose: *pose, pose_dot: Vec6::zeros(), pose_ddot: Vec6::zeros() }
+        Reference {
+            pose: *pose,
+            pose_dot: Vec6::zeros(),
+            pose_ddot: Vec6::zeros(),
+        }
     }
 
     /// `true` if every component is finite.
@@ -112,7 +116,12 @@ impl Fourier<5> {
         let mut c = [[0.0; 5]; 6];
         for (i, (si, ci)) in s.iter_mut().zip(c.iter_mut()).enumerate() {
             let amps = if i < 3 { &POS } else { &ANG };
-            for (l, ((sl, cl), a)) in si.iter_mut().zip(ci.iter_mut()).zip(amps.iter()).enumerate() {
+            for (l, ((sl, cl), a)) in si
+                .iter_mut()
+                .zip(ci.iter_mut())
+                .zip(amps.iter())
+                .enumerate()
+            {
                 // Phase chosen so that cos φ and sin φ are both well away from zero.
                 let phi = 0.35 + 0.9 * i as f64 + 1.3 * l as f64;
                 let w = omega0 * (l + 1) as f64;
@@ -120,7 +129,12 @@ impl Fourier<5> {
                 *cl = a * w * sin(phi);
             }
         }
-        Fourier { s, c, offset: home_pose(), omega0 }
+        Fourier {
+            s,
+            c,
+            offset: home_pose(),
+            omega0,
+        }
     }
 }
 
