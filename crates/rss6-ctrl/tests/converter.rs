@@ -1,5 +1,12 @@
 //! Torque-to-position converter: exact discrete inverse of the drive PID, also under command limits.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rss6_core::Vec6;

@@ -1,5 +1,12 @@
 //! Kalman filter: exact discretisation, noise reduction, velocity tracking, predict-only, steady state.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
+
 use nalgebra::Matrix3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -1,5 +1,12 @@
 //! Command guard and the servo's fault paths (NaN measurement, missing frames, stroke).
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
+
 use rss6_core::{home_pose, KinematicParams, Vec6};
 use rss6_ctrl::{
     CartesianPidGains, CommandGuard, CommandLimits, CtrlError, FaultReason, Kcsc, Reference,

@@ -1,5 +1,12 @@
 //! Reference trajectories: analytic derivatives, the box, reachability and the initial steps.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
+
 use rss6_core::{home_pose, ik, KinematicParams, Vec6};
 use rss6_ctrl::{Fourier, Sinusoid, Trajectory};
 
