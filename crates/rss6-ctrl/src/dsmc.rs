@@ -14,11 +14,10 @@
 //! K_r/ε inside, no jump. The Lyapunov argument of eq. 6.35–6.36 only uses the outside-the-layer branch,
 //! so Theorem 1's ultimate bound |F_i| ≤ ε is unchanged.
 
-use crate::dyn_shim::dynamics_terms;
 use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
-use rss6_core::{DynamicParams, KinematicParams, Vec6};
+use rss6_core::{dynamics_terms, DynamicParams, KinematicParams, Vec6};
 
 /// DSMC gains, diagonal per pose axis (x, y, z in SI translational units, α, β, γ in rotational ones).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -193,8 +192,7 @@ impl Dsmc {
             inside &= f[i].abs() <= g.epsilon[i];
         }
         let u = tau_model + g.kp.component_mul(&f) + g.ki.component_mul(&integral) + robust;
-        let j_theta = terms.j_ad * terms.j_s;
-        let tau_a = match j_theta.transpose().lu().solve(&u) {
+        let tau_a = match terms.j_theta.transpose().lu().solve(&u) {
             Some(t) if all_finite(t.as_slice()) => t,
             _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
         };

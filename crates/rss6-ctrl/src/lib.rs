@@ -10,7 +10,6 @@ extern crate std;
 
 mod converter;
 mod dsmc;
-mod dyn_shim;
 mod error;
 mod kalman;
 mod kcsc;
