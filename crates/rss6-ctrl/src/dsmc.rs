@@ -42,10 +42,10 @@ impl DsmcGains {
         DsmcGains {
             lambda: Vec6::repeat(6.0),
             kp: Vec6::new(250.0, 250.0, 250.0, 2.5, 2.5, 2.5),
-            ki: Vec6::new(500.0, 500.0, 500.0, 5.0, 5.0, 5.0),
+            ki: Vec6::new(1250.0, 1250.0, 1250.0, 12.5, 12.5, 12.5),
             kr: Vec6::new(2.0, 2.0, 2.0, 0.02, 0.02, 0.02),
             epsilon: Vec6::new(2e-3, 2e-3, 2e-3, 1e-2, 1e-2, 1e-2),
-            integral_limit: Vec6::new(0.02, 0.02, 0.02, 0.1, 0.1, 0.1),
+            integral_limit: Vec6::new(0.5, 0.5, 0.5, 5.0, 5.0, 5.0),
         }
     }
 

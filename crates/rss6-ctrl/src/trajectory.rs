@@ -157,3 +157,10 @@ impl<const N: usize> Trajectory for Fourier<N> {
         r
     }
 }
+
+impl Trajectory for Reference {
+    /// A constant reference: the same sample at every time.
+    fn sample(&self, _t: f64) -> Reference {
+        *self
+    }
+}
