@@ -41,10 +41,10 @@ impl DsmcGains {
     pub fn tuned() -> Self {
         DsmcGains {
             lambda: Vec6::repeat(6.0),
-            kp: Vec6::new(250.0, 250.0, 250.0, 2.5, 2.5, 2.5),
-            ki: Vec6::new(1250.0, 1250.0, 1250.0, 12.5, 12.5, 12.5),
+            kp: Vec6::new(150.0, 150.0, 150.0, 1.5, 1.5, 1.5),
+            ki: Vec6::new(750.0, 750.0, 750.0, 7.5, 7.5, 7.5),
             kr: Vec6::new(2.0, 2.0, 2.0, 0.02, 0.02, 0.02),
-            epsilon: Vec6::new(2e-3, 2e-3, 2e-3, 1e-2, 1e-2, 1e-2),
+            epsilon: Vec6::new(2e-2, 2e-2, 2e-2, 2e-2, 2e-2, 2e-2),
             integral_limit: Vec6::new(0.5, 0.5, 0.5, 5.0, 5.0, 5.0),
         }
     }

@@ -118,6 +118,11 @@ fn theorem1_sliding_variable_enters_the_boundary_layer_and_stays() {
     let s = run_scheme(Which::Dsmc, &Sinusoid::experiment1(), &setup);
     assert!(s.first_fault.is_none());
     let eps = DsmcGains::tuned().epsilon;
+    for i in 0..6 {
+        let m = s.sliding.iter().filter(|x| x.0 > 1.0).map(|x| x.1[i].abs()).fold(0.0, f64::max);
+        let m0 = s.sliding.iter().map(|x| x.1[i].abs()).fold(0.0, f64::max);
+        println!("axis {i}: max |F| after 1 s {m:.3e} (overall {m0:.3e}), eps {:.1e}", eps[i]);
+    }
     let inside = |f: &rss6_core::Vec6| (0..6).all(|i| f[i].abs() <= eps[i]);
     let first_in = s.sliding.iter().position(|(_, f, _)| inside(f)).expect("F never reached the layer");
     let t_in = s.sliding[first_in].0;
