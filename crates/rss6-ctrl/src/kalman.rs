@@ -45,7 +45,7 @@ impl KalmanConfig {
         let sp = 0.0096e-3;
         let sa = 0.0261_f64.to_radians();
         KalmanConfig {
-            q_jerk: Vec6::new(0.1, 0.1, 0.1, 30.0, 30.0, 30.0),
+            q_jerk: Vec6::new(1e-2, 1e-2, 1e-2, 3.0, 3.0, 3.0),
             q_vel: Vec6::zeros(),
             r: Vec6::new(sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa),
             p0_std: [1e-3, 1e-2, 1e-1],

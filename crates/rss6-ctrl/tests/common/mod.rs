@@ -55,7 +55,10 @@ impl ModelPlant {
             kp_nominal: KinematicParams::nominal(),
             dp,
             pid: JointPid::new(PidGains::nominal(), 1e-3, 30.0),
-            state: ModelState { pose: *start, pose_dot: Vec6::zeros() },
+            state: ModelState {
+                pose: *start,
+                pose_dot: Vec6::zeros(),
+            },
             tick: 0,
             dt: 1e-3,
             camera_every: 33,
@@ -158,9 +161,7 @@ pub enum Which {
 pub fn scheme(which: Which, theta0: &Vec6, dsmc: DsmcGains) -> Scheme {
     let kp = KinematicParams::nominal();
     match which {
-        Which::Dsmc => {
-            Scheme::Dsmc(Dsmc::new(kp, DynamicParams::nominal(), dsmc).unwrap())
-        }
+        Which::Dsmc => Scheme::Dsmc(Dsmc::new(kp, DynamicParams::nominal(), dsmc).unwrap()),
         Which::Kcsc => Scheme::Kcsc(Kcsc::new(kp, CartesianPidGains::thesis(), theta0).unwrap()),
         Which::Kjsc => Scheme::Kjsc(Kjsc::new(kp, JointSpaceGains::thesis(), theta0).unwrap()),
     }
@@ -213,57 +214,88 @@ pub struct Setup {
 
 impl Setup {
     pub fn new(kp_true: KinematicParams, noise: Noise, seconds: f64, seed: u64) -> Self {
-        Setup { kp_true, noise, seconds, seed, config: ServoConfig::nominal(), dsmc: DsmcGains::tuned() }
+        Setup {
+            kp_true,
+            noise,
+            seconds,
+            seed,
+            config: ServoConfig::nominal(),
+            dsmc: DsmcGains::tuned(),
+        }
     }
 }
 
 /// Runs one scheme on the analytic plant along `traj`, starting at rest at home.
 pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
     let start = rss6_core::home_pose();
-    let mut plant = ModelPlant::new(setup.kp_true, DynamicParams::nominal(), &start, setup.noise, setup.seed);
+    let mut plant = ModelPlant::new(
+        setup.kp_true,
+        DynamicParams::nominal(),
+        &start,
+        setup.noise,
+        setup.seed,
+    );
     let kp = KinematicParams::nominal();
     let kappa0 = plant.potentiometers();
     let theta0 = kp.theta_from_reading(&kappa0);
-    let mut servo =
-        Servo::new(kp, setup.config, scheme(which, &theta0, setup.dsmc), &start, &kappa0, 0.0).unwrap();
+    let mut servo = Servo::new(
+        kp,
+        setup.config,
+        scheme(which, &theta0, setup.dsmc),
+        &start,
+        &kappa0,
+        0.0,
+    )
+    .unwrap();
     let lambda = setup.dsmc.lambda;
     let mut st = Stats::default();
     let ticks = (setup.seconds / 1e-3).round() as u32;
     let mut prev = plant.state;
-    let summary = run(&mut plant, &mut servo, traj, 0.0, ticks, |rec: &TickRecord, p: &ModelPlant| {
-        // Error at the start of the tick: reference at t vs the true pose at t. The plant has already
-        // stepped, so compare with the reference at the plant's new time instead.
-        let t = p.time();
-        let r = traj.sample(t);
-        let e = r.pose - p.state.pose;
-        for i in 0..6 {
-            st.sq[i] += e[i] * e[i];
-            st.abs[i] += e[i].abs();
-        }
-        st.pos_sq += e.fixed_rows::<3>(0).norm_squared();
-        st.ang_sq += e.fixed_rows::<3>(3).norm_squared();
-        st.n += 1;
-        if let (Some(z), Some(tick)) = (rec.camera, rec.tick) {
-            // The frame and the estimate are for rec.t, when the true state was `prev`.
-            if let Some(est) = tick.estimate {
-                let v_true = prev.pose_dot;
-                for i in 0..6 {
-                    st.cam_sq[i] += (z[i] - prev.pose[i]).powi(2);
-                    st.est_sq[i] += (est.pose[i] - prev.pose[i]).powi(2);
-                    st.vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
-                    st.vel_sq[i] += v_true[i].powi(2);
-                }
-                st.kf_n += 1;
+    let summary = run(
+        &mut plant,
+        &mut servo,
+        traj,
+        0.0,
+        ticks,
+        |rec: &TickRecord, p: &ModelPlant| {
+            // Error at the start of the tick: reference at t vs the true pose at t. The plant has already
+            // stepped, so compare with the reference at the plant's new time instead.
+            let t = p.time();
+            let r = traj.sample(t);
+            let e = r.pose - p.state.pose;
+            for i in 0..6 {
+                st.sq[i] += e[i] * e[i];
+                st.abs[i] += e[i].abs();
             }
-        }
-        prev = p.state;
-        if rec.tick.map(|x| x.frame).unwrap_or(false) {
-            let f_true = (r.pose_dot - p.state.pose_dot) + lambda.component_mul(&e);
-            let f_ctrl = rec.tick.and_then(|x| x.dsmc).map(|d| d.1).unwrap_or(Vec6::zeros());
-            st.sliding.push((t, f_true, f_ctrl));
-            st.trace.push((t, e));
-        }
-    })
+            st.pos_sq += e.fixed_rows::<3>(0).norm_squared();
+            st.ang_sq += e.fixed_rows::<3>(3).norm_squared();
+            st.n += 1;
+            if let (Some(z), Some(tick)) = (rec.camera, rec.tick) {
+                // The frame and the estimate are for rec.t, when the true state was `prev`.
+                if let Some(est) = tick.estimate {
+                    let v_true = prev.pose_dot;
+                    for i in 0..6 {
+                        st.cam_sq[i] += (z[i] - prev.pose[i]).powi(2);
+                        st.est_sq[i] += (est.pose[i] - prev.pose[i]).powi(2);
+                        st.vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
+                        st.vel_sq[i] += v_true[i].powi(2);
+                    }
+                    st.kf_n += 1;
+                }
+            }
+            prev = p.state;
+            if rec.tick.map(|x| x.frame).unwrap_or(false) {
+                let f_true = (r.pose_dot - p.state.pose_dot) + lambda.component_mul(&e);
+                let f_ctrl = rec
+                    .tick
+                    .and_then(|x| x.dsmc)
+                    .map(|d| d.1)
+                    .unwrap_or(Vec6::zeros());
+                st.sliding.push((t, f_true, f_ctrl));
+                st.trace.push((t, e));
+            }
+        },
+    )
     .unwrap();
     st.first_fault = summary.first_fault;
     st
