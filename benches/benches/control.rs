@@ -34,7 +34,12 @@ fn converter_tick(c: &mut Criterion) {
     let tau = Vec6::new(3.0, -2.0, 4.0, 1.0, -3.5, 2.5);
     let theta = Vec6::repeat(0.01);
     c.bench_function("control/converter_tick", |b| {
-        b.iter(|| black_box(conv.step(black_box(&tau), black_box(&theta), &mut guard).unwrap()))
+        b.iter(|| {
+            black_box(
+                conv.step(black_box(&tau), black_box(&theta), &mut guard)
+                    .unwrap(),
+            )
+        })
     });
 }
 

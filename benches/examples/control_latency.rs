@@ -49,7 +49,10 @@ fn main() {
     for (k, slot) in ns.iter_mut().enumerate() {
         let tau = Vec6::repeat(2.0 + 1e-3 * (k % 100) as f64);
         let t0 = Instant::now();
-        black_box(conv.step(black_box(&tau), black_box(&theta), &mut guard).unwrap());
+        black_box(
+            conv.step(black_box(&tau), black_box(&theta), &mut guard)
+                .unwrap(),
+        );
         *slot = t0.elapsed().as_nanos() as u64;
     }
     report("converter tick", &mut ns);

@@ -23,9 +23,9 @@ pub const RICCATI_MAX_ITERATIONS: u32 = 20_000;
 /// Tuning of the pose Kalman filter. Indices follow χ = [x, y, z, α, β, γ].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KalmanConfig {
-    /// Spectral density of the white jerk driving χ̈ (Q_c[2,2]); m²/s⁵ for x, y, z and rad²/s⁵ for α, β, γ.
+    /// Spectral density of the white jerk driving χ̈ (Q_c(2,2)); m²/s⁵ for x, y, z and rad²/s⁵ for α, β, γ.
     pub q_jerk: Vec6,
-    /// Spectral density of white noise on the velocity equation (Q_c[1,1]), m²/s³ or rad²/s³; 0 for the
+    /// Spectral density of white noise on the velocity equation (Q_c(1,1)), m²/s³ or rad²/s³; 0 for the
     /// pure third-order integrator.
     pub q_vel: Vec6,
     /// Variance of one camera sample R (m² or rad²); Table 4.1: (0.0096 mm)², (0.0261°)².

@@ -2,7 +2,12 @@
 //!
 //! One `#[test]` only: the counter is process-wide, so no other test may run concurrently in this binary.
 
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::needless_range_loop)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
 
 mod common;
 
@@ -26,7 +31,10 @@ fn allocations(f: impl FnOnce()) -> usize {
 
 #[test]
 fn every_step_is_allocation_free() {
-    assert!(allocations(|| drop(black_box(vec![1u8; 64]))) > 0, "allocation counter is not counting");
+    assert!(
+        allocations(|| drop(black_box(vec![1u8; 64]))) > 0,
+        "allocation counter is not counting"
+    );
 
     let kp = KinematicParams::nominal();
     let dp = DynamicParams::nominal();
@@ -39,8 +47,14 @@ fn every_step_is_allocation_free() {
     };
     let theta = Vec6::repeat(0.01);
     let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
-    let mut kf_ss =
-        PoseKalman::new(KalmanConfig { steady_state: true, ..KalmanConfig::thesis() }, &home_pose()).unwrap();
+    let mut kf_ss = PoseKalman::new(
+        KalmanConfig {
+            steady_state: true,
+            ..KalmanConfig::thesis()
+        },
+        &home_pose(),
+    )
+    .unwrap();
     let mut dsmc = Dsmc::new(kp, dp, DsmcGains::tuned()).unwrap();
     let mut kcsc = Kcsc::new(kp, CartesianPidGains::thesis(), &Vec6::zeros()).unwrap();
     let mut vpid = VisualPid::new(kp, CartesianPidGains::thesis(), &Vec6::zeros()).unwrap();
@@ -60,7 +74,10 @@ fn every_step_is_allocation_free() {
             sink += kf_ss.step(0.033, z.as_ref()).unwrap().pose_dot[1];
             sink += dsmc.step(&r1, &est, 0.033).unwrap().tau_a[2];
             sink += kcsc.step(&r2, &est, 0.033).unwrap().theta_d[3];
-            sink += vpid.step(&r1, &est.pose, &est.pose_dot, 0.033).unwrap().theta_d[4];
+            sink += vpid
+                .step(&r1, &est.pose, &est.pose_dot, 0.033)
+                .unwrap()
+                .theta_d[4];
             sink += kjsc.step(&r2, &theta, 0.033).unwrap().theta_d[5];
             let tau = Vec6::repeat(1.0 + 0.01 * k as f64);
             let out = conv.step(&tau, &theta, &mut guard).unwrap();
@@ -86,7 +103,10 @@ fn every_step_is_allocation_free() {
             KinematicParams::perturbed(&table_4_2_errors(3)),
             dp,
             &start,
-            Noise { camera: true, potentiometer: true },
+            Noise {
+                camera: true,
+                potentiometer: true,
+            },
             5,
         );
         let kappa0 = <ModelPlant as Plant>::potentiometers(&plant);
@@ -109,7 +129,10 @@ fn every_step_is_allocation_free() {
             black_box(s);
         });
         assert_eq!(n, 0, "{which:?}: servo loop allocated {n} times");
-        assert!(frames >= 9, "the loop must have consumed camera frames ({frames})");
+        assert!(
+            frames >= 9,
+            "the loop must have consumed camera frames ({frames})"
+        );
     }
 }
 

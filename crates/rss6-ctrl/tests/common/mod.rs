@@ -1,7 +1,14 @@
 //! The analytic-model "robot" for closed-loop tests: rss6-core forward dynamics + RK4 at 1 kHz, the
 //! drive's [`JointPid`] on potentiometer readings (500 Hz, 0.2233 bit noise), a 30 Hz camera with the
 //! Table 4.1 noise, and kinematics that may differ from the controllers' nominal model (Table 4.2 sizes).
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![allow(
+    dead_code,
+    unreachable_pub,
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic
+)]
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
