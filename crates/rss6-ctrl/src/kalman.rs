@@ -39,8 +39,9 @@ pub struct KalmanConfig {
 }
 
 impl KalmanConfig {
-    /// Camera noise of Table 4.1 and a jerk density tuned for the thesis trajectories on the nominal robot
-    /// (filter bandwidth ≈ 3–4 Hz at 30 Hz sampling; see docs/control.md).
+    /// Camera noise of Table 4.1 and the *servo* jerk densities (1e-2 m²/s⁵, 3 rad²/s⁵): little lag, so the
+    /// DSMC's 30 Hz velocity loop stays stable; noise reduction is modest (see docs/control.md). Lower
+    /// `q_jerk` smooths more and lags more.
     pub fn thesis() -> Self {
         let sp = 0.0096e-3;
         let sa = 0.0261_f64.to_radians();
