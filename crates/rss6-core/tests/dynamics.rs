@@ -5,8 +5,9 @@
     non_snake_case,
     clippy::unwrap_used,
     clippy::expect_used,
-    clippy::panic
-)]
+    clippy::panic,
+    clippy::needless_range_loop
+)] // tests may panic; legs are indexed as in the thesis
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
