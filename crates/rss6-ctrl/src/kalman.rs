@@ -233,6 +233,25 @@ impl PoseKalman {
         }
     }
 
+    /// The estimate extrapolated `ahead` seconds (≥ 0) with Φ(ahead), without changing the filter: used to
+    /// bring a latency-delayed estimate to the present.
+    pub fn predicted(&self, ahead: f64) -> PoseEstimate {
+        let phi = transition(ahead.max(0.0));
+        let s = |i: usize| {
+            self.axes
+                .get(i)
+                .map_or(Vector3::repeat(f64::NAN), |a| phi * a.s)
+        };
+        let mut out = self.estimate();
+        for i in 0..6 {
+            let x = s(i);
+            out.pose[i] = x[0];
+            out.pose_dot[i] = x[1];
+            out.pose_ddot[i] = x[2];
+        }
+        out
+    }
+
     /// One step: predict over `dt` (s, time since the previous step), then update with `measurement`
     /// (the camera pose χ̄_E, m and rad) if a frame arrived; `None` = predict only (missing frame).
     ///

@@ -43,6 +43,9 @@ pub struct ModelPlant {
     pub dt: f64,
     pub camera_every: u64,
     pub pot_every: u64,
+    /// Frames are delivered this many ticks after exposure.
+    pub camera_latency_ticks: u64,
+    in_flight: std::collections::VecDeque<(u64, Vec6)>,
     noise: Noise,
     kappa: Vec6,
     pending_frame: Option<Vec6>,
@@ -70,6 +73,8 @@ impl ModelPlant {
             dt: 1e-3,
             camera_every: 33,
             pot_every: 2,
+            camera_latency_ticks: 0,
+            in_flight: std::collections::VecDeque::with_capacity(8),
             noise,
             kappa: Vec6::zeros(),
             pending_frame: None,
@@ -108,7 +113,19 @@ impl ModelPlant {
                 z[i] += Normal::new(0.0, s).unwrap().sample(&mut self.rng);
             }
         }
-        self.pending_frame = Some(z);
+        self.in_flight
+            .push_back((self.tick + self.camera_latency_ticks, z));
+        self.deliver();
+    }
+
+    fn deliver(&mut self) {
+        while let Some(&(due, z)) = self.in_flight.front() {
+            if due > self.tick {
+                break;
+            }
+            self.in_flight.pop_front();
+            self.pending_frame = Some(z);
+        }
     }
 }
 
@@ -127,6 +144,7 @@ impl Plant for ModelPlant {
         if self.tick % self.camera_every == 0 {
             self.sample_camera();
         }
+        self.deliver();
         Ok(())
     }
 
@@ -217,6 +235,8 @@ pub struct Setup {
     pub seed: u64,
     pub config: ServoConfig,
     pub dsmc: DsmcGains,
+    /// Camera latency of the plant (ticks of 1 ms).
+    pub latency_ticks: u64,
 }
 
 impl Setup {
@@ -228,6 +248,7 @@ impl Setup {
             seed,
             config: ServoConfig::nominal(),
             dsmc: DsmcGains::tuned(),
+            latency_ticks: 0,
         }
     }
 }
@@ -242,6 +263,7 @@ pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
         setup.noise,
         setup.seed,
     );
+    plant.camera_latency_ticks = setup.latency_ticks;
     let kp = KinematicParams::nominal();
     let kappa0 = plant.potentiometers();
     let theta0 = kp.theta_from_reading(&kappa0);
