@@ -153,7 +153,16 @@ pub fn jacobian_stewart(
     tips: &[Vec3; LEGS],
 ) -> Result<(Mat6, Vec6)> {
     check_finite(pose.as_slice())?;
-    let rot = pose_rotation(pose);
+    stewart_with_rotation(kp, &pose_rotation(pose), pose, tips)
+}
+
+/// [`jacobian_stewart`] for a rotation already computed from `pose` (the FK loop shares its trig).
+pub(crate) fn stewart_with_rotation(
+    kp: &KinematicParams,
+    rot: &Mat3,
+    pose: &Vec6,
+    tips: &[Vec3; LEGS],
+) -> Result<(Mat6, Vec6)> {
     let e = Vec3::new(pose[0], pose[1], pose[2]);
     let mut j = Mat6::zeros();
     let mut len = Vec6::zeros();
@@ -161,7 +170,7 @@ pub fn jacobian_stewart(
         let a_rel = rot * kp.platform_joints[i];
         let l = a_rel + e - tips[i];
         let n = l.norm();
-        if !(n > 0.0) {
+        if n.is_nan() || n <= 0.0 {
             return Err(CoreError::Singular(SingularKind::StewartJacobian));
         }
         let u = l / n;

@@ -48,3 +48,8 @@ pub use crate::pose::{
 };
 pub use crate::regressor::{regressor, regressor_tau_g, regressor_with_gravity, Regressor};
 pub use crate::types::{LegJacobian, Mat3, Mat3x6, Mat6, Vec3, Vec6, LEGS};
+pub use crate::workspace::{
+    homeomorphism_check, scan_box, singularity_check, type_i_check, type_ii_check, verify_box,
+    BoxLimits, BoxReport, BoxViolation, HomeomorphismCheck, PoseBox, SingularityCheck, TypeICheck,
+    TypeIICheck, ViolationKind, DOCUMENTED_BOX_HALF_WIDTH, MAX_POINTS_PER_AXIS, TYPE_I_SIGNS,
+};
