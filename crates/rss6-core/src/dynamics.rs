@@ -158,11 +158,9 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
     let l_dot = e_dot + a_dot - w_dot;
     let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
     let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-    let r_dot = (Vec6::new(
-        l_dot[0], l_dot[1], l_dot[2], al_dot[0], al_dot[1], al_dot[2],
-    ) - r * m_dot)
-        * inv_m;
-    let theta_ddot = r.dot(v_dot) + r_dot.dot(v);
+    // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
+    let theta_ddot =
+        r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
     // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
     let t_acc = S_HAT.cross(&w) * theta_ddot + S_HAT.cross(&w_dot) * theta_dot;
     let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
@@ -217,12 +215,48 @@ fn twist_force(
     Ok((f, theta_dot, j_ad_t))
 }
 
+/// Solves A x = b (6 × 6) by Gaussian elimination with partial pivoting on the stack; `None` if a pivot
+/// is zero or not finite. (nalgebra's `lu().solve()` does the same with copies of A and b; this is
+/// cheaper, and the solve is ~10 % of an inverse-dynamics call.)
+fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
+    for k in 0..6 {
+        let (mut p, mut max) = (k, a[(k, k)].abs());
+        for r in k + 1..6 {
+            let v = a[(r, k)].abs();
+            if v > max {
+                (p, max) = (r, v);
+            }
+        }
+        if max == 0.0 || !max.is_finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(k, p);
+            b.swap_rows(k, p);
+        }
+        let inv = 1.0 / a[(k, k)];
+        for r in k + 1..6 {
+            let f = a[(r, k)] * inv;
+            for c in k + 1..6 {
+                a[(r, c)] -= f * a[(k, c)];
+            }
+            b[r] -= f * b[k];
+        }
+    }
+    let mut x = Vec6::zeros();
+    for k in (0..6).rev() {
+        let mut s = b[k];
+        for c in k + 1..6 {
+            s -= a[(k, c)] * x[c];
+        }
+        x[k] = s / a[(k, k)];
+    }
+    Some(x)
+}
+
 /// Solves J_adᵀ x = f (x = actuator torques that produce twist-space force f).
 fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
-    let x = j_ad_t
-        .lu()
-        .solve(f)
-        .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+    let x = solve6(*j_ad_t, *f).ok_or(CoreError::Singular(SingularKind::TypeII))?;
     check_finite(x.as_slice()).map_err(|_| CoreError::Singular(SingularKind::TypeII))?;
     Ok(x)
 }
