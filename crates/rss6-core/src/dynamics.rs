@@ -142,6 +142,7 @@ impl LegAcc {
     }
 }
 
+#[inline(always)]
 pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
     let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
     let e_dot = Vec3::new(v[0], v[1], v[2]);
