@@ -24,6 +24,7 @@ TARGETS_NS='
 kinematics/ik 300
 kinematics/fk_warm 1000
 kinematics/fk_cold 3000
+dynamics/inverse_dynamics 2000
 '
 
 mkdir -p "$CRITERION_DIR"

@@ -51,7 +51,10 @@ use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::leg_jacobians::{leg_kin, leg_m, leg_static, LegKin, S_HAT};
 use crate::params::{Body, DynamicParams, KinematicParams};
-use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
+use crate::pose::{
+    euler_rate_jacobian, euler_rate_jacobian_dot, twist_jacobian, twist_jacobian_dot,
+    twist_jacobian_inverse,
+};
 use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
 
 /// Standard gravity in the base frame, g = [0, 0, −9.81] m/s² (the base's z axis points up).
@@ -260,6 +263,28 @@ fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
     let x = solve6(*j_ad_t, *f).ok_or(CoreError::Singular(SingularKind::TypeII))?;
     check_finite(x.as_slice()).map_err(|_| CoreError::Singular(SingularKind::TypeII))?;
     Ok(x)
+}
+
+/// v_E = J_s χ̇ and v̇_E = J_s χ̈ + J̇_s χ̇ (eq. 3.23, 5.12) with 3 × 3 blocks only (J_s = diag(I, J_e)).
+#[inline]
+fn twist_and_rate(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> (Vec6, Vec6) {
+    let je = euler_rate_jacobian(pose[3], pose[4]);
+    let je_dot = euler_rate_jacobian_dot(pose[3], pose[4], pose_dot[3], pose_dot[4]);
+    let phi_dot = Vec3::new(pose_dot[3], pose_dot[4], pose_dot[5]);
+    let phi_ddot = Vec3::new(pose_ddot[3], pose_ddot[4], pose_ddot[5]);
+    let w = je * phi_dot;
+    let w_dot = je * phi_ddot + je_dot * phi_dot;
+    (
+        Vec6::new(pose_dot[0], pose_dot[1], pose_dot[2], w[0], w[1], w[2]),
+        Vec6::new(
+            pose_ddot[0],
+            pose_ddot[1],
+            pose_ddot[2],
+            w_dot[0],
+            w_dot[1],
+            w_dot[2],
+        ),
+    )
 }
 
 fn check_state(pose_dot: &Vec6, more: &Vec6) -> Result<()> {
@@ -496,9 +521,7 @@ pub fn inverse_dynamics_with_gravity(
     check_state(pose_dot, pose_ddot)?;
     check_finite(g.as_slice())?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let js = twist_jacobian(pose);
-    let v = js * pose_dot;
-    let v_dot = js * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot;
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
     let (f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, g)?;
     Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
 }
