@@ -528,6 +528,9 @@ pub fn inverse_dynamics_with_gravity(
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
 /// torques τ_a (N·m), with g = [`GRAVITY`]. Solves M̃χ̈ = J_θᵀ τ_a − C̃χ̇ − G̃ − τ̃_f by Cholesky.
+///
+/// Errors: IK errors, [`CoreError::Singular`] (type I; `Matrix` if M is not positive definite, which
+/// only happens for non-physical Ξ; `Euler` at |β| = π/2), [`CoreError::NonFinite`].
 pub fn forward_dynamics(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -673,7 +676,8 @@ impl ModelState {
 }
 
 /// One classical fourth-order Runge–Kutta step of length `dt` (s) of the forward dynamics with the
-/// actuator torques τ_a (N·m) held constant over the step, g = [`GRAVITY`].
+/// actuator torques τ_a (N·m) held constant over the step, g = [`GRAVITY`]. Errors as
+/// [`forward_dynamics`] at any of the four stages (e.g. a stage state leaving the workspace).
 pub fn rk4_step(
     kp: &KinematicParams,
     dp: &DynamicParams,
