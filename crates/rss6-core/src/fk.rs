@@ -15,7 +15,7 @@ use crate::ik::{ik, wrench_tips};
 use crate::jacobian::{stewart_rows, LegGeometry, Rows6};
 use crate::params::KinematicParams;
 use crate::pose::EulerTrig;
-use crate::types::{Mat6, Vec3, Vec6, LEGS};
+use crate::types::{Vec3, Vec6, LEGS};
 
 /// Stopping rules of the iterative FK solvers (step 1 of §3.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -226,6 +226,7 @@ pub fn fk_theta_newton(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::types::Mat6;
 
     #[test]
     fn solve6_matches_nalgebra_lu() {
