@@ -128,3 +128,25 @@ fn fk_reports_non_convergence_with_the_iteration_bound() {
         }
     }
 }
+
+#[test]
+fn invalid_fk_options_are_rejected() {
+    let kp = KinematicParams::nominal();
+    for bad in [
+        FkOptions {
+            eps_c: -1.0,
+            ..FkOptions::default()
+        },
+        FkOptions {
+            eps_p: f64::NAN,
+            ..FkOptions::default()
+        },
+    ] {
+        for r in [
+            fk(&kp, &Vec6::zeros(), &home_pose(), &bad),
+            fk_theta_newton(&kp, &Vec6::zeros(), &home_pose(), &bad),
+        ] {
+            assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
+        }
+    }
+}
