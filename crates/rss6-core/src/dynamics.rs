@@ -142,6 +142,7 @@ impl LegAcc {
     }
 }
 
+#[inline(always)]
 pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
     let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
     let e_dot = Vec3::new(v[0], v[1], v[2]);
@@ -158,11 +159,9 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
     let l_dot = e_dot + a_dot - w_dot;
     let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
     let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-    let r_dot = (Vec6::new(
-        l_dot[0], l_dot[1], l_dot[2], al_dot[0], al_dot[1], al_dot[2],
-    ) - r * m_dot)
-        * inv_m;
-    let theta_ddot = r.dot(v_dot) + r_dot.dot(v);
+    // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
+    let theta_ddot =
+        r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
     // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
     let t_acc = S_HAT.cross(&w) * theta_ddot + S_HAT.cross(&w_dot) * theta_dot;
     let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
@@ -217,12 +216,48 @@ fn twist_force(
     Ok((f, theta_dot, j_ad_t))
 }
 
+/// Solves A x = b (6 × 6) by Gaussian elimination with partial pivoting on the stack; `None` if a pivot
+/// is zero or not finite. (nalgebra's `lu().solve()` does the same with copies of A and b; this is
+/// cheaper, and the solve is ~10 % of an inverse-dynamics call.)
+fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
+    for k in 0..6 {
+        let (mut p, mut max) = (k, a[(k, k)].abs());
+        for r in k + 1..6 {
+            let v = a[(r, k)].abs();
+            if v > max {
+                (p, max) = (r, v);
+            }
+        }
+        if max == 0.0 || !max.is_finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(k, p);
+            b.swap_rows(k, p);
+        }
+        let inv = 1.0 / a[(k, k)];
+        for r in k + 1..6 {
+            let f = a[(r, k)] * inv;
+            for c in k + 1..6 {
+                a[(r, c)] -= f * a[(k, c)];
+            }
+            b[r] -= f * b[k];
+        }
+    }
+    let mut x = Vec6::zeros();
+    for k in (0..6).rev() {
+        let mut s = b[k];
+        for c in k + 1..6 {
+            s -= a[(k, c)] * x[c];
+        }
+        x[k] = s / a[(k, k)];
+    }
+    Some(x)
+}
+
 /// Solves J_adᵀ x = f (x = actuator torques that produce twist-space force f).
 fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
-    let x = j_ad_t
-        .lu()
-        .solve(f)
-        .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+    let x = solve6(*j_ad_t, *f).ok_or(CoreError::Singular(SingularKind::TypeII))?;
     check_finite(x.as_slice()).map_err(|_| CoreError::Singular(SingularKind::TypeII))?;
     Ok(x)
 }
@@ -305,6 +340,13 @@ fn twist_terms(geom: &LegGeometry, dp: &DynamicParams, v: &Vec6, g: &Vec3) -> Re
 /// Mass matrix M̃(χ) (eq. 6.2, χ coordinates), 6 × 6, symmetric positive definite in the workspace.
 /// Units: kg (translation block), kg·m (coupling), kg·m² (rotation block).
 ///
+/// Bodies (13): the platform (centre of mass E, inertia R·diag(I_x, I_y, I_z)·Rᵀ, [`platform_inertia`]);
+/// wrench i (centre of mass at the midpoint of B_i T_i, only I_z about the axis through it parallel
+/// to ŝ enters, [`wrench_axial_inertia`]); link i (centre of mass at the midpoint of T_i A_i, no spin
+/// about its axis (Assumption 2), only the transverse moment (I_x + I_y)/2 enters,
+/// [`link_transverse_inertia`]). M̃ = J_sᵀ M J_s with M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i)
+/// (eq. 3.47); see `docs/dynamics.md`.
+///
 /// ```
 /// use rss6_core::{mass_matrix, home_pose, DynamicParams, KinematicParams};
 /// let m = mass_matrix(&KinematicParams::nominal(), &DynamicParams::nominal(), &home_pose()).unwrap();
@@ -318,8 +360,12 @@ pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Res
     Ok(js.transpose() * m * js)
 }
 
-/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2 with the J_a,i J̇_s terms, see module docs): the
-/// velocity force is C̃·χ̇, and xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2).
+/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2): the velocity force is C̃·χ̇, and
+/// xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2), indeed dM̃/dt = C̃ + C̃ᵀ.
+///
+/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = `[0 0; 0 [ω]× I_p]`. Unlike eq. 6.2 as
+/// printed, the legs' J_a,iᵀ M_w,i J_a,i J̇_s terms (and the links') are kept: d(J_a,i J_s)/dt needs
+/// them, and without them Property 2 fails whenever the Euler angles move.
 pub fn coriolis(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -365,10 +411,69 @@ pub fn friction(
     Ok(j_theta.transpose() * joint_friction(dp, &(j_theta * pose_dot)))
 }
 
+// ---------------------------------------------------------------------------------------------
+// Twist-coordinate form (eq. 3.41, 3.47, 3.48): τ_g = J_adᵀ τ_a = M v̇_E + C v_E + G + τ_f.
+
+/// Mass matrix M(χ) of eq. 3.41/3.47 in twist coordinates v_E = [Ė; ω]: M̃ = J_sᵀ M J_s.
+pub fn mass_matrix_twist(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    twist_mass_matrix(&LegGeometry::at_pose(kp, pose)?, dp)
+}
+
+/// Coriolis matrix C(χ, v_E) of eq. 3.41/3.47 for the twist `v_e` = [Ė; ω] (m/s, rad/s):
+/// C = C_p + Σ (J_a,iᵀ M_w,i J̇_a,i + J_b,iᵀ M_l,i J̇_b,i). dM/dt − 2C is skew-symmetric.
+pub fn coriolis_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Mat6> {
+    check_finite(v_e.as_slice())?;
+    Ok(twist_terms(&LegGeometry::at_pose(kp, pose)?, dp, v_e, &GRAVITY)?.c)
+}
+
+/// Gravity G(χ) of eq. 3.41/3.47 in twist coordinates (N, N·m) for gravity `g` (m/s²): G̃ = J_sᵀ G.
+pub fn gravity_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    Ok(twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?.0)
+}
+
+/// Friction τ_f = J_adᵀ [f_c,i sign(θ̇_i) + f_v,i θ̇_i] of eq. 3.48 for the twist `v_e` (θ̇ = J_ad v_E).
+pub fn friction_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Vec6> {
+    check_finite(v_e.as_slice())?;
+    let j_ad = LegGeometry::at_pose(kp, pose)?.j_ad()?;
+    Ok(j_ad.transpose() * joint_friction(dp, &(j_ad * v_e)))
+}
+
 /// Actuator torques τ_a (N·m) for the motion (χ, χ̇, χ̈) (m, rad; /s; /s²), solving
 /// J_sᵀ J_adᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3) with g = [`GRAVITY`].
 ///
 /// Errors: IK errors, [`CoreError::Singular`] (type I or II), [`CoreError::NonFinite`].
+///
+/// ```
+/// use rss6_core::*;
+/// let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+/// let pose = Vec6::new(0.01, -0.01, 0.12, 0.02, 0.0, -0.03);
+/// let (pd, pdd) = (Vec6::new(0.1, 0.0, 0.0, 0.0, 0.5, 0.0), Vec6::new(0.0, 0.0, 1.0, 2.0, 0.0, 0.0));
+/// let tau = inverse_dynamics(&kp, &dp, &pose, &pd, &pdd).unwrap();
+/// // the forward dynamics gives the acceleration back
+/// let acc = forward_dynamics(&kp, &dp, &pose, &pd, &tau).unwrap();
+/// assert!((acc - pdd).amax() < 1e-9);
+/// // and J_θᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3)
+/// let t = dynamics_terms(&kp, &dp, &pose, &pd).unwrap();
+/// let rhs = t.m * pdd + t.c * pd + t.g + t.f;
+/// assert!((t.j_theta.transpose() * tau - rhs).amax() < 1e-9 * rhs.amax());
+/// ```
 pub fn inverse_dynamics(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -532,6 +637,16 @@ pub struct ModelState {
     pub pose: Vec6,
     /// χ̇.
     pub pose_dot: Vec6,
+}
+
+impl ModelState {
+    /// The robot at rest at `pose` (χ̇ = 0).
+    pub fn at_rest(pose: &Vec6) -> Self {
+        ModelState {
+            pose: *pose,
+            pose_dot: Vec6::zeros(),
+        }
+    }
 }
 
 /// One classical fourth-order Runge–Kutta step of length `dt` (s) of the forward dynamics with the
