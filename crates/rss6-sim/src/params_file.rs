@@ -9,7 +9,33 @@
 use crate::error::{Result, SimError};
 use rss6_core::{Body, DynamicParams, KinematicParams, Vec3, LEGS};
 use rss6_ctrl::PidGains;
-use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use serde::{de::DeserializeOwned, Deserialize, Deserializer, Serialize};
+
+/// Deserialises a fixed-size array, rejecting too many elements as well as too few (serde's own
+/// array impl ignores extra elements in some formats).
+fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+    d: D,
+) -> std::result::Result<[T; N], D::Error> {
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let n = v.len();
+    v.try_into().map_err(|_| {
+        serde::de::Error::invalid_length(n, &format!("an array of {N} elements").as_str())
+    })
+}
+
+/// [`exact`] for N × 3 arrays of points.
+fn exact_points<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> std::result::Result<[[f64; 3]; N], D::Error> {
+    #[derive(Deserialize)]
+    struct P(#[serde(deserialize_with = "exact")] [f64; 3]);
+    let v: Vec<P> = Vec::deserialize(d)?;
+    let n = v.len();
+    let pts: Vec<[f64; 3]> = v.into_iter().map(|p| p.0).collect();
+    pts.try_into().map_err(|_| {
+        serde::de::Error::invalid_length(n, &format!("an array of {N} points").as_str())
+    })
+}
 use std::path::Path;
 
 /// Kinematic parameter file.
@@ -17,18 +43,25 @@ use std::path::Path;
 #[serde(deny_unknown_fields)]
 pub struct KinematicParamsFile {
     /// B_i (m).
+    #[serde(deserialize_with = "exact_points")]
     pub base_joints: [[f64; 3]; LEGS],
     /// A'_i in ΣE (m).
+    #[serde(deserialize_with = "exact_points")]
     pub platform_joints: [[f64; 3]; LEGS],
     /// l_TB,i (m).
+    #[serde(deserialize_with = "exact")]
     pub wrench_lengths: [f64; LEGS],
     /// l_AT,i (m).
+    #[serde(deserialize_with = "exact")]
     pub link_lengths: [f64; LEGS],
     /// θ0_i (rad).
+    #[serde(deserialize_with = "exact")]
     pub theta0: [f64; LEGS],
     /// η_i (rad/bit).
+    #[serde(deserialize_with = "exact")]
     pub eta: [f64; LEGS],
     /// Δθ_i (rad).
+    #[serde(deserialize_with = "exact")]
     pub dtheta: [f64; LEGS],
 }
 
@@ -68,6 +101,7 @@ pub struct BodyFile {
     /// Mass (kg).
     pub mass: f64,
     /// Principal moments (kg·m²).
+    #[serde(deserialize_with = "exact")]
     pub inertia: [f64; 3],
 }
 
@@ -76,8 +110,10 @@ pub struct BodyFile {
 #[serde(deny_unknown_fields)]
 pub struct BodiesFile {
     /// Masses (kg).
+    #[serde(deserialize_with = "exact")]
     pub mass: [f64; LEGS],
     /// Principal moments (kg·m²).
+    #[serde(deserialize_with = "exact_points")]
     pub inertia: [[f64; 3]; LEGS],
 }
 
@@ -92,8 +128,10 @@ pub struct DynamicParamsFile {
     /// The links.
     pub links: BodiesFile,
     /// f_c,i (N·m).
+    #[serde(deserialize_with = "exact")]
     pub coulomb: [f64; LEGS],
     /// f_v,i (N·m·s/rad).
+    #[serde(deserialize_with = "exact")]
     pub viscous: [f64; LEGS],
 }
 
