@@ -19,7 +19,9 @@ pub use crate::effects::{
     REGISTRY,
 };
 pub use crate::error::{Result, SimError};
-pub use crate::log::{read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS};
+pub use crate::log::{
+    read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS,
+};
 pub use crate::params_file::{
     load_dynamic_params, load_kinematic_params, load_pid_gains, save_dynamic_params,
     save_kinematic_params, save_pid_gains, DynamicParamsFile, KinematicParamsFile, PidGainsFile,

@@ -143,7 +143,10 @@ impl From<&DynamicParams> for DynamicParamsFile {
         };
         let pi = d.platform.inertia;
         DynamicParamsFile {
-            platform: BodyFile { mass: d.platform.mass, inertia: [pi[0], pi[1], pi[2]] },
+            platform: BodyFile {
+                mass: d.platform.mass,
+                inertia: [pi[0], pi[1], pi[2]],
+            },
             wrenches: bodies(&d.wrenches),
             links: bodies(&d.links),
             coulomb: d.coulomb,
@@ -187,13 +190,17 @@ fn write<T: Serialize>(path: &Path, value: &T) -> Result<()> {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
-    std::fs::write(path, text)
-        .map_err(|source| SimError::Io { path: path.display().to_string(), source })
+    std::fs::write(path, text).map_err(|source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    })
 }
 
 fn read<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SimError::Io { path: path.display().to_string(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
     toml::from_str(&text).map_err(|e| SimError::ParamFile {
         path: path.display().to_string(),
         message: e.to_string(),
@@ -201,7 +208,10 @@ fn read<T: DeserializeOwned>(path: &Path) -> Result<T> {
 }
 
 fn invalid(path: &Path, e: rss6_core::CoreError) -> SimError {
-    SimError::ParamFile { path: path.display().to_string(), message: e.to_string() }
+    SimError::ParamFile {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
 }
 
 /// Writes kinematic parameters to a TOML file.
@@ -230,17 +240,31 @@ pub fn load_dynamic_params(path: &Path) -> Result<DynamicParams> {
 
 /// Writes PID gains to a TOML file.
 pub fn save_pid_gains(path: &Path, g: &PidGains) -> Result<()> {
-    write(path, &PidGainsFile { lp: g.lp, li: g.li, ld: g.ld })
+    write(
+        path,
+        &PidGainsFile {
+            lp: g.lp,
+            li: g.li,
+            ld: g.ld,
+        },
+    )
 }
 
 /// Reads PID gains from a TOML file (finite, ≥ 0).
 pub fn load_pid_gains(path: &Path) -> Result<PidGains> {
     let f: PidGainsFile = read(path)?;
-    if ![f.lp, f.li, f.ld].iter().all(|g| g.is_finite() && *g >= 0.0) {
+    if ![f.lp, f.li, f.ld]
+        .iter()
+        .all(|g| g.is_finite() && *g >= 0.0)
+    {
         return Err(SimError::ParamFile {
             path: path.display().to_string(),
             message: "PID gains must be finite and >= 0".into(),
         });
     }
-    Ok(PidGains { lp: f.lp, li: f.li, ld: f.ld })
+    Ok(PidGains {
+        lp: f.lp,
+        li: f.li,
+        ld: f.ld,
+    })
 }

@@ -117,7 +117,9 @@ impl CmmConfig {
     /// Checks the configuration.
     pub fn validate(&self) -> Result<()> {
         if self.reflectors.len() < 4 {
-            return Err(SimError::InvalidConfig("the CMM needs at least 4 reflectors".into()));
+            return Err(SimError::InvalidConfig(
+                "the CMM needs at least 4 reflectors".into(),
+            ));
         }
         if !(self.period > 0.0 && self.latency >= 0.0 && self.pixel_noise >= 0.0) {
             return Err(SimError::InvalidConfig(
@@ -215,7 +217,8 @@ impl OpticalCmm {
         const EPS: f64 = 1e-9;
         if time + EPS >= self.next_capture {
             let m = self.measure(truth)?;
-            self.pending.push_back((self.next_capture + self.latency, m));
+            self.pending
+                .push_back((self.next_capture + self.latency, m));
             self.next_capture += self.cfg.period;
         }
         self.out = None;
@@ -312,6 +315,7 @@ impl Potentiometers {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
     use rand::SeedableRng;
@@ -319,8 +323,15 @@ mod tests {
     #[test]
     fn kabsch_recovers_a_rigid_transform_exactly() {
         let iso = pose_to_isometry(&Vec6::new(0.3, -0.2, 2.0, 0.4, -0.3, 1.2));
-        let model: Vec<Vec3> = CmmConfig::c_track().reflectors.iter().map(|r| Vec3::from(*r)).collect();
-        let meas: Vec<Vec3> = model.iter().map(|p| (iso * Point3::from(*p)).coords).collect();
+        let model: Vec<Vec3> = CmmConfig::c_track()
+            .reflectors
+            .iter()
+            .map(|r| Vec3::from(*r))
+            .collect();
+        let meas: Vec<Vec3> = model
+            .iter()
+            .map(|p| (iso * Point3::from(*p)).coords)
+            .collect();
         let est = kabsch(&model, &meas).unwrap();
         assert!((est.to_homogeneous() - iso.to_homogeneous()).amax() < 1e-12);
     }

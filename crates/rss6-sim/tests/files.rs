@@ -1,4 +1,5 @@
 //! MCAP run logs (round trip, killed run, truncated file) and TOML parameter files.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{DynamicParams, KinematicParams};
 use rss6_ctrl::PidGains;
@@ -48,12 +49,20 @@ fn mcap_round_trip() {
     assert_eq!(log.readings.len(), 400);
     assert_eq!(log.commands.len(), 400);
     assert_eq!(log.torques.len(), 400);
-    let frames: Vec<_> = records.iter().filter_map(|r| r.camera.map(|c| (r.time, c))).collect();
+    let frames: Vec<_> = records
+        .iter()
+        .filter_map(|r| r.camera.map(|c| (r.time, c)))
+        .collect();
     assert_eq!(log.camera.len(), frames.len());
     assert!(frames.len() >= 12);
     for (r, (t, p)) in records.iter().zip(&log.true_pose) {
         assert!((r.time - t).abs() < 1e-9);
-        assert!((r.true_pose - p).amax() < 1e-12, "pose {} vs {}", r.true_pose, p);
+        assert!(
+            (r.true_pose - p).amax() < 1e-12,
+            "pose {} vs {}",
+            r.true_pose,
+            p
+        );
     }
     for ((t0, c0), (t1, c1)) in frames.iter().zip(&log.camera) {
         assert!((t0 - t1).abs() < 1e-9 && (c0 - c1).amax() < 1e-12);
@@ -84,7 +93,11 @@ fn a_killed_run_is_readable_up_to_its_last_finished_chunk() {
     std::mem::forget(logger);
     let log = read_log(&path).unwrap();
     assert!(!log.complete);
-    assert!(!log.true_pose.is_empty() && log.true_pose.len() < n, "{} of {n}", log.true_pose.len());
+    assert!(
+        !log.true_pose.is_empty() && log.true_pose.len() < n,
+        "{} of {n}",
+        log.true_pose.len()
+    );
     // What was read is a prefix of the run, in order.
     for w in log.true_pose.windows(2) {
         assert!(w[1].0 > w[0].0);
@@ -130,7 +143,11 @@ fn parameter_files_round_trip_and_bad_files_give_clear_errors() {
     let mut dp = DynamicParams::nominal();
     dp.coulomb[2] = 0.4;
     dp.links[4].mass = 1.5;
-    let pid = PidGains { lp: 350.0, li: 1800.0, ld: 3.5 };
+    let pid = PidGains {
+        lp: 350.0,
+        li: 1800.0,
+        ld: 3.5,
+    };
     let (pk, pd, pp) = (tmp("kin.toml"), tmp("dyn.toml"), tmp("pid.toml"));
     save_kinematic_params(&pk, &kp).unwrap();
     save_dynamic_params(&pd, &dp).unwrap();
@@ -139,7 +156,15 @@ fn parameter_files_round_trip_and_bad_files_give_clear_errors() {
     assert_eq!(load_dynamic_params(&pd).unwrap(), dp);
     assert_eq!(load_pid_gains(&pp).unwrap(), pid);
     let text = std::fs::read_to_string(&pk).unwrap();
-    for key in ["base_joints", "platform_joints", "wrench_lengths", "link_lengths", "theta0", "eta", "dtheta"] {
+    for key in [
+        "base_joints",
+        "platform_joints",
+        "wrench_lengths",
+        "link_lengths",
+        "theta0",
+        "eta",
+        "dtheta",
+    ] {
         assert!(text.contains(key), "missing key {key}");
     }
     // Corrupt, truncated, wrong shape, unknown key, invalid value.
@@ -147,19 +172,31 @@ fn parameter_files_round_trip_and_bad_files_give_clear_errors() {
     for (content, needle) in [
         ("this is not toml ][", "invalid parameter file"),
         (&text[..text.len() / 2], "invalid parameter file"),
-        (&text.replace("link_lengths = [", "link_lengths = [1.0, "), "invalid length 7"),
-        (&text.replace("link_lengths = [", "link_lengths = [\"a\", "), "invalid parameter file"),
+        (
+            &text.replace("link_lengths = [", "link_lengths = [1.0, "),
+            "invalid length 7",
+        ),
+        (
+            &text.replace("link_lengths = [", "link_lengths = [\"a\", "),
+            "invalid parameter file",
+        ),
         (&format!("{text}\nextra = 1\n"), "unknown field"),
     ] {
         std::fs::write(&bad, content).unwrap();
         let e = load_kinematic_params(&bad).unwrap_err();
         assert!(matches!(e, SimError::ParamFile { .. }), "{e}");
-        assert!(e.to_string().contains(needle) && e.to_string().contains("bad.toml"), "{e}");
+        assert!(
+            e.to_string().contains(needle) && e.to_string().contains("bad.toml"),
+            "{e}"
+        );
     }
     let missing = load_kinematic_params(&tmp("does_not_exist.toml")).unwrap_err();
     assert!(matches!(missing, SimError::Io { .. }), "{missing}");
     let mut neg = dp;
     neg.platform.mass = -1.0;
     save_dynamic_params(&pd, &neg).unwrap();
-    assert!(matches!(load_dynamic_params(&pd).unwrap_err(), SimError::ParamFile { .. }));
+    assert!(matches!(
+        load_dynamic_params(&pd).unwrap_err(),
+        SimError::ParamFile { .. }
+    ));
 }
