@@ -12,10 +12,10 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::ik::{ik, wrench_tips};
-use crate::jacobian::{stewart_with_rotation, LegGeometry};
+use crate::jacobian::{stewart_rows, LegGeometry, Rows6};
 use crate::params::KinematicParams;
 use crate::pose::EulerTrig;
-use crate::types::{Mat6, Vec3, Vec6, LEGS};
+use crate::types::{Vec3, Vec6, LEGS};
 
 /// Stopping rules of the iterative FK solvers (step 1 of §3.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,14 +59,16 @@ fn check_inputs(theta: &Vec6, guess: &Vec6, opts: &FkOptions) -> Result<()> {
     Ok(())
 }
 
-/// Solves A x = b (6 × 6) by Gaussian elimination with partial pivoting on the stack; `None` if a
+/// Solves A x = b (6 × 6, A given by rows) by Gaussian elimination with partial pivoting on the stack; `None` if a
 /// pivot is zero or not finite. nalgebra's `lu().solve()` does the same but copies the matrix and the
 /// right-hand side; this was ~40 % of an FK solve, so the two Newton loops use this instead.
-fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
+fn solve6(mut m: Rows6, b: Vec6) -> Option<Vec6> {
+    // Rows are contiguous, so the row operations vectorise.
+    let mut y: [f64; 6] = b.into();
     for k in 0..6 {
-        let (mut p, mut max) = (k, a[(k, k)].abs());
-        for r in k + 1..6 {
-            let v = a[(r, k)].abs();
+        let (mut p, mut max) = (k, m[k][k].abs());
+        for (r, row) in m.iter().enumerate().skip(k + 1) {
+            let v = row[k].abs();
             if v > max {
                 (p, max) = (r, v);
             }
@@ -74,28 +76,28 @@ fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
         if max == 0.0 || !max.is_finite() {
             return None;
         }
-        if p != k {
-            a.swap_rows(k, p);
-            b.swap_rows(k, p);
-        }
-        let inv = 1.0 / a[(k, k)];
-        for r in k + 1..6 {
-            let f = a[(r, k)] * inv;
-            for c in k + 1..6 {
-                a[(r, c)] -= f * a[(k, c)];
+        m.swap(k, p);
+        y.swap(k, p);
+        let pivot = m[k];
+        let yk = y[k];
+        let inv = 1.0 / pivot[k];
+        for (row, yr) in m.iter_mut().zip(y.iter_mut()).skip(k + 1) {
+            let f = row[k] * inv;
+            for (x, pv) in row.iter_mut().zip(pivot.iter()) {
+                *x -= f * pv;
             }
-            b[r] -= f * b[k];
+            *yr -= f * yk;
         }
     }
-    let mut x = Vec6::zeros();
+    let mut x = [0.0; 6];
     for k in (0..6).rev() {
-        let mut s = b[k];
+        let mut s = y[k];
         for c in k + 1..6 {
-            s -= a[(k, c)] * x[c];
+            s -= m[k][c] * x[c];
         }
-        x[k] = s / a[(k, k)];
+        x[k] = s / m[k][k];
     }
-    Some(x)
+    Some(Vec6::from(x))
 }
 
 /// Converts a twist-space step [ΔE; Δω] into a pose step [ΔE; Δφ] (Δφ = J_e⁻¹ Δω, eq. 3.22).
@@ -111,9 +113,9 @@ fn stewart_at(
     kp: &KinematicParams,
     pose: &Vec6,
     tips: &[Vec3; LEGS],
-) -> Result<(EulerTrig, Mat6, Vec6)> {
+) -> Result<(EulerTrig, Rows6, Vec6)> {
     let trig = EulerTrig::of_pose(pose);
-    let (jp, len) = stewart_with_rotation(kp, &trig.rotation(), pose, tips)?;
+    let (jp, len) = stewart_rows(kp, &trig.rotation(), pose, tips)?;
     Ok((trig, jp, len))
 }
 
@@ -206,7 +208,8 @@ pub fn fk_theta_newton(
                 residual,
             });
         }
-        let step = solve6(geo.j_theta()?, dth).ok_or(CoreError::Singular(SingularKind::TypeII))?;
+        let rows: Rows6 = geo.j_theta()?.transpose().into();
+        let step = solve6(rows, dth).ok_or(CoreError::Singular(SingularKind::TypeII))?;
         pose += step;
         iterations += 1;
         if step.amax() < opts.eps_p {
@@ -223,6 +226,7 @@ pub fn fk_theta_newton(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::types::Mat6;
 
     #[test]
     fn solve6_matches_nalgebra_lu() {
@@ -239,7 +243,7 @@ mod tests {
                     }
             });
             let b = Vec6::from_fn(|r, _| libm::cos(r as f64 + 0.3 * s));
-            let x = solve6(a, b);
+            let x = solve6(a.transpose().into(), b);
             match a.lu().solve(&b) {
                 Some(y) => {
                     let x = x.unwrap_or_else(Vec6::zeros);
@@ -250,7 +254,7 @@ mod tests {
         }
         let mut singular = Mat6::identity();
         singular.set_row(4, &singular.row(2).clone_owned());
-        assert!(solve6(singular, Vec6::repeat(1.0)).is_none());
-        assert!(solve6(Mat6::repeat(f64::NAN), Vec6::repeat(1.0)).is_none());
+        assert!(solve6(singular.transpose().into(), Vec6::repeat(1.0)).is_none());
+        assert!(solve6([[f64::NAN; 6]; 6], Vec6::repeat(1.0)).is_none());
     }
 }

@@ -26,7 +26,10 @@ fn typed_errors() {
         other => panic!("{other:?}"),
     }
     assert_eq!(ik(&kp, &Vec6::repeat(f64::NAN)), Err(CoreError::NonFinite));
-    let tight = FkOptions { max_iterations: 1, ..FkOptions::default() };
+    let tight = FkOptions {
+        max_iterations: 1,
+        ..FkOptions::default()
+    };
     let theta = ik(&kp, &Vec6::new(0.02, 0.02, 0.135, 0.05, 0.0, 0.0)).unwrap();
     assert!(matches!(
         fk(&kp, &theta, &home_pose(), &tight),
@@ -57,6 +60,9 @@ fn perturbed_robot() {
     b[36] = 1e-3; // Δl_AT,1 = +1 mm (eq. 4.3 order: ΔA', ΔB, Δl_AT, Δl_TB, Δη, Δθ)
     let kp = KinematicParams::perturbed(&b);
     let back = kp.errors_from(&KinematicParams::nominal());
-    assert!(back.iter().zip(b.iter()).all(|(x, y)| (x - y).abs() < 1e-15));
+    assert!(back
+        .iter()
+        .zip(b.iter())
+        .all(|(x, y)| (x - y).abs() < 1e-15));
     kp.validate().unwrap();
 }
