@@ -49,7 +49,7 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::{leg_kin, leg_m, leg_static, LegKin, S_HAT};
+use crate::leg_jacobians::{leg_kin, leg_m, leg_static, LegKin};
 use crate::params::{Body, DynamicParams, KinematicParams};
 use crate::pose::{
     euler_rate_jacobian, euler_rate_jacobian_dot, twist_jacobian, twist_jacobian_dot,
@@ -103,6 +103,18 @@ pub fn joint_friction_smooth(dp: &DynamicParams, theta_dot: &Vec6, eps: f64) -> 
     })
 }
 
+/// ŝ × u for ŝ = ẑ: [−u_y, u_x, 0].
+#[inline(always)]
+fn z_cross(u: &Vec3) -> Vec3 {
+    Vec3::new(-u[1], u[0], 0.0)
+}
+
+/// ŝ·(u × v) for ŝ = ẑ: u_x v_y − u_y v_x.
+#[inline(always)]
+fn z_triple(u: &Vec3, v: &Vec3) -> f64 {
+    u[0] * v[1] - u[1] * v[0]
+}
+
 // ---------------------------------------------------------------------------------------------
 // Vector (Newton–Euler) path: body accelerations of one leg.
 
@@ -133,7 +145,7 @@ impl LegAcc {
     pub(crate) fn jbd_t(&self, u: &Vec3) -> Vec6 {
         let p = u.cross(&self.l);
         let ap = self.a.cross(&p);
-        let k = S_HAT.dot(&p.cross(&self.w));
+        let k = z_triple(&p, &self.w);
         (Vec6::new(p[0], p[1], p[2], ap[0], ap[1], ap[2]) + self.r * k) * self.inv_l2
     }
 
@@ -141,7 +153,7 @@ impl LegAcc {
     #[inline]
     pub(crate) fn jbu_t(&self, f: &Vec3) -> Vec6 {
         let cl = self.l * 0.5;
-        self.r * S_HAT.dot(&self.w.cross(f)) + self.jbd_t(&cl.cross(f))
+        self.r * z_triple(&self.w, f) + self.jbd_t(&cl.cross(f))
     }
 }
 
@@ -157,7 +169,8 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
     let al = a.cross(&l);
     let r = Vec6::new(l[0], l[1], l[2], al[0], al[1], al[2]) * inv_m;
     let theta_dot = r.dot(v);
-    let w_dot = S_HAT.cross(&w) * theta_dot;
+    let s_w = z_cross(&w);
+    let w_dot = s_w * theta_dot;
     let a_dot = omega.cross(&a);
     let l_dot = e_dot + a_dot - w_dot;
     let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
@@ -166,7 +179,7 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
     let theta_ddot =
         r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
     // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
-    let t_acc = S_HAT.cross(&w) * theta_ddot + S_HAT.cross(&w_dot) * theta_dot;
+    let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
     let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
     let inv_l2 = 1.0 / l.norm_squared();
     // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
@@ -180,7 +193,7 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
         l,
         a,
         inv_l2,
-        s_cw: S_HAT.cross(&(w * 0.5)),
+        s_cw: s_w * 0.5,
         cw_acc: t_acc * 0.5,
         cl_acc: t_acc + l_acc * 0.5,
         omega2_dot,
@@ -214,7 +227,7 @@ fn twist_force(
         let f_l = (k.cl_acc - g) * lb.mass;
         let n_l = k.omega2_dot * link_transverse_inertia(lb);
         let cl = k.l * 0.5;
-        f += k.r * (q_w + S_HAT.dot(&k.w.cross(&f_l))) + k.jbd_t(&(cl.cross(&f_l) + n_l));
+        f += k.r * (q_w + z_triple(&k.w, &f_l)) + k.jbd_t(&(cl.cross(&f_l) + n_l));
     }
     Ok((f, theta_dot, j_ad_t))
 }
