@@ -26,6 +26,9 @@ fn bench_dynamics(c: &mut Criterion) {
         pose: p,
         pose_dot: pd,
     };
+    c.bench_function("leg_geometry_ik", |b| {
+        b.iter(|| LegGeometry::at_pose(black_box(&kp), black_box(&p)))
+    });
     c.bench_function("inverse_dynamics", |b| {
         b.iter(|| inverse_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd))
     });

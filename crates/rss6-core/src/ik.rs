@@ -15,12 +15,16 @@
 use crate::error::{check_finite, CoreError, Result};
 use crate::params::{leg_side, KinematicParams};
 use crate::pose::pose_rotation;
-use crate::types::{Vec3, Vec6, LEGS};
+use crate::types::{Mat3, Vec3, Vec6, LEGS};
 use core::f64::consts::{FRAC_PI_2, PI};
 use libm::{acos, atan2, sqrt};
 
 /// Wraps an angle to (−π, π].
 pub fn wrap_angle(a: f64) -> f64 {
+    // Fast path: the IK's angles are almost always in range already (fmod is slow).
+    if a > -PI && a <= PI {
+        return a;
+    }
     let mut x = a % (2.0 * PI);
     if x <= -PI {
         x += 2.0 * PI;
@@ -32,7 +36,15 @@ pub fn wrap_angle(a: f64) -> f64 {
 
 /// Platform joint centres A_i in the base frame for pose χ (eq. 3.4).
 pub fn platform_joints_in_base(kp: &KinematicParams, pose: &Vec6) -> [Vec3; LEGS] {
-    let r = pose_rotation(pose);
+    platform_joints_with_rotation(kp, &pose_rotation(pose), pose)
+}
+
+/// A_i = R A'_i + E for a rotation already computed from `pose`.
+pub(crate) fn platform_joints_with_rotation(
+    kp: &KinematicParams,
+    r: &Mat3,
+    pose: &Vec6,
+) -> [Vec3; LEGS] {
     let e = Vec3::new(pose[0], pose[1], pose[2]);
     let mut a = [Vec3::zeros(); LEGS];
     for (ai, ap) in a.iter_mut().zip(kp.platform_joints.iter()) {
@@ -45,27 +57,35 @@ pub fn platform_joints_in_base(kp: &KinematicParams, pose: &Vec6) -> [Vec3; LEGS
 pub fn wrench_tips(kp: &KinematicParams, theta: &Vec6) -> [Vec3; LEGS] {
     let mut t = [Vec3::zeros(); LEGS];
     for (i, ti) in t.iter_mut().enumerate() {
-        let phi = theta[i] + kp.theta0[i];
-        *ti = kp.base_joints[i]
-            + kp.wrench_lengths[i] * Vec3::new(libm::cos(phi), libm::sin(phi), 0.0);
+        let (s, c) = libm::sincos(theta[i] + kp.theta0[i]);
+        *ti = kp.base_joints[i] + kp.wrench_lengths[i] * Vec3::new(c, s, 0.0);
     }
     t
 }
 
 /// IK of one leg given its platform joint A_i in the base frame.
 pub fn ik_leg(kp: &KinematicParams, leg: usize, a: &Vec3) -> Result<f64> {
-    let b = kp.base_joints.get(leg).ok_or(CoreError::InvalidParameter("leg index >= 6"))?;
+    let b = kp
+        .base_joints
+        .get(leg)
+        .ok_or(CoreError::InvalidParameter("leg index >= 6"))?;
     let (r, l) = (kp.wrench_lengths[leg], kp.link_lengths[leg]);
     let d = a - b;
     let rho = sqrt(d[0] * d[0] + d[1] * d[1]);
     let k = (d.norm_squared() + r * r - l * l) / (2.0 * r);
     let leg_u8 = leg as u8;
-    if !(rho > 0.0) || !k.is_finite() {
-        return Err(CoreError::Unreachable { leg: leg_u8, excess: f64::INFINITY });
+    if rho.is_nan() || rho <= 0.0 || !k.is_finite() {
+        return Err(CoreError::Unreachable {
+            leg: leg_u8,
+            excess: f64::INFINITY,
+        });
     }
     let c = k / rho;
     if c.abs() > 1.0 {
-        return Err(CoreError::Unreachable { leg: leg_u8, excess: c.abs() - 1.0 });
+        return Err(CoreError::Unreachable {
+            leg: leg_u8,
+            excess: c.abs() - 1.0,
+        });
     }
     let psi = atan2(d[1], d[0]);
     let delta = acos(c);
@@ -82,7 +102,11 @@ pub fn ik_leg(kp: &KinematicParams, leg: usize, a: &Vec3) -> Result<f64> {
     } else if in_branch(other) {
         Ok(other)
     } else {
-        let theta = if preferred.abs() <= other.abs() { preferred } else { other };
+        let theta = if preferred.abs() <= other.abs() {
+            preferred
+        } else {
+            other
+        };
         Err(CoreError::OutOfBranch { leg: leg_u8, theta })
     }
 }

@@ -59,6 +59,11 @@ fn dynamics_hot_paths_do_not_allocate() {
             sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();
             sink += potential_energy_with_gravity(&kp, &dp, p, &GRAVITY).unwrap();
             sink += joint_friction_smooth(&dp, &pose_dot, 1e-3)[0];
+            sink += mass_matrix_twist(&kp, &dp, p).unwrap()[(1, 1)];
+            sink += coriolis_twist(&kp, &dp, p, &pose_dot).unwrap()[(3, 4)];
+            sink += gravity_twist(&kp, &dp, p, &GRAVITY).unwrap()[2];
+            sink += friction_twist(&kp, &dp, p, &pose_dot).unwrap()[0];
+            sink += ModelState::at_rest(p).pose[2];
             // error paths too
             let far = Vec6::new(0.0, 0.0, 0.5, 0.0, 0.0, 0.0);
             sink += inverse_dynamics(&kp, &dp, &far, &pose_dot, &pose_ddot).map_or(1.0, |_| 0.0);
