@@ -37,7 +37,8 @@ cargo bench -p rss6-benches --bench '*' -- --warm-up-time "$WARM_UP" --measureme
     --noplot "$@" >&2
 
 echo
-echo "Medians (criterion, warm-up ${WARM_UP} s, measurement ${MEASUREMENT} s; $(nproc) cores, $(uname -m)):"
+echo "Medians (criterion, warm-up ${WARM_UP} s, measurement ${MEASUREMENT} s; $(nproc) cores, $(uname -m);"
+echo "load average $(cut -d' ' -f1-3 /proc/loadavg) — wall-clock medians grow with other load):"
 echo
 find "$CRITERION_DIR" -path '*/new/estimates.json' -newer "$MARKER" -print0 | sort -z |
     TARGETS_NS="$TARGETS_NS" python3 -c '

@@ -3,7 +3,7 @@
 //! (256 calls, well under a scheduler time slice) and the fastest round is reported next to the median
 //! round: the fastest round is one that ran undisturbed.
 //!
-//! `cargo run --release -p rss6-benches --example kin_cpu [rounds]`
+//! `cargo run --release -p rss6-benches --example kin_cpu [rounds] [calls_per_round]`
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 #[path = "support/poses.rs"]
@@ -38,7 +38,9 @@ fn main() {
     let reps: usize = std::env::args().nth(1).map_or(400, |s| s.parse().unwrap());
     let kp = KinematicParams::nominal();
     let opts = FkOptions::default();
-    let n = 256;
+    // Calls per round (default 256); a large value (e.g. 100000) makes each round span several time
+    // slices, and on a loaded machine its time per call rises to criterion's level.
+    let n: usize = std::env::args().nth(2).map_or(256, |s| s.parse().unwrap());
     let cold = poses::box_poses(n);
     let cold_theta: Vec<Vec6> = cold.iter().map(|p| ik(&kp, p).unwrap()).collect();
     let path = poses::smooth_path(n + 1);

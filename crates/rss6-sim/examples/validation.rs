@@ -11,8 +11,14 @@ use std::io::Write;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let out = args.get(1).cloned().unwrap_or_else(|| "sim_validation.csv".into());
-    let secs: f64 = args.get(2).map(|s| s.parse().expect("seconds")).unwrap_or(10.0);
+    let out = args
+        .get(1)
+        .cloned()
+        .unwrap_or_else(|| "sim_validation.csv".into());
+    let secs: f64 = args
+        .get(2)
+        .map(|s| s.parse().expect("seconds"))
+        .unwrap_or(10.0);
     let cfg = SimConfig::nominal();
     let mut plant = Plant::new(cfg.clone()).unwrap();
     let mut twin = ModelSim::new(cfg).unwrap();
@@ -47,8 +53,16 @@ fn main() {
         }
     }
     println!("{secs} s of the exciting trajectory, plant vs twin (nominal robot, same PID and sensor noise)");
-    println!("worst difference: {:.4} mm, {:.4} mrad (Fig. 5.5-5.6 bound: 1.25 mm, 3.25 mrad)", worst.0 * 1e3, worst.1 * 1e3);
-    println!("after 1 s:        {:.4} mm, {:.4} mrad (bound: 0.1 mm, 0.25 mrad)", late.0 * 1e3, late.1 * 1e3);
+    println!(
+        "worst difference: {:.4} mm, {:.4} mrad (Fig. 5.5-5.6 bound: 1.25 mm, 3.25 mrad)",
+        worst.0 * 1e3,
+        worst.1 * 1e3
+    );
+    println!(
+        "after 1 s:        {:.4} mm, {:.4} mrad (bound: 0.1 mm, 0.25 mrad)",
+        late.0 * 1e3,
+        late.1 * 1e3
+    );
     println!("worst loop-closure gap: {:.2} µm (bound 10 µm)", gap * 1e6);
     println!("CSV: {out}");
 }

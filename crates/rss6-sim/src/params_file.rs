@@ -268,3 +268,69 @@ pub fn load_pid_gains(path: &Path) -> Result<PidGains> {
         ld: f.ld,
     })
 }
+
+/// The plant's truth record as a file (written only when asked for, see [`save_truth`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruthFile {
+    /// True kinematics.
+    pub kinematics: KinematicParamsFile,
+    /// True dynamics.
+    pub dynamics: DynamicParamsFile,
+    /// True PID gains.
+    pub pid: PidGainsFile,
+    /// ᴼχ_C (m, rad).
+    #[serde(deserialize_with = "exact")]
+    pub sensor_in_base: [f64; 6],
+    /// ᴱχ_t (m, rad).
+    #[serde(deserialize_with = "exact")]
+    pub target_in_effector: [f64; 6],
+    /// Hidden effects that were on.
+    #[serde(default)]
+    pub effects: Vec<crate::effects::EffectSpec>,
+}
+
+impl From<&crate::sim::Truth> for TruthFile {
+    fn from(t: &crate::sim::Truth) -> Self {
+        let six = |v: &rss6_core::Vec6| core::array::from_fn(|i| v[i]);
+        TruthFile {
+            kinematics: (&t.kinematics).into(),
+            dynamics: (&t.dynamics).into(),
+            pid: PidGainsFile {
+                lp: t.pid.lp,
+                li: t.pid.li,
+                ld: t.pid.ld,
+            },
+            sensor_in_base: six(&t.sensor_in_base),
+            target_in_effector: six(&t.target_in_effector),
+            effects: t.effects.clone(),
+        }
+    }
+}
+
+impl From<&TruthFile> for crate::sim::Truth {
+    fn from(f: &TruthFile) -> Self {
+        crate::sim::Truth {
+            kinematics: (&f.kinematics).into(),
+            dynamics: (&f.dynamics).into(),
+            pid: PidGains {
+                lp: f.pid.lp,
+                li: f.pid.li,
+                ld: f.pid.ld,
+            },
+            sensor_in_base: f.sensor_in_base.into(),
+            target_in_effector: f.target_in_effector.into(),
+            effects: f.effects.clone(),
+        }
+    }
+}
+
+/// Writes the truth record of a run (kinematics, dynamics, PID, ᴼχ_C, ᴱχ_t, effects) to TOML.
+pub fn save_truth(path: &Path, truth: &crate::sim::Truth) -> Result<()> {
+    write(path, &TruthFile::from(truth))
+}
+
+/// Reads a truth record written by [`save_truth`].
+pub fn load_truth(path: &Path) -> Result<crate::sim::Truth> {
+    Ok((&read::<TruthFile>(path)?).into())
+}

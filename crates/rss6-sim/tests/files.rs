@@ -200,3 +200,19 @@ fn parameter_files_round_trip_and_bad_files_give_clear_errors() {
         SimError::ParamFile { .. }
     ));
 }
+
+#[test]
+fn the_truth_record_is_written_only_when_asked_and_round_trips() {
+    let mut cfg = SimConfig::nominal();
+    cfg.effects = vec![
+        rss6_sim::EffectSpec::new("base_tilt", &[("roll", 0.02)]),
+        rss6_sim::EffectSpec::new("camera_latency", &[("latency", 0.01)]),
+    ];
+    let plant = Plant::new(cfg).unwrap();
+    let path = tmp("truth.toml");
+    rss6_sim::save_truth(&path, &plant.truth()).unwrap();
+    let back = rss6_sim::load_truth(&path).unwrap();
+    assert_eq!(back, plant.truth());
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("base_tilt") && text.contains("sensor_in_base"));
+}
