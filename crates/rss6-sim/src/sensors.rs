@@ -117,7 +117,9 @@ impl CmmConfig {
     /// Checks the configuration.
     pub fn validate(&self) -> Result<()> {
         if self.reflectors.len() < 4 {
-            return Err(SimError::InvalidConfig("the CMM needs at least 4 reflectors".into()));
+            return Err(SimError::InvalidConfig(
+                "the CMM needs at least 4 reflectors".into(),
+            ));
         }
         if !(self.period > 0.0 && self.latency >= 0.0 && self.pixel_noise >= 0.0) {
             return Err(SimError::InvalidConfig(
@@ -184,6 +186,7 @@ pub(crate) struct OpticalCmm {
     pending: std::collections::VecDeque<(f64, Vec6)>,
     out: Option<Vec6>,
     rng: ChaCha8Rng,
+    dropped: u64,
 }
 
 impl OpticalCmm {
@@ -196,6 +199,7 @@ impl OpticalCmm {
             pending: Default::default(),
             out: None,
             rng,
+            dropped: 0,
         }
     }
 
@@ -214,8 +218,15 @@ impl OpticalCmm {
     pub(crate) fn tick(&mut self, time: f64, truth: &Vec6) -> Result<()> {
         const EPS: f64 = 1e-9;
         if time + EPS >= self.next_capture {
-            let m = self.measure(truth)?;
-            self.pending.push_back((self.next_capture + self.latency, m));
+            // A frame in which the target cannot be measured (a reflector outside an image,
+            // degenerate geometry) is dropped, as a tracker drops occluded frames.
+            match self.measure(truth) {
+                Ok(m) => self
+                    .pending
+                    .push_back((self.next_capture + self.latency, m)),
+                Err(SimError::Cmm(_)) => self.dropped += 1,
+                Err(e) => return Err(e),
+            }
             self.next_capture += self.cfg.period;
         }
         self.out = None;
@@ -232,6 +243,11 @@ impl OpticalCmm {
 
     pub(crate) fn output(&self) -> Option<Vec6> {
         self.out
+    }
+
+    /// Frames dropped since construction (target not measurable).
+    pub(crate) fn dropped(&self) -> u64 {
+        self.dropped
     }
 
     pub(crate) fn latency(&self) -> f64 {
@@ -312,6 +328,7 @@ impl Potentiometers {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
     use rand::SeedableRng;
@@ -319,8 +336,15 @@ mod tests {
     #[test]
     fn kabsch_recovers_a_rigid_transform_exactly() {
         let iso = pose_to_isometry(&Vec6::new(0.3, -0.2, 2.0, 0.4, -0.3, 1.2));
-        let model: Vec<Vec3> = CmmConfig::c_track().reflectors.iter().map(|r| Vec3::from(*r)).collect();
-        let meas: Vec<Vec3> = model.iter().map(|p| (iso * Point3::from(*p)).coords).collect();
+        let model: Vec<Vec3> = CmmConfig::c_track()
+            .reflectors
+            .iter()
+            .map(|r| Vec3::from(*r))
+            .collect();
+        let meas: Vec<Vec3> = model
+            .iter()
+            .map(|p| (iso * Point3::from(*p)).coords)
+            .collect();
         let est = kabsch(&model, &meas).unwrap();
         assert!((est.to_homogeneous() - iso.to_homogeneous()).amax() < 1e-12);
     }

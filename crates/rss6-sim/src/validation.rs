@@ -32,7 +32,11 @@ impl Default for ExcitingTrajectory {
 impl ExcitingTrajectory {
     /// Desired pose χ_d(t).
     pub fn pose(&self, t: f64) -> Vec6 {
-        let s = if t >= self.ramp { 1.0 } else { 0.5 * (1.0 - (PI * t.max(0.0) / self.ramp).cos()) };
+        let s = if t >= self.ramp {
+            1.0
+        } else {
+            0.5 * (1.0 - (PI * t.max(0.0) / self.ramp).cos())
+        };
         home_pose()
             + Vec6::from_fn(|i, _| s * self.amplitude[i] * (2.0 * PI * self.frequency[i] * t).sin())
     }
