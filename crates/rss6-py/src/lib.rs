@@ -1,8 +1,25 @@
-//! Python bindings (issue 7). Work in progress.
+//! Python bindings of rss6 (module `rss6._rss6`, issue 7). The pure-Python package `rss6` re-exports
+//! everything here; exceptions live in `rss6.errors` (see [`errors`]). Arrays cross as numpy float64;
+//! every input is shape- and finiteness-checked before it reaches Rust, and long calls release the GIL.
+
 use pyo3::prelude::*;
+
+mod convert;
+mod errors;
+mod kinematics;
+mod params;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
-fn _rss6(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<params::PyKinematicParams>()?;
+    m.add_class::<params::PyDynamicParams>()?;
+    m.add_function(wrap_pyfunction!(kinematics::home_pose, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::ik, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::ik_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::fk, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::fk_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::jacobian_theta, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::jacobian_ad, m)?)?;
     Ok(())
 }
