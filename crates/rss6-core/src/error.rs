@@ -17,6 +17,8 @@ pub enum SingularKind {
     Euler,
     /// A matrix handed in by the caller (e.g. a mass matrix) could not be factorised.
     Matrix,
+    /// The homeomorphism condition (eq. 4.22) failed: the forward kinematics may not be unique there.
+    Homeomorphism,
 }
 
 /// Every way a call into `rss6-core` can fail.

@@ -31,7 +31,11 @@ pub struct FkOptions {
 impl Default for FkOptions {
     /// ε_c = 1e-13 m, ε_p = 1e-13, 30 iterations: round trips exact to ~1e-12.
     fn default() -> Self {
-        FkOptions { eps_c: 1e-13, eps_p: 1e-13, max_iterations: 30 }
+        FkOptions {
+            eps_c: 1e-13,
+            eps_p: 1e-13,
+            max_iterations: 30,
+        }
     }
 }
 
@@ -78,7 +82,12 @@ fn twist_step_to_pose_step(pose: &Vec6, dv: &Vec6) -> Result<Vec6> {
 /// let sol = fk(&kp, &ik(&kp, &target).unwrap(), &home_pose(), &FkOptions::default()).unwrap();
 /// assert!((sol.pose - target).amax() < 1e-10);
 /// ```
-pub fn fk(kp: &KinematicParams, theta: &Vec6, guess: &Vec6, opts: &FkOptions) -> Result<FkSolution> {
+pub fn fk(
+    kp: &KinematicParams,
+    theta: &Vec6,
+    guess: &Vec6,
+    opts: &FkOptions,
+) -> Result<FkSolution> {
     check_inputs(theta, guess, opts)?;
     let tips = wrench_tips(kp, theta);
     let target = Vec6::from_column_slice(&kp.link_lengths);
@@ -92,10 +101,17 @@ pub fn fk(kp: &KinematicParams, theta: &Vec6, guess: &Vec6, opts: &FkOptions) ->
             return Err(CoreError::NonFinite);
         }
         if residual < opts.eps_c {
-            return Ok(FkSolution { pose, iterations, residual });
+            return Ok(FkSolution {
+                pose,
+                iterations,
+                residual,
+            });
         }
         if iterations >= opts.max_iterations {
-            return Err(CoreError::NotConverged { iterations, residual });
+            return Err(CoreError::NotConverged {
+                iterations,
+                residual,
+            });
         }
         let dv = jp
             .lu()
@@ -107,7 +123,11 @@ pub fn fk(kp: &KinematicParams, theta: &Vec6, guess: &Vec6, opts: &FkOptions) ->
         if step.amax() < opts.eps_p {
             let (_, len) = jacobian_stewart(kp, &pose, &tips)?;
             let residual = (target - len).amax();
-            return Ok(FkSolution { pose, iterations, residual });
+            return Ok(FkSolution {
+                pose,
+                iterations,
+                residual,
+            });
         }
     }
 }
@@ -129,10 +149,17 @@ pub fn fk_theta_newton(
         let dth = theta - geo.theta;
         let residual = dth.amax();
         if residual < opts.eps_c {
-            return Ok(FkSolution { pose, iterations, residual });
+            return Ok(FkSolution {
+                pose,
+                iterations,
+                residual,
+            });
         }
         if iterations >= opts.max_iterations {
-            return Err(CoreError::NotConverged { iterations, residual });
+            return Err(CoreError::NotConverged {
+                iterations,
+                residual,
+            });
         }
         let step = geo
             .j_theta()?
@@ -143,7 +170,11 @@ pub fn fk_theta_newton(
         iterations += 1;
         if step.amax() < opts.eps_p {
             let residual = (theta - ik(kp, &pose)?).amax();
-            return Ok(FkSolution { pose, iterations, residual });
+            return Ok(FkSolution {
+                pose,
+                iterations,
+                residual,
+            });
         }
     }
 }

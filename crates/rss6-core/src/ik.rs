@@ -54,18 +54,27 @@ pub fn wrench_tips(kp: &KinematicParams, theta: &Vec6) -> [Vec3; LEGS] {
 
 /// IK of one leg given its platform joint A_i in the base frame.
 pub fn ik_leg(kp: &KinematicParams, leg: usize, a: &Vec3) -> Result<f64> {
-    let b = kp.base_joints.get(leg).ok_or(CoreError::InvalidParameter("leg index >= 6"))?;
+    let b = kp
+        .base_joints
+        .get(leg)
+        .ok_or(CoreError::InvalidParameter("leg index >= 6"))?;
     let (r, l) = (kp.wrench_lengths[leg], kp.link_lengths[leg]);
     let d = a - b;
     let rho = sqrt(d[0] * d[0] + d[1] * d[1]);
     let k = (d.norm_squared() + r * r - l * l) / (2.0 * r);
     let leg_u8 = leg as u8;
-    if !(rho > 0.0) || !k.is_finite() {
-        return Err(CoreError::Unreachable { leg: leg_u8, excess: f64::INFINITY });
+    if rho.is_nan() || rho <= 0.0 || !k.is_finite() {
+        return Err(CoreError::Unreachable {
+            leg: leg_u8,
+            excess: f64::INFINITY,
+        });
     }
     let c = k / rho;
     if c.abs() > 1.0 {
-        return Err(CoreError::Unreachable { leg: leg_u8, excess: c.abs() - 1.0 });
+        return Err(CoreError::Unreachable {
+            leg: leg_u8,
+            excess: c.abs() - 1.0,
+        });
     }
     let psi = atan2(d[1], d[0]);
     let delta = acos(c);
@@ -82,7 +91,11 @@ pub fn ik_leg(kp: &KinematicParams, leg: usize, a: &Vec3) -> Result<f64> {
     } else if in_branch(other) {
         Ok(other)
     } else {
-        let theta = if preferred.abs() <= other.abs() { preferred } else { other };
+        let theta = if preferred.abs() <= other.abs() {
+            preferred
+        } else {
+            other
+        };
         Err(CoreError::OutOfBranch { leg: leg_u8, theta })
     }
 }

@@ -161,7 +161,7 @@ pub fn jacobian_stewart(
         let a_rel = rot * kp.platform_joints[i];
         let l = a_rel + e - tips[i];
         let n = l.norm();
-        if !(n > 0.0) {
+        if n.is_nan() || n <= 0.0 {
             return Err(CoreError::Singular(SingularKind::StewartJacobian));
         }
         let u = l / n;

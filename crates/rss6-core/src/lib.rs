@@ -13,12 +13,20 @@ mod error;
 mod fk;
 mod ik;
 mod jacobian;
+mod leg_jacobians;
 mod params;
 mod pose;
 mod regressor;
 mod types;
 mod workspace;
 
+pub use crate::dynamics::{
+    coriolis, dynamics_terms, dynamics_terms_with_gravity, forward_dynamics,
+    forward_dynamics_with_gravity, friction, gravity, gravity_with, inverse_dynamics,
+    inverse_dynamics_with_gravity, joint_friction, joint_friction_smooth, kinetic_energy,
+    link_transverse_inertia, mass_matrix, platform_inertia, potential_energy_with_gravity,
+    rk4_step, rk4_step_with_gravity, wrench_axial_inertia, DynamicsTerms, ModelState, GRAVITY,
+};
 pub use crate::error::{CoreError, Result, SingularKind};
 pub use crate::fk::{fk, fk_theta_newton, FkOptions, FkSolution};
 pub use crate::ik::{ik, ik_leg, ik_reading, platform_joints_in_base, wrap_angle, wrench_tips};
@@ -26,6 +34,7 @@ pub use crate::jacobian::{
     jacobian_a1, jacobian_a2, jacobian_ad, jacobian_stewart, jacobian_theta, LegGeometry,
     TYPE_I_TOLERANCE,
 };
+pub use crate::leg_jacobians::{leg_jacobians, leg_jacobians_from_geometry, LegJacobians};
 pub use crate::params::{
     home_pose, leg_side, Body, DynamicParams, KinematicParams, BASE_RADIUS, ETA_NOMINAL, HOME_Z,
     N_DYN, N_KIN_ERRORS, PAIR_HALF_SPACING, PLATFORM_HALF_ANGLE_DEG, PLATFORM_RADIUS, THETA0_DEG,
@@ -36,4 +45,10 @@ pub use crate::pose::{
     inverse as pose_inverse, isometry_to_pose, pose_rotation, pose_to_isometry, rotation, twist,
     twist_dot, twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse,
 };
+pub use crate::regressor::{regressor, regressor_tau_g, regressor_with_gravity, Regressor};
 pub use crate::types::{LegJacobian, Mat3, Mat3x6, Mat6, Vec3, Vec6, LEGS};
+pub use crate::workspace::{
+    homeomorphism_check, scan_box, singularity_check, type_i_check, type_ii_check, verify_box,
+    BoxLimits, BoxReport, BoxViolation, HomeomorphismCheck, PoseBox, SingularityCheck, TypeICheck,
+    TypeIICheck, ViolationKind, DOCUMENTED_BOX_HALF_WIDTH, MAX_POINTS_PER_AXIS, TYPE_I_SIGNS,
+};

@@ -180,8 +180,10 @@ impl KinematicParams {
         if self.link_lengths.iter().any(|&l| l <= 0.0) {
             return Err(CoreError::InvalidParameter("link length must be > 0"));
         }
-        if self.eta.iter().any(|&e| e == 0.0) {
-            return Err(CoreError::InvalidParameter("potentiometer gain eta must be non-zero"));
+        if self.eta.contains(&0.0) {
+            return Err(CoreError::InvalidParameter(
+                "potentiometer gain eta must be non-zero",
+            ));
         }
         Ok(())
     }
@@ -209,7 +211,10 @@ pub struct Body {
 impl Body {
     /// A body from its mass and principal moments.
     pub const fn new(mass: f64, ix: f64, iy: f64, iz: f64) -> Self {
-        Body { mass, inertia: Vec3::new(ix, iy, iz) }
+        Body {
+            mass,
+            inertia: Vec3::new(ix, iy, iz),
+        }
     }
 }
 
@@ -269,10 +274,8 @@ impl DynamicParams {
             put(1 + i, &self.wrenches[i]);
             put(7 + i, &self.links[i]);
         }
-        for i in 0..LEGS {
-            x[52 + i] = self.coulomb[i];
-            x[58 + i] = self.viscous[i];
-        }
+        x[52..58].copy_from_slice(&self.coulomb);
+        x[58..64].copy_from_slice(&self.viscous);
         x
     }
 
@@ -287,11 +290,20 @@ impl DynamicParams {
                 return Err(CoreError::InvalidParameter("body mass must be > 0"));
             }
             if b.inertia.iter().any(|&i| i < 0.0) {
-                return Err(CoreError::InvalidParameter("moments of inertia must be >= 0"));
+                return Err(CoreError::InvalidParameter(
+                    "moments of inertia must be >= 0",
+                ));
             }
         }
-        if self.coulomb.iter().chain(self.viscous.iter()).any(|&f| f < 0.0) {
-            return Err(CoreError::InvalidParameter("friction coefficients must be >= 0"));
+        if self
+            .coulomb
+            .iter()
+            .chain(self.viscous.iter())
+            .any(|&f| f < 0.0)
+        {
+            return Err(CoreError::InvalidParameter(
+                "friction coefficients must be >= 0",
+            ));
         }
         Ok(())
     }

@@ -74,12 +74,13 @@ pub fn twist_jacobian(pose: &Vec6) -> Mat6 {
 /// J̇_s = diag(0, J̇_e).
 pub fn twist_jacobian_dot(pose: &Vec6, pose_dot: &Vec6) -> Mat6 {
     let mut js = Mat6::zeros();
-    js.fixed_view_mut::<3, 3>(3, 3).copy_from(&euler_rate_jacobian_dot(
-        pose[3],
-        pose[4],
-        pose_dot[3],
-        pose_dot[4],
-    ));
+    js.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&euler_rate_jacobian_dot(
+            pose[3],
+            pose[4],
+            pose_dot[3],
+            pose_dot[4],
+        ));
     js
 }
 

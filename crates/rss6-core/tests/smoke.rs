@@ -1,4 +1,10 @@
 //! Quick smoke checks of the kinematic core (the exhaustive suites live beside this file).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // tests may panic; legs are indexed as in the thesis
 use rss6_core::*;
 
 #[test]
@@ -19,7 +25,22 @@ fn fk_both_methods_round_trip() {
     let th = ik(&kp, &target).unwrap();
     let a = fk(&kp, &th, &home_pose(), &FkOptions::default()).unwrap();
     let b = fk_theta_newton(&kp, &th, &home_pose(), &FkOptions::default()).unwrap();
-    assert!((a.pose - target).amax() < 1e-12, "{} {}", a.pose, a.iterations);
-    assert!((b.pose - target).amax() < 1e-12, "{} {}", b.pose, b.iterations);
-    std::println!("quasi-stewart {} iters, newton-theta {} iters, max|theta| {}", a.iterations, b.iterations, th.amax());
+    assert!(
+        (a.pose - target).amax() < 1e-12,
+        "{} {}",
+        a.pose,
+        a.iterations
+    );
+    assert!(
+        (b.pose - target).amax() < 1e-12,
+        "{} {}",
+        b.pose,
+        b.iterations
+    );
+    std::println!(
+        "quasi-stewart {} iters, newton-theta {} iters, max|theta| {}",
+        a.iterations,
+        b.iterations,
+        th.amax()
+    );
 }

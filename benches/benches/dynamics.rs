@@ -1,0 +1,53 @@
+//! Criterion benches of the rss6-core dynamics (target: inverse dynamics ≤ 2 µs).
+//!
+//! `cargo bench -p rss6-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
+#![allow(missing_docs, clippy::unwrap_used)]
+use criterion::{criterion_group, criterion_main, Criterion};
+use rss6_core::*;
+use std::hint::black_box;
+
+fn state() -> (KinematicParams, DynamicParams, Vec6, Vec6, Vec6) {
+    let mut dp = DynamicParams::nominal();
+    dp.coulomb = [0.2; 6];
+    dp.viscous = [0.05; 6];
+    (
+        KinematicParams::nominal(),
+        dp,
+        Vec6::new(0.012, -0.015, 0.128, 0.03, -0.04, 0.02),
+        Vec6::new(0.1, -0.2, 0.05, 0.3, 0.1, -0.2),
+        Vec6::new(1.0, 0.5, -0.3, -2.0, 1.0, 0.4),
+    )
+}
+
+fn bench_dynamics(c: &mut Criterion) {
+    let (kp, dp, p, pd, pdd) = state();
+    let tau = inverse_dynamics(&kp, &dp, &p, &pd, &pdd).unwrap();
+    let s = ModelState {
+        pose: p,
+        pose_dot: pd,
+    };
+    c.bench_function("inverse_dynamics", |b| {
+        b.iter(|| inverse_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd))
+    });
+    c.bench_function("mass_matrix", |b| {
+        b.iter(|| mass_matrix(black_box(&kp), &dp, black_box(&p)))
+    });
+    c.bench_function("forward_dynamics", |b| {
+        b.iter(|| forward_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &tau))
+    });
+    c.bench_function("regressor", |b| {
+        b.iter(|| regressor(black_box(&kp), black_box(&p), &pd, &pdd))
+    });
+    c.bench_function("dynamics_terms", |b| {
+        b.iter(|| dynamics_terms(black_box(&kp), &dp, black_box(&p), &pd))
+    });
+    c.bench_function("leg_jacobians", |b| {
+        b.iter(|| leg_jacobians(black_box(&kp), black_box(&p), &pd))
+    });
+    c.bench_function("rk4_step", |b| {
+        b.iter(|| rk4_step(black_box(&kp), &dp, black_box(&s), &tau, 1e-3))
+    });
+}
+
+criterion_group!(benches, bench_dynamics);
+criterion_main!(benches);

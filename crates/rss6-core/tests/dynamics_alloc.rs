@@ -1,0 +1,69 @@
+//! Zero heap allocations in the dynamics hot paths, counted by an instrumented `#[global_allocator]`.
+//!
+//! One `#[test]` only: the counter is process-wide, so no other test may run concurrently in this binary.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+use rss6_core::*;
+use stats_alloc::{Region, StatsAlloc, INSTRUMENTED_SYSTEM};
+use std::alloc::System;
+use std::hint::black_box;
+
+#[global_allocator]
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
+
+/// Runs `f` and returns the number of allocations (incl. reallocations) it made.
+fn allocations(f: impl FnOnce()) -> usize {
+    let region = Region::new(GLOBAL);
+    f();
+    let s = region.change();
+    s.allocations + s.reallocations
+}
+
+#[test]
+fn dynamics_hot_paths_do_not_allocate() {
+    assert!(
+        allocations(|| drop(black_box(vec![1u8; 64]))) > 0,
+        "allocation counter is not counting"
+    );
+    let kp = KinematicParams::perturbed(&[2e-4; N_KIN_ERRORS]);
+    let mut dp = DynamicParams::nominal();
+    dp.coulomb = [0.2; 6];
+    dp.viscous = [0.05; 6];
+    let pose = Vec6::new(0.012, -0.015, 0.128, 0.03, -0.04, 0.02);
+    let pose_dot = Vec6::new(0.1, -0.2, 0.05, 0.3, 0.1, -0.2);
+    let pose_ddot = Vec6::new(1.0, 0.5, -0.3, -2.0, 1.0, 0.4);
+    let g_tilt = Vec3::new(0.1, 0.0, -9.8);
+    let mut sink = 0.0;
+    let n = allocations(|| {
+        for _ in 0..5 {
+            let p = black_box(&pose);
+            sink += mass_matrix(&kp, &dp, p).unwrap()[(0, 0)];
+            sink += coriolis(&kp, &dp, p, &pose_dot).unwrap()[(1, 2)];
+            sink += gravity(&kp, &dp, p).unwrap()[2];
+            sink += gravity_with(&kp, &dp, p, &g_tilt).unwrap()[2];
+            sink += friction(&kp, &dp, p, &pose_dot).unwrap()[3];
+            let tau = inverse_dynamics(&kp, &dp, p, &pose_dot, &pose_ddot).unwrap();
+            sink += tau[0];
+            sink += inverse_dynamics_with_gravity(&kp, &dp, p, &pose_dot, &pose_ddot, &g_tilt)
+                .unwrap()[1];
+            sink += forward_dynamics(&kp, &dp, p, &pose_dot, &tau).unwrap()[4];
+            sink +=
+                forward_dynamics_with_gravity(&kp, &dp, p, &pose_dot, &tau, &g_tilt).unwrap()[4];
+            let t = dynamics_terms(&kp, &dp, p, &pose_dot).unwrap();
+            sink += t.m[(2, 2)] + t.c[(0, 1)] + t.g[2] + t.f[0] + t.j_theta[(0, 0)];
+            sink += regressor(&kp, p, &pose_dot, &pose_ddot).unwrap()[(0, 4)];
+            sink += regressor_tau_g(&kp, p, &pose_dot, &pose_ddot).unwrap()[(2, 0)];
+            let legs = leg_jacobians(&kp, p, &pose_dot).unwrap();
+            sink += legs[3].j_b_dot[(4, 4)] + legs[2].j_a_dot[(0, 0)];
+            let s = ModelState { pose: *p, pose_dot };
+            sink += rk4_step(&kp, &dp, &s, &tau, 1e-3).unwrap().pose[0];
+            sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();
+            sink += potential_energy_with_gravity(&kp, &dp, p, &GRAVITY).unwrap();
+            sink += joint_friction_smooth(&dp, &pose_dot, 1e-3)[0];
+            // error paths too
+            let far = Vec6::new(0.0, 0.0, 0.5, 0.0, 0.0, 0.0);
+            sink += inverse_dynamics(&kp, &dp, &far, &pose_dot, &pose_ddot).map_or(1.0, |_| 0.0);
+        }
+    });
+    black_box(sink);
+    assert_eq!(n, 0, "dynamics hot paths allocated {n} times");
+}
