@@ -23,7 +23,11 @@ pub struct PidGains {
 impl PidGains {
     /// The default SI gains for the nominal robot (see the module docs).
     pub const fn nominal() -> Self {
-        PidGains { lp: 400.0, li: 2000.0, ld: 4.0 }
+        PidGains {
+            lp: 400.0,
+            li: 2000.0,
+            ld: 4.0,
+        }
     }
 
     /// Gains as the thesis's (l_p, l_i, l_d) triple; the last three entries of the vector A (eq. 5.6).
@@ -74,12 +78,26 @@ impl JointPid {
         self.integral
     }
 
+    /// The previous error e_{k−1} = θ_d − θ (rad) per joint, used by the derivative term.
+    pub fn prev_error(&self) -> [f64; LEGS] {
+        self.prev_error
+    }
+
+    /// `false` until the first tick (the first tick has no derivative term).
+    pub fn is_primed(&self) -> bool {
+        self.primed
+    }
+
     /// One tick: joint torques (N·m) from the commanded and measured angles (rad).
     pub fn step(&mut self, theta_cmd: &Vec6, theta_meas: &Vec6) -> Vec6 {
         let mut tau = Vec6::zeros();
         for i in 0..LEGS {
             let e = theta_cmd[i] - theta_meas[i];
-            let de = if self.primed { (e - self.prev_error[i]) / self.dt } else { 0.0 };
+            let de = if self.primed {
+                (e - self.prev_error[i]) / self.dt
+            } else {
+                0.0
+            };
             let integral = self.integral[i] + e * self.dt;
             let raw = self.gains.lp * e + self.gains.li * integral + self.gains.ld * de;
             let lim = self.torque_limit;

@@ -1,0 +1,127 @@
+//! The crate's error and fault types: small, `Copy`, no strings, so they can cross a real-time boundary.
+
+use core::fmt;
+use rss6_core::CoreError;
+
+/// Why a controller entered its fault state. Readable with `fault()` on every controller and on
+/// [`crate::Servo`]; the controller keeps returning [`CtrlError::Faulted`] with this reason (and holds its
+/// last safe command) until `reset`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum FaultReason {
+    /// A camera pose measurement contained NaN or ±∞.
+    NonFiniteMeasurement,
+    /// A potentiometer reading (or the joint angle derived from it) contained NaN or ±∞.
+    NonFiniteJoint,
+    /// The reference (χ_d, χ̇_d, χ̈_d) contained NaN or ±∞.
+    NonFiniteReference,
+    /// The controller produced a non-finite torque or joint command (e.g. from a model blow-up).
+    NonFiniteCommand,
+    /// No camera frame for `age` seconds, longer than the configured limit.
+    StaleCamera {
+        /// Time since the last accepted frame (s).
+        age: f64,
+    },
+    /// A model evaluation (IK, Jacobian, dynamics) failed at the measured pose.
+    Model(CoreError),
+}
+
+/// Every way a call into `rss6-ctrl` can fail.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum CtrlError {
+    /// The controller is (or just went) into its fault state; the reason says why. The last safe command
+    /// is still available from the controller (`held_command()` / `last_command()`).
+    Faulted(FaultReason),
+    /// An argument was NaN or ±∞ (for calls that do not latch a fault, e.g. the Kalman filter).
+    NonFinite,
+    /// A time step was not strictly positive and finite (s).
+    InvalidTimeStep(f64),
+    /// A configuration value is out of range (non-positive gain, empty stroke …).
+    InvalidParameter(&'static str),
+    /// A model evaluation in rss6-core failed.
+    Core(CoreError),
+}
+
+impl From<CoreError> for CtrlError {
+    fn from(e: CoreError) -> Self {
+        CtrlError::Core(e)
+    }
+}
+
+impl fmt::Display for FaultReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FaultReason::NonFiniteMeasurement => write!(f, "camera measurement is NaN or infinite"),
+            FaultReason::NonFiniteJoint => write!(f, "potentiometer reading is NaN or infinite"),
+            FaultReason::NonFiniteReference => write!(f, "reference trajectory is NaN or infinite"),
+            FaultReason::NonFiniteCommand => write!(f, "controller output is NaN or infinite"),
+            FaultReason::StaleCamera { age } => {
+                write!(f, "no camera frame for {age:.3} s (stale camera data)")
+            }
+            FaultReason::Model(e) => write!(f, "model evaluation failed: {e}"),
+        }
+    }
+}
+
+impl fmt::Display for CtrlError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CtrlError::Faulted(r) => write!(f, "controller faulted: {r}"),
+            CtrlError::NonFinite => write!(f, "input contains NaN or infinity"),
+            CtrlError::InvalidTimeStep(dt) => {
+                write!(f, "time step must be > 0 and finite, got {dt}")
+            }
+            CtrlError::InvalidParameter(what) => write!(f, "invalid parameter: {what}"),
+            CtrlError::Core(e) => write!(f, "rss6-core: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for CtrlError {}
+
+/// Shorthand for results of this crate.
+pub type Result<T> = core::result::Result<T, CtrlError>;
+
+/// `true` if every element is finite.
+pub(crate) fn all_finite(xs: &[f64]) -> bool {
+    xs.iter().all(|x| x.is_finite())
+}
+
+/// `Err(InvalidTimeStep)` unless `dt` is finite and > 0.
+pub(crate) fn check_dt(dt: f64) -> Result<()> {
+    if dt.is_finite() && dt > 0.0 {
+        Ok(())
+    } else {
+        Err(CtrlError::InvalidTimeStep(dt))
+    }
+}
+
+/// A latched fault: the first reason wins until [`FaultLatch::clear`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct FaultLatch {
+    reason: Option<FaultReason>,
+}
+
+impl FaultLatch {
+    pub(crate) fn get(&self) -> Option<FaultReason> {
+        self.reason
+    }
+    /// Latches `r` (unless already faulted) and returns the error to hand back.
+    pub(crate) fn trip(&mut self, r: FaultReason) -> CtrlError {
+        if self.reason.is_none() {
+            self.reason = Some(r);
+        }
+        CtrlError::Faulted(self.reason.unwrap_or(r))
+    }
+    /// `Err(Faulted)` if latched.
+    pub(crate) fn check(&self) -> Result<()> {
+        match self.reason {
+            Some(r) => Err(CtrlError::Faulted(r)),
+            None => Ok(()),
+        }
+    }
+    pub(crate) fn clear(&mut self) {
+        self.reason = None;
+    }
+}

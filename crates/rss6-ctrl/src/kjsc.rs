@@ -1,0 +1,127 @@
+//! Kinematic joint-space controller KJSC (eq. 6.41–6.42): the reference pose is mapped to joint angles by
+//! the nominal inverse kinematics, θ_r = IK(χ_d), and a PID on e_j = θ_r − θ (potentiometers) gives
+//!
+//! θ_d = θ_bias + k_p e_j + k_d ė_j + k_i ∫e_j dt.
+//!
+//! As with KCSC the thesis's form has no θ_bias (θ(home) = 0 on its robot). ė_j uses the analytic
+//! θ̇_r = J_θ(χ_d) χ̇_d and a backward difference of θ. KJSC never sees the camera, so kinematic errors
+//! of the robot go straight into the Cartesian error — the point of the comparison in Tables 6.1/6.2.
+
+use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
+use crate::kcsc::JointCommand;
+use crate::trajectory::Reference;
+use rss6_core::{ik, jacobian_theta, KinematicParams, Vec6};
+
+/// Diagonal joint-space PID gains of eq. 6.42 (same for every joint).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointSpaceGains {
+    /// k_p (dimensionless).
+    pub kp: f64,
+    /// k_i (1/s).
+    pub ki: f64,
+    /// k_d (s).
+    pub kd: f64,
+    /// Anti-windup bound on |∫e_j dt| (rad·s).
+    pub integral_limit: f64,
+}
+
+impl JointSpaceGains {
+    /// The same numbers as the Cartesian baseline: k_p = 0.3, k_i = 2.4 1/s, k_d = 0.001 s.
+    pub fn thesis() -> Self {
+        JointSpaceGains {
+            kp: 0.3,
+            ki: 2.4,
+            kd: 0.001,
+            integral_limit: 1.0,
+        }
+    }
+}
+
+/// KJSC, eq. 6.42.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kjsc {
+    kp_model: KinematicParams,
+    gains: JointSpaceGains,
+    bias: Vec6,
+    integral: Vec6,
+    prev_theta: Option<Vec6>,
+    last: Vec6,
+    fault: FaultLatch,
+}
+
+impl Kjsc {
+    /// A KJSC on kinematics `kp_model`, starting at command `bias` (rad).
+    pub fn new(kp_model: KinematicParams, gains: JointSpaceGains, bias: &Vec6) -> Result<Self> {
+        kp_model.validate()?;
+        if !(all_finite(&[gains.kp, gains.ki, gains.kd, gains.integral_limit])
+            && all_finite(bias.as_slice()))
+        {
+            return Err(CtrlError::NonFinite);
+        }
+        Ok(Kjsc {
+            kp_model,
+            gains,
+            bias: *bias,
+            integral: Vec6::zeros(),
+            prev_theta: None,
+            last: *bias,
+            fault: FaultLatch::default(),
+        })
+    }
+
+    /// The latched fault, if any.
+    pub fn fault(&self) -> Option<FaultReason> {
+        self.fault.get()
+    }
+
+    /// The last command produced (held while faulted).
+    pub fn last_command(&self) -> Vec6 {
+        self.last
+    }
+
+    /// Clears integral, derivative memory and the fault.
+    pub fn reset(&mut self) {
+        self.integral = Vec6::zeros();
+        self.prev_theta = None;
+        self.last = self.bias;
+        self.fault.clear();
+    }
+
+    /// One step `dt` (s) after the previous one, with the potentiometer angles `theta` (nominal
+    /// convention, rad).
+    pub fn step(&mut self, reference: &Reference, theta: &Vec6, dt: f64) -> Result<JointCommand> {
+        self.fault.check()?;
+        check_dt(dt)?;
+        if !reference.is_finite() {
+            return Err(self.fault.trip(FaultReason::NonFiniteReference));
+        }
+        if !all_finite(theta.as_slice()) {
+            return Err(self.fault.trip(FaultReason::NonFiniteJoint));
+        }
+        let theta_r = match ik(&self.kp_model, &reference.pose) {
+            Ok(t) => t,
+            Err(e) => return Err(self.fault.trip(FaultReason::Model(e))),
+        };
+        let theta_r_dot = match jacobian_theta(&self.kp_model, &reference.pose) {
+            Ok(j) => j * reference.pose_dot,
+            Err(e) => return Err(self.fault.trip(FaultReason::Model(e))),
+        };
+        let theta_dot = match self.prev_theta {
+            Some(p) => (theta - p) / dt,
+            None => Vec6::zeros(),
+        };
+        let g = &self.gains;
+        let e = theta_r - theta;
+        let e_dot = theta_r_dot - theta_dot;
+        let lim = g.integral_limit;
+        let integral = (self.integral + e * dt).map(|x| x.clamp(-lim, lim));
+        let theta_d = self.bias + e * g.kp + e_dot * g.kd + integral * g.ki;
+        if !all_finite(theta_d.as_slice()) {
+            return Err(self.fault.trip(FaultReason::NonFiniteCommand));
+        }
+        self.integral = integral;
+        self.prev_theta = Some(*theta);
+        self.last = theta_d;
+        Ok(JointCommand { theta_d })
+    }
+}

@@ -1,0 +1,397 @@
+//! The visual-servo loop of Fig. 6.2 as one allocation-free object, plus a plant-agnostic runner.
+//!
+//! [`Servo::tick`] is called at the joint rate (1 kHz). When a camera frame arrives it runs the Kalman
+//! filter and the camera-rate controller (DSMC, KCSC or KJSC); every tick it produces a guarded joint
+//! command: DSMC through the torque-to-position converter (with the latest potentiometer angles),
+//! KCSC/KJSC by holding their latest θ_d. If no frame arrives for 1.5 camera periods the filter predicts
+//! and the controller runs on the prediction; after `stale_after` seconds without a frame, or on any
+//! NaN/∞ input, the servo latches a fault, returns [`CtrlError::Faulted`] and [`Servo::held_command`] is
+//! the last command sent (the drive's PID then holds the robot there).
+//!
+//! [`run`] drives any [`Plant`] (the analytic model in the tests, the rapier plant, or a real robot behind
+//! a bus) with a [`Trajectory`] for a fixed number of ticks, sending the held command while faulted.
+
+use crate::converter::TorqueToPosition;
+use crate::dsmc::Dsmc;
+use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
+use crate::kalman::{KalmanConfig, PoseEstimate, PoseKalman};
+use crate::kcsc::Kcsc;
+use crate::kjsc::Kjsc;
+use crate::pid::PidGains;
+use crate::safety::{CommandGuard, CommandLimits};
+use crate::trajectory::{Reference, Trajectory};
+use rss6_core::{KinematicParams, Vec6};
+
+/// The camera-rate controller inside a [`Servo`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(clippy::large_enum_variant)]
+pub enum Scheme {
+    /// DSMC (eq. 6.25) + torque-to-position converter.
+    Dsmc(Dsmc),
+    /// KCSC (eq. 6.40).
+    Kcsc(Kcsc),
+    /// KJSC (eq. 6.42).
+    Kjsc(Kjsc),
+}
+
+impl Scheme {
+    /// Short name for reports: "DSMC", "KCSC" or "KJSC".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Scheme::Dsmc(_) => "DSMC",
+            Scheme::Kcsc(_) => "KCSC",
+            Scheme::Kjsc(_) => "KJSC",
+        }
+    }
+}
+
+/// Rates, limits and the drive's PID as seen by the servo.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoConfig {
+    /// Joint-loop period (s), 1e-3.
+    pub joint_dt: f64,
+    /// Nominal camera period (s), 0.033.
+    pub frame_period: f64,
+    /// Fault if no frame for this long (s).
+    pub stale_after: f64,
+    /// Stroke and rate limits of the joint commands.
+    pub limits: CommandLimits,
+    /// Kalman filter tuning.
+    pub kalman: KalmanConfig,
+    /// Gains of the drive's built-in PID (what the converter inverts).
+    pub pid: PidGains,
+    /// Torque limit of the drive's PID (N·m).
+    pub torque_limit: f64,
+}
+
+impl ServoConfig {
+    /// 1 kHz joint loop, 30 Hz camera, stale after 0.2 s, nominal limits, thesis Kalman tuning, nominal
+    /// drive PID with a 30 N·m limit.
+    pub fn nominal() -> Self {
+        ServoConfig {
+            joint_dt: 1e-3,
+            frame_period: 0.033,
+            stale_after: 0.2,
+            limits: CommandLimits::nominal(),
+            kalman: KalmanConfig::thesis(),
+            pid: PidGains::nominal(),
+            torque_limit: 30.0,
+        }
+    }
+}
+
+/// What one tick produced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoTick {
+    /// The joint command to send (nominal convention, rad).
+    pub theta_cmd: Vec6,
+    /// A camera frame was consumed this tick.
+    pub frame: bool,
+    /// The Kalman estimate if the camera-rate part ran this tick (frame or prediction).
+    pub estimate: Option<PoseEstimate>,
+    /// The DSMC's latest τ_a (N·m) and F (DSMC only).
+    pub dsmc: Option<(Vec6, Vec6)>,
+}
+
+/// Kalman filter + camera-rate controller + converter + command guard (Fig. 6.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Servo {
+    kp_nominal: KinematicParams,
+    config: ServoConfig,
+    kalman: PoseKalman,
+    scheme: Scheme,
+    converter: TorqueToPosition,
+    guard: CommandGuard,
+    held_tau: Vec6,
+    held_sliding: Vec6,
+    held_theta_d: Vec6,
+    last_frame_t: f64,
+    last_kalman_t: f64,
+    started: bool,
+    fault: FaultLatch,
+}
+
+impl Servo {
+    /// A servo starting at time `t0` (s) with the robot at `initial_pose` (m, rad; Kalman start) and the
+    /// potentiometers reading `initial_kappa` (bits). `kp_nominal` converts readings to θ (eq. 4.2).
+    /// The drive's PID must be at rest (zero integral) at `t0`.
+    pub fn new(
+        kp_nominal: KinematicParams,
+        config: ServoConfig,
+        scheme: Scheme,
+        initial_pose: &Vec6,
+        initial_kappa: &Vec6,
+        t0: f64,
+    ) -> Result<Self> {
+        check_dt(config.joint_dt)?;
+        check_dt(config.frame_period)?;
+        check_dt(config.stale_after)?;
+        if !t0.is_finite() {
+            return Err(CtrlError::NonFinite);
+        }
+        let theta0 = kp_nominal.theta_from_reading(initial_kappa);
+        let kalman = PoseKalman::new(config.kalman, initial_pose)?;
+        let converter = TorqueToPosition::new(config.pid, config.joint_dt, config.torque_limit)?;
+        let guard = CommandGuard::new(config.limits, &theta0)?;
+        Ok(Servo {
+            kp_nominal,
+            config,
+            kalman,
+            scheme,
+            converter,
+            guard,
+            held_tau: Vec6::zeros(),
+            held_sliding: Vec6::zeros(),
+            held_theta_d: guard.last_command(),
+            last_frame_t: t0,
+            last_kalman_t: t0,
+            started: false,
+            fault: FaultLatch::default(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ServoConfig {
+        &self.config
+    }
+
+    /// The camera-rate controller (read its gains, integral, fault).
+    pub fn scheme(&self) -> &Scheme {
+        &self.scheme
+    }
+
+    /// The Kalman filter.
+    pub fn kalman(&self) -> &PoseKalman {
+        &self.kalman
+    }
+
+    /// The converter (and its shadow of the drive PID).
+    pub fn converter(&self) -> &TorqueToPosition {
+        &self.converter
+    }
+
+    /// The latched fault, if any.
+    pub fn fault(&self) -> Option<FaultReason> {
+        self.fault.get()
+    }
+
+    /// The last command let through the guard: what to keep sending while faulted.
+    pub fn held_command(&self) -> Vec6 {
+        self.guard.last_command()
+    }
+
+    fn trip(&mut self, r: FaultReason) -> CtrlError {
+        self.fault.trip(r)
+    }
+
+    fn run_scheme(
+        &mut self,
+        reference: &Reference,
+        est: &PoseEstimate,
+        theta: &Vec6,
+        dt: f64,
+    ) -> Result<()> {
+        match &mut self.scheme {
+            Scheme::Dsmc(d) => {
+                let out = d.step(reference, est, dt)?;
+                self.held_tau = out.tau_a;
+                self.held_sliding = out.sliding;
+            }
+            Scheme::Kcsc(k) => self.held_theta_d = k.step(reference, est, dt)?.theta_d,
+            Scheme::Kjsc(k) => self.held_theta_d = k.step(reference, theta, dt)?.theta_d,
+        }
+        Ok(())
+    }
+
+    /// One joint-rate tick at time `t` (s): `reference` at t, the camera pose χ̄_E in the base frame if a
+    /// frame arrived (m, rad), and the potentiometer readings κ (bits). Fixed work: one Kalman step and one
+    /// controller step at most, one converter/guard step always.
+    pub fn tick(
+        &mut self,
+        t: f64,
+        reference: &Reference,
+        camera: Option<&Vec6>,
+        kappa: &Vec6,
+    ) -> Result<ServoTick> {
+        self.fault.check()?;
+        if !t.is_finite() {
+            return Err(self.trip(FaultReason::NonFiniteReference));
+        }
+        let theta = self.kp_nominal.theta_from_reading(kappa);
+        if !all_finite(theta.as_slice()) {
+            return Err(self.trip(FaultReason::NonFiniteJoint));
+        }
+        if !reference.is_finite() {
+            return Err(self.trip(FaultReason::NonFiniteReference));
+        }
+        let min_dt = 1e-6;
+        let mut camera_step: Option<(PoseEstimate, f64)> = None;
+        let mut frame = false;
+        if let Some(z) = camera {
+            if !all_finite(z.as_slice()) {
+                return Err(self.trip(FaultReason::NonFiniteMeasurement));
+            }
+            let dt = (t - self.last_kalman_t).max(min_dt);
+            let est = match self.kalman.step(dt, Some(z)) {
+                Ok(e) => e,
+                Err(_) => return Err(self.trip(FaultReason::NonFiniteMeasurement)),
+            };
+            self.last_frame_t = t;
+            self.last_kalman_t = t;
+            camera_step = Some((est, dt));
+            frame = true;
+        } else {
+            let age = t - self.last_frame_t;
+            if age > self.config.stale_after {
+                return Err(self.trip(FaultReason::StaleCamera { age }));
+            }
+            let since = t - self.last_kalman_t;
+            if since >= 1.5 * self.config.frame_period {
+                let est = match self.kalman.step(since, None) {
+                    Ok(e) => e,
+                    Err(_) => return Err(self.trip(FaultReason::NonFiniteMeasurement)),
+                };
+                self.last_kalman_t = t;
+                camera_step = Some((est, since));
+            } else if !self.started {
+                camera_step = Some((self.kalman.estimate(), self.config.frame_period));
+            }
+        }
+        self.started = true;
+        if let Some((est, dt)) = camera_step {
+            if let Err(e) = self.run_scheme(reference, &est, &theta, dt) {
+                let r = match e {
+                    CtrlError::Faulted(r) => r,
+                    CtrlError::Core(c) => FaultReason::Model(c),
+                    _ => FaultReason::NonFiniteCommand,
+                };
+                return Err(self.trip(r));
+            }
+        }
+        let theta_cmd = match self.scheme {
+            Scheme::Dsmc(_) => match self.converter.step(&self.held_tau, &theta, &mut self.guard) {
+                Ok(o) => o.theta_cmd,
+                Err(CtrlError::Faulted(r)) => return Err(self.trip(r)),
+                Err(_) => return Err(self.trip(FaultReason::NonFiniteCommand)),
+            },
+            _ => match self.guard.apply(&self.held_theta_d, self.config.joint_dt) {
+                Ok(g) => {
+                    self.converter.observe(&g.command, &theta);
+                    g.command
+                }
+                Err(CtrlError::Faulted(r)) => return Err(self.trip(r)),
+                Err(_) => return Err(self.trip(FaultReason::NonFiniteCommand)),
+            },
+        };
+        let dsmc = match self.scheme {
+            Scheme::Dsmc(_) => Some((self.held_tau, self.held_sliding)),
+            _ => None,
+        };
+        Ok(ServoTick {
+            theta_cmd,
+            frame,
+            estimate: camera_step.map(|(e, _)| e),
+            dsmc,
+        })
+    }
+}
+
+/// A robot (real or simulated) as the servo sees it. Joint commands are in the nominal joint convention.
+pub trait Plant {
+    /// The plant's own error type (bus error, simulation failure …).
+    type Error;
+    /// Sends one joint command and advances one joint-loop tick (1 kHz).
+    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> core::result::Result<(), Self::Error>;
+    /// The camera pose χ̄_E of the end-effector in the base frame (m, rad) if a frame arrived since the
+    /// last call, else `None`. (A plant whose camera reports ᶜχ_t converts with ᴼχ_C and ᴱχ_t first.)
+    fn camera(&mut self) -> Option<Vec6>;
+    /// The latest potentiometer readings κ (bits).
+    fn potentiometers(&self) -> Vec6;
+    /// Plant time (s).
+    fn time(&self) -> f64;
+}
+
+/// What [`run`] shows the observer after every tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TickRecord {
+    /// Time at the start of the tick (s).
+    pub t: f64,
+    /// The reference used.
+    pub reference: Reference,
+    /// The camera frame consumed this tick, if any.
+    pub camera: Option<Vec6>,
+    /// The command sent (rad).
+    pub theta_cmd: Vec6,
+    /// The servo's output, or `None` while faulted.
+    pub tick: Option<ServoTick>,
+    /// The servo's latched fault, if any.
+    pub fault: Option<FaultReason>,
+}
+
+/// Summary of a [`run`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSummary {
+    /// Ticks executed.
+    pub ticks: u32,
+    /// Camera frames consumed.
+    pub frames: u32,
+    /// Time and reason of the first fault, if any.
+    pub first_fault: Option<(f64, FaultReason)>,
+}
+
+/// Runs `servo` on `plant` for `ticks` joint-loop ticks following `trajectory` (sampled at plant time
+/// minus `t0`). While the servo is faulted the held command keeps being sent. `observe` sees every tick
+/// and the plant after the command was applied. Stops early only on a plant error.
+pub fn run<P, T, F>(
+    plant: &mut P,
+    servo: &mut Servo,
+    trajectory: &T,
+    t0: f64,
+    ticks: u32,
+    mut observe: F,
+) -> core::result::Result<RunSummary, P::Error>
+where
+    P: Plant,
+    T: Trajectory + ?Sized,
+    F: FnMut(&TickRecord, &P),
+{
+    let mut summary = RunSummary {
+        ticks: 0,
+        frames: 0,
+        first_fault: None,
+    };
+    for _ in 0..ticks {
+        let t = plant.time();
+        let reference = trajectory.sample(t - t0);
+        let camera = plant.camera();
+        let kappa = plant.potentiometers();
+        let result = servo.tick(t, &reference, camera.as_ref(), &kappa);
+        let (theta_cmd, tick) = match result {
+            Ok(o) => (o.theta_cmd, Some(o)),
+            Err(_) => (servo.held_command(), None),
+        };
+        if camera.is_some() && tick.is_some() {
+            summary.frames += 1;
+        }
+        let fault = servo.fault();
+        if summary.first_fault.is_none() {
+            if let Some(r) = fault {
+                summary.first_fault = Some((t, r));
+            }
+        }
+        plant.step_joint_command(&theta_cmd)?;
+        summary.ticks += 1;
+        observe(
+            &TickRecord {
+                t,
+                reference,
+                camera,
+                theta_cmd,
+                tick,
+                fault,
+            },
+            plant,
+        );
+    }
+    Ok(summary)
+}
