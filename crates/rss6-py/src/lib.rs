@@ -5,6 +5,8 @@
 use pyo3::prelude::*;
 
 mod convert;
+mod ctrl;
+mod dynamics;
 mod errors;
 mod kinematics;
 mod params;
@@ -21,5 +23,20 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kinematics::fk_batch, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::jacobian_theta, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::jacobian_ad, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::mass_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::coriolis, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::gravity, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::friction, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::inverse_dynamics, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::forward_dynamics, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::regressor, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::dynamics_terms, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::rk4_step, m)?)?;
+    m.add_class::<ctrl::PyTrajectory>()?;
+    m.add_class::<ctrl::PyKalmanFilter>()?;
+    m.add_class::<ctrl::PyDsmc>()?;
+    m.add_class::<ctrl::PyKcsc>()?;
+    m.add_class::<ctrl::PyKjsc>()?;
+    m.add_class::<ctrl::PyTorqueToPosition>()?;
     Ok(())
 }
