@@ -1,0 +1,82 @@
+//! The crate's error type.
+
+use rss6_core::CoreError;
+
+/// Which calibration method a call refers to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum Method {
+    /// Relative-pose-based algorithm (eq. 4.16–4.21): 60 kinematic + 6 external parameters (ᴱχ_t).
+    Rpba,
+    /// Implicit leg-closure calibration (eq. 4.10–4.15): 60 kinematic + 12 external (ᴼχ_C, ᴱχ_t).
+    Implicit,
+}
+
+impl core::fmt::Display for Method {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Method::Rpba => write!(f, "RPBA"),
+            Method::Implicit => write!(f, "implicit"),
+        }
+    }
+}
+
+/// Every way a calibration call can fail. Never a silent wrong answer: if the data cannot support an
+/// estimate the error says why and what is missing.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IdentError {
+    /// Fewer usable configurations than identifiable parameters require.
+    #[error(
+        "too few usable configurations for {method}: got {got}, need at least {needed} \
+         ({params} identifiable parameters, 6 equations per configuration{extra})"
+    )]
+    TooFewConfigurations {
+        /// The method.
+        method: Method,
+        /// Usable configurations (including the reference configuration 0).
+        got: usize,
+        /// Minimum number of configurations (including configuration 0).
+        needed: usize,
+        /// Number of identifiable (gauge-free) parameters.
+        params: usize,
+        /// Note on how configuration 0 counts.
+        extra: &'static str,
+    },
+    /// The data leave parameter directions beyond the frame (gauge) choices unseen.
+    #[error(
+        "rank-deficient data: Jacobian rank {rank} < {expected} identifiable parameters; \
+         the data cannot see: {}", unseen.join(", ")
+    )]
+    RankDeficient {
+        /// Numerical rank of the gauge-reduced Jacobian.
+        rank: usize,
+        /// The rank complete data would give.
+        expected: usize,
+        /// Names of the parameters dominating the unseen directions.
+        unseen: Vec<String>,
+    },
+    /// The reference configuration (index 0) is missing or unusable; every relative pose needs it.
+    #[error("reference configuration 0 is unusable: {0}")]
+    BadReference(String),
+    /// Forward kinematics failed at a configuration that cannot be dropped.
+    #[error("forward kinematics failed at configuration {config}: {source}")]
+    Fk {
+        /// Configuration index in the data.
+        config: usize,
+        /// The kinematics error.
+        #[source]
+        source: CoreError,
+    },
+    /// Inconsistent or non-finite input (parameters, options, shapes).
+    #[error("invalid input: {0}")]
+    InvalidInput(String),
+    /// An error from the kinematics core.
+    #[error("kinematics: {0}")]
+    Core(#[from] CoreError),
+    /// A robot data source failed.
+    #[error("robot source: {0}")]
+    Source(String),
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T> = core::result::Result<T, IdentError>;
