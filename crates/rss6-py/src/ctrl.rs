@@ -121,19 +121,6 @@ pub(crate) struct PyTrajectory {
     name: String,
 }
 
-impl PyTrajectory {
-    pub(crate) fn named(name: &str) -> PyResult<Self> {
-        match name {
-            "exp1" => Ok(PyTrajectory { inner: Traj::Sin(Sinusoid::experiment1()), name: "exp1".into() }),
-            "exp2" => Ok(PyTrajectory {
-                inner: Traj::Fourier(pad_fourier(&Fourier::experiment2())),
-                name: "exp2".into(),
-            }),
-            other => Err(invalid(format!("trajectory must be 'exp1' or 'exp2', got '{other}'"))),
-        }
-    }
-}
-
 #[pymethods]
 impl PyTrajectory {
     /// Experiment 1: sinusoid with an initial step, ω = 0.5 rad/s.

@@ -10,6 +10,8 @@ mod dynamics;
 mod errors;
 mod kinematics;
 mod params;
+mod plant;
+mod servo;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
@@ -38,5 +40,9 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ctrl::PyKcsc>()?;
     m.add_class::<ctrl::PyKjsc>()?;
     m.add_class::<ctrl::PyTorqueToPosition>()?;
+    m.add_class::<plant::PyModelSim>()?;
+    m.add_function(wrap_pyfunction!(servo::run_servo, m)?)?;
+    m.add_function(wrap_pyfunction!(servo::compose_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(servo::invert_pose, m)?)?;
     Ok(())
 }
