@@ -650,3 +650,36 @@ pub fn residuals_and_jacobian(
 pub fn gauge_directions(method: Method, reference: &KinematicParams, x: &DVector<f64>) -> DMatrix<f64> {
     Layout::new(method, *reference).gauge_basis(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::collect;
+    use crate::generator::{AnalyticRobot, NoiseModel, TrueRobot};
+    use rand::SeedableRng;
+
+    /// The gauge claim of `model.rs` is exact, not first-order: finite frame changes leave every
+    /// residual unchanged.
+    #[test]
+    fn residuals_are_invariant_under_finite_gauge_transformations() {
+        let nominal = KinematicParams::nominal();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let truth = TrueRobot::draw(&nominal, &mut rng);
+        let mut src = AnalyticRobot::new(truth, nominal, NoiseModel::default(), 5);
+        let mut thetas = vec![Vec6::zeros()];
+        thetas.extend(crate::validate::test_configurations(8, 1, (-0.4, 0.4)));
+        let data = collect(&mut src, &thetas, 2.0).unwrap();
+        let g = [0.01, -0.02, 0.005, 0.03, 0.004, -0.003, 0.01, 0.02, -0.01, 0.05];
+        for method in [Method::Rpba, Method::Implicit] {
+            let layout = Layout::new(method, nominal);
+            let x = layout.pack(&truth.kp, Some(&truth.sensor_in_base), &truth.target_in_effector);
+            let xg = layout.apply_gauge(&x, &g);
+            assert!((&xg - &x).amax() > 1e-3, "the gauge must actually move the parameters");
+            let (kappa, cam, _) = usable(&data);
+            let mut p = Problem::new(layout, kappa, cam, &CalibrationOptions::default());
+            let r = p.eval(&x, false).unwrap().r;
+            let rg = p.eval(&xg, false).unwrap().r;
+            assert!((&r - &rg).amax() < 1e-6 * r.amax(), "{method}: {}", (&r - &rg).amax());
+        }
+    }
+}

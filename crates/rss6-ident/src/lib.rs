@@ -47,4 +47,5 @@ pub use crate::selection::{
     SelectionOptions, SelectionReport, StrokeOptions,
 };
 
+pub use crate::study::{mean_p95, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow};
 pub use crate::validate::{relative_pose_errors, test_configurations, RelativePoseErrors};
