@@ -4,6 +4,7 @@
 
 use pyo3::prelude::*;
 
+mod calib;
 mod convert;
 mod ctrl;
 mod dynamics;
@@ -44,5 +45,14 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(servo::run_servo, m)?)?;
     m.add_function(wrap_pyfunction!(servo::compose_poses, m)?)?;
     m.add_function(wrap_pyfunction!(servo::invert_pose, m)?)?;
+    m.add_class::<calib::PyCalibrationData>()?;
+    m.add_class::<calib::PyCalibrationResult>()?;
+    m.add_function(wrap_pyfunction!(calib::stroke, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::select_configurations, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::collect, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::rpba, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
     Ok(())
 }

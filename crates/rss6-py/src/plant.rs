@@ -325,6 +325,12 @@ impl PyModelSim {
         self.robot.time()
     }
 
+    /// Joint-loop tick length (s).
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.robot.dt()
+    }
+
     /// ᶜχ_t (6,) if a camera frame completed since the last call, else None.
     fn camera<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
         self.robot.camera().map(|z| out6(py, &z))
