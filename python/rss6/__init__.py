@@ -8,21 +8,44 @@ R = Rx(α)·Ry(β)·Rz(γ). Every error derives from :class:`rss6.Rss6Error` (se
 >>> theta = rss6.ik(kp, rss6.home_pose())
 >>> bool(abs(theta).max() < 1e-12)
 True
+
+Submodules: :mod:`rss6.servo` (tracking experiments), :mod:`rss6.calibrate` (RPBA, implicit),
+:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.cli` (the ``rss6`` command).
 """
 
 from __future__ import annotations
 
 from rss6 import errors
 from rss6._rss6 import (
+    CalibrationData,
+    CalibrationResult,
+    Dsmc,
     DynamicParams,
+    KalmanFilter,
+    Kcsc,
+    Kjsc,
     KinematicParams,
+    ModelSim,
+    TorqueToPosition,
+    Trajectory,
+    compose_poses,
+    coriolis,
+    dynamics_terms,
     fk,
     fk_batch,
+    forward_dynamics,
+    friction,
+    gravity,
     home_pose,
     ik,
     ik_batch,
+    inverse_dynamics,
+    invert_pose,
     jacobian_ad,
     jacobian_theta,
+    mass_matrix,
+    regressor,
+    rk4_step,
 )
 from rss6.errors import (
     CalibrationError,
@@ -41,10 +64,20 @@ from rss6.errors import (
     UnreachableError,
 )
 
+try:  # the rapier plant (rss6-sim) is optional in builds without it
+    from rss6._rss6 import Plant  # type: ignore[attr-defined]
+except ImportError:  # pragma: no cover - depends on the build
+    Plant = None  # type: ignore[assignment,misc]
+
+from rss6 import calibrate, logs, servo  # noqa: E402  (need the names above)
+
 __version__ = "0.1.0"
 
 __all__ = [
     "errors",
+    "calibrate",
+    "logs",
+    "servo",
     "KinematicParams",
     "DynamicParams",
     "home_pose",
@@ -54,6 +87,27 @@ __all__ = [
     "fk_batch",
     "jacobian_theta",
     "jacobian_ad",
+    "compose_poses",
+    "invert_pose",
+    "mass_matrix",
+    "coriolis",
+    "gravity",
+    "friction",
+    "inverse_dynamics",
+    "forward_dynamics",
+    "regressor",
+    "dynamics_terms",
+    "rk4_step",
+    "Trajectory",
+    "KalmanFilter",
+    "Dsmc",
+    "Kcsc",
+    "Kjsc",
+    "TorqueToPosition",
+    "ModelSim",
+    "Plant",
+    "CalibrationData",
+    "CalibrationResult",
     "Rss6Error",
     "InvalidInputError",
     "ShapeError",
