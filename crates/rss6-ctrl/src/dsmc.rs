@@ -75,6 +75,11 @@ impl DsmcGains {
 }
 
 /// Continuous boundary-layer saturation sat(F/ε) = clamp(F/ε, −1, 1) (replaces eq. 6.28, see module docs).
+///
+/// ```
+/// assert_eq!(rss6_ctrl::sat(0.01, 0.02), 0.5); // inside the layer: linear
+/// assert_eq!(rss6_ctrl::sat(-3.0, 0.02), -1.0); // outside: sgn
+/// ```
 pub fn sat(f: f64, epsilon: f64) -> f64 {
     (f / epsilon).clamp(-1.0, 1.0)
 }

@@ -23,9 +23,9 @@ pub const RICCATI_MAX_ITERATIONS: u32 = 20_000;
 /// Tuning of the pose Kalman filter. Indices follow χ = [x, y, z, α, β, γ].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KalmanConfig {
-    /// Spectral density of the white jerk driving χ̈ (Q_c[2,2]); m²/s⁵ for x, y, z and rad²/s⁵ for α, β, γ.
+    /// Spectral density of the white jerk driving χ̈ (Q_c(2,2)); m²/s⁵ for x, y, z and rad²/s⁵ for α, β, γ.
     pub q_jerk: Vec6,
-    /// Spectral density of white noise on the velocity equation (Q_c[1,1]), m²/s³ or rad²/s³; 0 for the
+    /// Spectral density of white noise on the velocity equation (Q_c(1,1)), m²/s³ or rad²/s³; 0 for the
     /// pure third-order integrator.
     pub q_vel: Vec6,
     /// Variance of one camera sample R (m² or rad²); Table 4.1: (0.0096 mm)², (0.0261°)².
@@ -39,8 +39,9 @@ pub struct KalmanConfig {
 }
 
 impl KalmanConfig {
-    /// Camera noise of Table 4.1 and a jerk density tuned for the thesis trajectories on the nominal robot
-    /// (filter bandwidth ≈ 3–4 Hz at 30 Hz sampling; see docs/control.md).
+    /// Camera noise of Table 4.1 and the *servo* jerk densities (1e-2 m²/s⁵, 3 rad²/s⁵): little lag, so the
+    /// DSMC's 30 Hz velocity loop stays stable; noise reduction is modest (see docs/control.md). Lower
+    /// `q_jerk` smooths more and lags more.
     pub fn thesis() -> Self {
         let sp = 0.0096e-3;
         let sa = 0.0261_f64.to_radians();
@@ -230,6 +231,25 @@ impl PoseKalman {
             pose_dot: get(1),
             pose_ddot: get(2),
         }
+    }
+
+    /// The estimate extrapolated `ahead` seconds (≥ 0) with Φ(ahead), without changing the filter: used to
+    /// bring a latency-delayed estimate to the present.
+    pub fn predicted(&self, ahead: f64) -> PoseEstimate {
+        let phi = transition(ahead.max(0.0));
+        let s = |i: usize| {
+            self.axes
+                .get(i)
+                .map_or(Vector3::repeat(f64::NAN), |a| phi * a.s)
+        };
+        let mut out = self.estimate();
+        for i in 0..6 {
+            let x = s(i);
+            out.pose[i] = x[0];
+            out.pose_dot[i] = x[1];
+            out.pose_ddot[i] = x[2];
+        }
+        out
     }
 
     /// One step: predict over `dt` (s, time since the previous step), then update with `measurement`

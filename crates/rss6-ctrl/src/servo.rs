@@ -54,6 +54,9 @@ pub struct ServoConfig {
     pub frame_period: f64,
     /// Fault if no frame for this long (s).
     pub stale_after: f64,
+    /// Camera latency L (s, ≥ 0): a frame arriving at t was exposed at t − L. The filter runs on exposure
+    /// times and the controllers get its estimate extrapolated by L (Φ(L), third-order model).
+    pub camera_latency: f64,
     /// Stroke and rate limits of the joint commands.
     pub limits: CommandLimits,
     /// Kalman filter tuning.
@@ -65,13 +68,14 @@ pub struct ServoConfig {
 }
 
 impl ServoConfig {
-    /// 1 kHz joint loop, 30 Hz camera, stale after 0.2 s, nominal limits, thesis Kalman tuning, nominal
+    /// 1 kHz joint loop, 30 Hz camera without latency, stale after 0.2 s, nominal limits, thesis Kalman tuning, nominal
     /// drive PID with a 30 N·m limit.
     pub fn nominal() -> Self {
         ServoConfig {
             joint_dt: 1e-3,
             frame_period: 0.033,
             stale_after: 0.2,
+            camera_latency: 0.0,
             limits: CommandLimits::nominal(),
             kalman: KalmanConfig::thesis(),
             pid: PidGains::nominal(),
@@ -126,6 +130,11 @@ impl Servo {
         check_dt(config.joint_dt)?;
         check_dt(config.frame_period)?;
         check_dt(config.stale_after)?;
+        if !(config.camera_latency >= 0.0 && config.camera_latency < config.stale_after) {
+            return Err(CtrlError::InvalidParameter(
+                "camera latency must be in [0, stale_after)",
+            ));
+        }
         if !t0.is_finite() {
             return Err(CtrlError::NonFinite);
         }
@@ -144,7 +153,7 @@ impl Servo {
             held_sliding: Vec6::zeros(),
             held_theta_d: guard.last_command(),
             last_frame_t: t0,
-            last_kalman_t: t0,
+            last_kalman_t: t0 - config.camera_latency,
             started: false,
             fault: FaultLatch::default(),
         })
@@ -206,7 +215,51 @@ impl Servo {
     /// One joint-rate tick at time `t` (s): `reference` at t, the camera pose χ̄_E in the base frame if a
     /// frame arrived (m, rad), and the potentiometer readings κ (bits). Fixed work: one Kalman step and one
     /// controller step at most, one converter/guard step always.
+    ///
+    /// On `Err` the caller sends [`Servo::held_command`]; the servo assumes it did and keeps the
+    /// converter's shadow of the drive PID in step with it, so [`Servo::reset`] can restart bumplessly.
     pub fn tick(
+        &mut self,
+        t: f64,
+        reference: &Reference,
+        camera: Option<&Vec6>,
+        kappa: &Vec6,
+    ) -> Result<ServoTick> {
+        let out = self.tick_inner(t, reference, camera, kappa);
+        if out.is_err() {
+            let theta = self.kp_nominal.theta_from_reading(kappa);
+            if all_finite(theta.as_slice()) {
+                let held = self.guard.last_command();
+                self.converter.observe(&held, &theta);
+            }
+        }
+        out
+    }
+
+    /// Clears every fault and restarts the filter at `pose` (m, rad) at time `t` (s); the command guard and
+    /// the controllers' integrals restart from the held command. The drive's PID state is kept (the
+    /// converter has been shadowing it throughout).
+    pub fn reset(&mut self, t: f64, pose: &Vec6) -> Result<()> {
+        if !(t.is_finite() && all_finite(pose.as_slice())) {
+            return Err(CtrlError::NonFinite);
+        }
+        self.kalman.reset(pose);
+        match &mut self.scheme {
+            Scheme::Dsmc(d) => d.reset(),
+            Scheme::Kcsc(k) => k.reset(),
+            Scheme::Kjsc(k) => k.reset(),
+        }
+        self.held_theta_d = self.guard.last_command();
+        self.held_tau = Vec6::zeros();
+        self.held_sliding = Vec6::zeros();
+        self.last_frame_t = t;
+        self.last_kalman_t = t - self.config.camera_latency;
+        self.started = false;
+        self.fault.clear();
+        Ok(())
+    }
+
+    fn tick_inner(
         &mut self,
         t: f64,
         reference: &Reference,
@@ -231,13 +284,14 @@ impl Servo {
             if !all_finite(z.as_slice()) {
                 return Err(self.trip(FaultReason::NonFiniteMeasurement));
             }
-            let dt = (t - self.last_kalman_t).max(min_dt);
-            let est = match self.kalman.step(dt, Some(z)) {
-                Ok(e) => e,
-                Err(_) => return Err(self.trip(FaultReason::NonFiniteMeasurement)),
-            };
+            let exposed = t - self.config.camera_latency;
+            let dt = (exposed - self.last_kalman_t).max(min_dt);
+            if self.kalman.step(dt, Some(z)).is_err() {
+                return Err(self.trip(FaultReason::NonFiniteMeasurement));
+            }
+            let est = self.kalman.predicted(self.config.camera_latency);
             self.last_frame_t = t;
-            self.last_kalman_t = t;
+            self.last_kalman_t = exposed;
             camera_step = Some((est, dt));
             frame = true;
         } else {
@@ -245,16 +299,19 @@ impl Servo {
             if age > self.config.stale_after {
                 return Err(self.trip(FaultReason::StaleCamera { age }));
             }
-            let since = t - self.last_kalman_t;
+            let exposed = t - self.config.camera_latency;
+            let since = exposed - self.last_kalman_t;
             if since >= 1.5 * self.config.frame_period {
-                let est = match self.kalman.step(since, None) {
-                    Ok(e) => e,
-                    Err(_) => return Err(self.trip(FaultReason::NonFiniteMeasurement)),
-                };
-                self.last_kalman_t = t;
-                camera_step = Some((est, since));
+                if self.kalman.step(since, None).is_err() {
+                    return Err(self.trip(FaultReason::NonFiniteMeasurement));
+                }
+                self.last_kalman_t = exposed;
+                camera_step = Some((self.kalman.predicted(self.config.camera_latency), since));
             } else if !self.started {
-                camera_step = Some((self.kalman.estimate(), self.config.frame_period));
+                camera_step = Some((
+                    self.kalman.predicted(self.config.camera_latency),
+                    self.config.frame_period,
+                ));
             }
         }
         self.started = true;

@@ -59,6 +59,14 @@ pub struct Sinusoid {
 impl Sinusoid {
     /// Experiment 1: ω = 0.5 rad/s; amplitudes 10, 8, 6 mm and 0.03 rad; y starts 8 mm and z 5 mm off
     /// home (the initial step in y and z), x and the angles start at home. Peak excursion 11 mm / 0.03 rad.
+    ///
+    /// ```
+    /// use rss6_ctrl::{Sinusoid, Trajectory};
+    /// let r = Sinusoid::experiment1().sample(0.0);
+    /// let step = r.pose - rss6_core::home_pose();
+    /// assert!((step[1] - 0.008).abs() < 1e-12 && (step[2] - 0.005).abs() < 1e-12);
+    /// assert!((r.pose_dot[0] - 0.010 * 0.5).abs() < 1e-12); // analytic χ̇_d
+    /// ```
     pub fn experiment1() -> Self {
         let home = home_pose();
         Sinusoid {

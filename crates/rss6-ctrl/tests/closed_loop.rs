@@ -202,3 +202,34 @@ fn theorem1_sliding_variable_enters_the_boundary_layer_and_stays() {
     );
     assert!(t_end > 9.9, "the run must cover 10 s");
 }
+
+/// Heavier study: the Experiment 1 ordering on five other randomly perturbed plants (and camera seeds).
+/// `cargo test -p rss6-ctrl --test closed_loop -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn experiment1_ordering_on_other_plants() {
+    let traj = Sinusoid::experiment1();
+    for seed in 100..105 {
+        let setup = Setup::new(
+            KinematicParams::perturbed(&table_4_2_errors(seed)),
+            Noise {
+                camera: true,
+                potentiometer: true,
+            },
+            15.0,
+            seed,
+        );
+        let r: Vec<f64> = [Which::Kjsc, Which::Kcsc, Which::Dsmc]
+            .into_iter()
+            .map(|w| run_scheme(w, &traj, &setup).pos_rmse() * 1e3)
+            .collect();
+        println!(
+            "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm",
+            r[0], r[1], r[2]
+        );
+        assert!(
+            r[2] < r[1] && r[1] < r[0],
+            "seed {seed}: ordering broken {r:?}"
+        );
+    }
+}

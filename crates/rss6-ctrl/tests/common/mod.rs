@@ -1,7 +1,14 @@
 //! The analytic-model "robot" for closed-loop tests: rss6-core forward dynamics + RK4 at 1 kHz, the
 //! drive's [`JointPid`] on potentiometer readings (500 Hz, 0.2233 bit noise), a 30 Hz camera with the
 //! Table 4.1 noise, and kinematics that may differ from the controllers' nominal model (Table 4.2 sizes).
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![allow(
+    dead_code,
+    unreachable_pub,
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic
+)]
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -36,6 +43,9 @@ pub struct ModelPlant {
     pub dt: f64,
     pub camera_every: u64,
     pub pot_every: u64,
+    /// Frames are delivered this many ticks after exposure.
+    pub camera_latency_ticks: u64,
+    in_flight: std::collections::VecDeque<(u64, Vec6)>,
     noise: Noise,
     kappa: Vec6,
     pending_frame: Option<Vec6>,
@@ -63,6 +73,8 @@ impl ModelPlant {
             dt: 1e-3,
             camera_every: 33,
             pot_every: 2,
+            camera_latency_ticks: 0,
+            in_flight: std::collections::VecDeque::with_capacity(8),
             noise,
             kappa: Vec6::zeros(),
             pending_frame: None,
@@ -101,7 +113,19 @@ impl ModelPlant {
                 z[i] += Normal::new(0.0, s).unwrap().sample(&mut self.rng);
             }
         }
-        self.pending_frame = Some(z);
+        self.in_flight
+            .push_back((self.tick + self.camera_latency_ticks, z));
+        self.deliver();
+    }
+
+    fn deliver(&mut self) {
+        while let Some(&(due, z)) = self.in_flight.front() {
+            if due > self.tick {
+                break;
+            }
+            self.in_flight.pop_front();
+            self.pending_frame = Some(z);
+        }
     }
 }
 
@@ -120,6 +144,7 @@ impl Plant for ModelPlant {
         if self.tick % self.camera_every == 0 {
             self.sample_camera();
         }
+        self.deliver();
         Ok(())
     }
 
@@ -210,6 +235,8 @@ pub struct Setup {
     pub seed: u64,
     pub config: ServoConfig,
     pub dsmc: DsmcGains,
+    /// Camera latency of the plant (ticks of 1 ms).
+    pub latency_ticks: u64,
 }
 
 impl Setup {
@@ -221,6 +248,7 @@ impl Setup {
             seed,
             config: ServoConfig::nominal(),
             dsmc: DsmcGains::tuned(),
+            latency_ticks: 0,
         }
     }
 }
@@ -235,6 +263,7 @@ pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
         setup.noise,
         setup.seed,
     );
+    plant.camera_latency_ticks = setup.latency_ticks;
     let kp = KinematicParams::nominal();
     let kappa0 = plant.potentiometers();
     let theta0 = kp.theta_from_reading(&kappa0);
