@@ -27,14 +27,19 @@ struct Adapter<'a> {
     target_inv: Vec6,
     kp_model: KinematicParams,
     kp_nominal: KinematicParams,
+    convert: bool,
 }
 
 impl Plant for Adapter<'_> {
     type Error = String;
 
     fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
-        let kappa = self.kp_model.reading_from_theta(theta_cmd);
-        self.robot.step(&self.kp_nominal.theta_from_reading(&kappa))
+        if self.convert {
+            let kappa = self.kp_model.reading_from_theta(theta_cmd);
+            self.robot.step(&self.kp_nominal.theta_from_reading(&kappa))
+        } else {
+            self.robot.step(theta_cmd)
+        }
     }
 
     fn camera(&mut self) -> Option<Vec6> {
@@ -162,20 +167,28 @@ pub(crate) fn run_servo<'py>(
     let result = with_robot(plant, |robot| -> PyResult<Log> {
         let dt = robot.dt();
         config.joint_dt = dt;
+        // Joint conventions: KJSC turns χ_d into joint angles by the model's IK, so it works in the
+        // model's (calibrated) physical convention and its commands are converted to the drive's nominal
+        // one. DSMC's converter must mirror the drive's PID exactly, so DSMC (and KCSC, whose joint
+        // increments come from J_θ) work in the drive's nominal convention.
+        let convert = controller == "kjsc";
+        let kp_nominal = KinematicParams::nominal();
+        let kp_servo = if convert { kp_model } else { kp_nominal };
         let kappa0 = robot.potentiometers();
-        let theta0 = kp_model.theta_from_reading(&kappa0);
+        let theta0 = kp_servo.theta_from_reading(&kappa0);
         let t0 = robot.time();
         let mut adapter = Adapter {
             robot,
             sensor_in_base: sensor,
             target_inv: pose_inverse(&target),
             kp_model,
-            kp_nominal: KinematicParams::nominal(),
+            kp_nominal,
+            convert,
         };
         // Kalman start: the first camera frame if one is pending, else the model's FK of the readings.
         let start = match adapter.camera() {
             Some(p) => p,
-            None => rss6_core::fk(&kp_model, &theta0, &rss6_core::home_pose(), &rss6_core::FkOptions::default())
+            None => rss6_core::fk(&kp_model, &kp_model.theta_from_reading(&kappa0), &rss6_core::home_pose(), &rss6_core::FkOptions::default())
                 .map_err(core)?
                 .pose,
         };
@@ -185,7 +198,7 @@ pub(crate) fn run_servo<'py>(
             "kjsc" => Scheme::Kjsc(Kjsc::new(kp_model, JointSpaceGains::thesis(), &theta0).map_err(ctrl_err)?),
             other => return Err(invalid(format!("controller must be 'dsmc', 'kcsc' or 'kjsc', got '{other}'"))),
         };
-        let mut servo = Servo::new(kp_model, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
+        let mut servo = Servo::new(kp_servo, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
         let ticks = (duration / dt).round() as u32;
         let mut log = Log::default();
         let summary = py.detach(|| {
