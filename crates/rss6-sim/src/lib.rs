@@ -1,2 +1,37 @@
-//! rss6-sim: the physics plant that plays the real robot (issue 5). Work in progress.
+#![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
+// Textbook names (chi, kappa, tau …) mirror the thesis's symbols.
+#![allow(non_snake_case)]
+
+mod effects;
+mod error;
+mod log;
+mod params_file;
+mod plant;
+mod sensors;
+mod sim;
+mod twin;
+mod validation;
+
+pub use crate::effects::{
+    build_effects, make_effect, Backlash, BacklashEffect, BaseTilt, CameraLatency, Effect,
+    EffectConstructor, EffectSetup, EffectSpec, JointFriction, Payload, PayloadEffect, G0,
+    REGISTRY,
+};
+pub use crate::error::{Result, SimError};
+pub use crate::log::{read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS};
+pub use crate::params_file::{
+    load_dynamic_params, load_kinematic_params, load_pid_gains, save_dynamic_params,
+    save_kinematic_params, save_pid_gains, DynamicParamsFile, KinematicParamsFile, PidGainsFile,
+};
+pub use crate::plant::{Plant, RapierPhysics};
+pub use crate::sensors::{
+    kabsch, measure_with, Camera, CmmConfig, CMM_ANGLE_NOISE, CMM_POSITION_NOISE,
+    DEFAULT_PIXEL_NOISE, POT_NOISE_BITS, TARGET_RADIUS,
+};
+pub use crate::sim::{
+    default_sensor_in_base, default_target_in_effector, Physics, Robot, RobotSim, SimConfig,
+    SolverConfig, TJoint, Truth, DEFAULT_TORQUE_LIMIT,
+};
+pub use crate::twin::{ModelPhysics, ModelSim};
+pub use crate::validation::{compare, pose_distance, DiffSample, ExcitingTrajectory};

@@ -1,0 +1,55 @@
+//! Accuracy/speed table of the rapier plant: loop-closure gap and cost per 1 kHz step for 4, 8 and 16
+//! solver iterations, on the default exciting trajectory (plant alone, nominal robot, 3 s).
+//!
+//! `cargo run --release -p rss6-sim --example plant_table`
+
+use rss6_core::KinematicParams;
+use rss6_sim::{ExcitingTrajectory, Plant, RobotSim, SimConfig, TJoint};
+use std::time::Instant;
+
+fn run(iterations: usize, pgs: usize, t_joint: TJoint, secs: f64) -> (f64, f64, f64, f64) {
+    let mut cfg = SimConfig::nominal();
+    cfg.solver.iterations = iterations;
+    cfg.solver.pgs_iterations = pgs;
+    cfg.solver.t_joint = t_joint;
+    cfg.solver.multibody_legs = std::env::var("MB").is_ok();
+    if let Ok(v) = std::env::var("STAB") {
+        cfg.solver.stabilization_iterations = v.parse().expect("STAB");
+    }
+    let nominal = KinematicParams::nominal();
+    let mut plant = Plant::new(cfg).expect("plant");
+    let traj = ExcitingTrajectory::default();
+    let n = (secs / 1e-3) as usize;
+    let cmds: Vec<_> = (0..n).map(|k| traj.joint_command(&nominal, k as f64 * 1e-3).expect("ik")).collect();
+    let (mut worst, mut worst_late, mut spin) = (0.0f64, 0.0f64, 0.0f64);
+    let start = Instant::now();
+    for (k, c) in cmds.iter().enumerate() {
+        plant.step_joint_command(c).expect("step");
+        let e = plant.loop_closure_error();
+        worst = worst.max(e);
+        if k as f64 * 1e-3 > 1.0 {
+            worst_late = worst_late.max(e);
+        }
+        spin = plant.link_spin_rates().iter().fold(spin, |m, s| m.max(s.abs()));
+    }
+    let per_step = start.elapsed().as_secs_f64() / n as f64;
+    (worst, worst_late, per_step, spin)
+}
+
+fn main() {
+    println!("| solver iterations | PGS per iteration | worst loop gap (µm) | after 1 s (µm) | µs/step | real-time factor |");
+    println!("|---|---|---|---|---|---|");
+    for pgs in [1, 2, 3] {
+        for it in [4, 8, 16] {
+            let (w, wl, s, _) = run(it, pgs, TJoint::Spherical, 3.0);
+            println!("| {it} | {pgs} | {:.2} | {:.2} | {:.1} | {:.1}x |", w * 1e6, wl * 1e6, s * 1e6, 1e-3 / s);
+        }
+    }
+    println!();
+    println!("| joint at T_i | max link spin rate (rad/s) |");
+    println!("|---|---|");
+    for tj in [TJoint::Spherical, TJoint::Universal] {
+        let (_, _, _, spin) = run(8, 1, tj, 3.0);
+        println!("| {tj:?} | {spin:.3e} |");
+    }
+}

@@ -1,0 +1,107 @@
+//! The model twin: the same call shape as the plant, driven by the analytic model of rss6-core
+//! (forward dynamics eq. 6.1–6.4 integrated by RK4 in χ coordinates) with the same PID, drive train
+//! and sensors: the "simulated model" of the thesis's Fig. 5.1.
+//!
+//! Joint angles are θ = IK(χ) and rates θ̇ = J_θ χ̇ (eq. 5.3). Effects the model can express act on it
+//! too (gravity direction, friction, backlash, camera latency; a payload adds its mass and its
+//! parallel-axis inertia to the platform, but Ξ has no place for a COM offset, so the offset's
+//! gravity moment is not modelled — that is a model discrepancy by design).
+
+use crate::effects::EffectSetup;
+use crate::error::Result;
+use crate::sim::{total_friction, Physics, Robot, SimConfig};
+use rss6_core::{
+    ik, jacobian_theta, rk4_step_with_gravity, DynamicParams, KinematicParams, ModelState, Vec3,
+    Vec6,
+};
+
+/// Analytic-model physics.
+#[derive(Debug, Clone)]
+pub struct ModelPhysics {
+    kp: KinematicParams,
+    dp: DynamicParams,
+    gravity: Vec3,
+    dt: f64,
+    state: ModelState,
+    theta: Vec6,
+}
+
+impl ModelPhysics {
+    /// The model for `cfg` with effect hooks `setup`.
+    pub fn new(cfg: &SimConfig, setup: &EffectSetup) -> Self {
+        let mut dp = cfg.dynamics;
+        let (fc, fv) = total_friction(&cfg.dynamics, setup);
+        dp.coulomb = fc;
+        dp.viscous = fv;
+        if let Some(p) = setup.payload {
+            let c = p.com;
+            dp.platform.mass += p.mass;
+            for k in 0..3 {
+                dp.platform.inertia[k] += p.inertia + p.mass * (c.norm_squared() - c[k] * c[k]);
+            }
+        }
+        ModelPhysics {
+            kp: cfg.kinematics,
+            dp,
+            gravity: setup.gravity,
+            dt: cfg.dt,
+            state: ModelState { pose: rss6_core::home_pose(), pose_dot: Vec6::zeros() },
+            theta: Vec6::zeros(),
+        }
+    }
+
+    /// The model state (χ, χ̇).
+    pub fn state(&self) -> ModelState {
+        self.state
+    }
+}
+
+impl Physics for ModelPhysics {
+    fn place(&mut self, pose: &Vec6, theta: &Vec6) -> Result<()> {
+        self.state = ModelState { pose: *pose, pose_dot: Vec6::zeros() };
+        self.theta = *theta;
+        Ok(())
+    }
+
+    fn advance(&mut self, tau: &Vec6) -> Result<()> {
+        self.state =
+            rk4_step_with_gravity(&self.kp, &self.dp, &self.state, tau, self.dt, &self.gravity)?;
+        self.theta = ik(&self.kp, &self.state.pose)?;
+        Ok(())
+    }
+
+    fn pose(&self) -> Vec6 {
+        self.state.pose
+    }
+
+    fn theta(&self) -> Vec6 {
+        self.theta
+    }
+
+    fn theta_dot(&self) -> Vec6 {
+        jacobian_theta(&self.kp, &self.state.pose)
+            .map(|j| j * self.state.pose_dot)
+            .unwrap_or_else(|_| Vec6::from_element(f64::NAN))
+    }
+
+    fn loop_closure_error(&self) -> f64 {
+        0.0
+    }
+}
+
+/// The analytic-model twin of the plant.
+pub type ModelSim = Robot<ModelPhysics>;
+
+impl Robot<ModelPhysics> {
+    /// Builds the twin from a full configuration, placed at the home pose.
+    pub fn new(cfg: SimConfig) -> Result<Self> {
+        let (effects, setup) = Self::prepare(&cfg)?;
+        let physics = ModelPhysics::new(&cfg, &setup);
+        Self::assemble(cfg, effects, setup, physics)
+    }
+
+    /// The model state (χ, χ̇).
+    pub fn model_state(&self) -> ModelState {
+        self.physics.state()
+    }
+}
