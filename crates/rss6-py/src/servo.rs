@@ -201,10 +201,14 @@ pub(crate) fn run_servo<'py>(
         let mut servo = Servo::new(kp_servo, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
         let ticks = (duration / dt).round() as u32;
         let mut log = Log::default();
+        // The observer sees the plant after the tick's step; record the true pose at the start of the
+        // tick, when the reference was sampled and the consumed camera frame was taken.
+        let mut start_pose = adapter.robot.true_pose();
         let summary = py.detach(|| {
             run(&mut adapter, &mut servo, &traj, t0, ticks, |rec: &TickRecord, p: &Adapter<'_>| {
                 let t = rec.t - t0;
-                let true_pose = p.robot.true_pose();
+                let true_pose = start_pose;
+                start_pose = p.robot.true_pose();
                 log.t.push(t);
                 log.desired.push(rec.reference.pose);
                 log.truth.push(true_pose);
