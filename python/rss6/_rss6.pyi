@@ -1,17 +1,16 @@
 # Type stubs of the compiled module rss6._rss6 (checked by `python -m mypy.stubtest rss6._rss6`).
-from __future__ import annotations
 
-from os import PathLike
 from collections.abc import Callable
+from os import PathLike
 from typing import Any, Literal, final
-
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from typing_extensions import TypeAlias
 
-_F64 = NDArray[np.float64]
-_Path = str | PathLike[str]
-_FkMethod = Literal["quasi_stewart", "theta_newton"]
+_F64: TypeAlias = NDArray[np.float64]
+_Path: TypeAlias = str | PathLike[str]
+_FkMethod: TypeAlias = Literal["quasi_stewart", "theta_newton"]
 
 @final
 class KinematicParams:
@@ -100,13 +99,19 @@ def fk_batch(
 def jacobian_theta(kp: KinematicParams, pose: ArrayLike) -> _F64: ...
 def jacobian_ad(kp: KinematicParams, pose: ArrayLike) -> _F64: ...
 
-_Triple = tuple[_F64, _F64, _F64]
+_Triple: TypeAlias = tuple[_F64, _F64, _F64]
 
 # --- dynamics ---------------------------------------------------------------------------------
 def mass_matrix(kp: KinematicParams, dp: DynamicParams, pose: ArrayLike) -> _F64: ...
-def coriolis(kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike) -> _F64: ...
-def gravity(kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, *, g: ArrayLike | None = None) -> _F64: ...
-def friction(kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike) -> _F64: ...
+def coriolis(
+    kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike
+) -> _F64: ...
+def gravity(
+    kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, *, g: ArrayLike | None = None
+) -> _F64: ...
+def friction(
+    kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike
+) -> _F64: ...
 def inverse_dynamics(
     kp: KinematicParams,
     dp: DynamicParams,
@@ -126,9 +131,16 @@ def forward_dynamics(
     g: ArrayLike | None = None,
 ) -> _F64: ...
 def regressor(
-    kp: KinematicParams, pose: ArrayLike, pose_dot: ArrayLike, pose_ddot: ArrayLike, *, g: ArrayLike | None = None
+    kp: KinematicParams,
+    pose: ArrayLike,
+    pose_dot: ArrayLike,
+    pose_ddot: ArrayLike,
+    *,
+    g: ArrayLike | None = None,
 ) -> _F64: ...
-def dynamics_terms(kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike) -> dict[str, _F64]: ...
+def dynamics_terms(
+    kp: KinematicParams, dp: DynamicParams, pose: ArrayLike, pose_dot: ArrayLike
+) -> dict[str, _F64]: ...
 def rk4_step(
     kp: KinematicParams,
     dp: DynamicParams,
@@ -150,7 +162,9 @@ class Trajectory:
     @staticmethod
     def experiment2() -> Trajectory: ...
     @staticmethod
-    def sinusoid(center: ArrayLike, amplitude: ArrayLike, phase: ArrayLike, omega: float) -> Trajectory: ...
+    def sinusoid(
+        center: ArrayLike, amplitude: ArrayLike, phase: ArrayLike, omega: float
+    ) -> Trajectory: ...
     @staticmethod
     def fourier(s: ArrayLike, c: ArrayLike, offset: ArrayLike, omega0: float) -> Trajectory: ...
     def sample(self, t: float) -> _Triple: ...
@@ -189,7 +203,9 @@ class Dsmc:
         epsilon: ArrayLike | None = None,
         integral_limit: ArrayLike | None = None,
     ) -> Dsmc: ...
-    def step(self, reference: tuple[ArrayLike, ...], estimate: tuple[ArrayLike, ...], dt: float) -> dict[str, Any]: ...
+    def step(
+        self, reference: tuple[ArrayLike, ...], estimate: tuple[ArrayLike, ...], dt: float
+    ) -> dict[str, Any]: ...
     @property
     def fault(self) -> str | None: ...
     def integral(self) -> _F64: ...
@@ -206,7 +222,9 @@ class Kcsc:
         ki: ArrayLike | None = None,
         kd: ArrayLike | None = None,
     ) -> Kcsc: ...
-    def step(self, reference: tuple[ArrayLike, ...], estimate: tuple[ArrayLike, ...], dt: float) -> _F64: ...
+    def step(
+        self, reference: tuple[ArrayLike, ...], estimate: tuple[ArrayLike, ...], dt: float
+    ) -> _F64: ...
     @property
     def fault(self) -> str | None: ...
     def reset(self) -> None: ...
@@ -232,7 +250,7 @@ class TorqueToPosition:
     def __new__(
         cls,
         *,
-        pid: tuple[float, float, float] = (400.0, 2000.0, 4.0),
+        pid: tuple[float, float, float] = ...,
         dt: float = 1e-3,
         torque_limit: float = 30.0,
         stroke: tuple[float, float] | None = None,
@@ -249,7 +267,7 @@ class _SimBase:
         kp: KinematicParams,
         dp: DynamicParams,
         *,
-        pid: tuple[float, float, float] = (400.0, 2000.0, 4.0),
+        pid: tuple[float, float, float] = ...,
         effects: dict[str, dict[str, float]] | list[tuple[str, dict[str, float]]] | None = None,
         seed: int = 0,
         dt: float = 1e-3,
@@ -297,7 +315,9 @@ def run_servo(
 @final
 class CalibrationData:
     @staticmethod
-    def from_arrays(kappa: ArrayLike, sensor_pose: ArrayLike, theta_cmd: ArrayLike | None = None) -> CalibrationData: ...
+    def from_arrays(
+        kappa: ArrayLike, sensor_pose: ArrayLike, theta_cmd: ArrayLike | None = None
+    ) -> CalibrationData: ...
     def __len__(self) -> int: ...
     @property
     def kappa(self) -> _F64: ...

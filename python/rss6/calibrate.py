@@ -26,22 +26,19 @@ from rss6._rss6 import (
     CalibrationData,
     CalibrationResult,
     KinematicParams,
-    implicit,
-    rpba,
     select_configurations,
     stroke,
 )
 from rss6.errors import InvalidInputError
 
 __all__ = [
+    "TABLE_4_2",
+    "THESIS_TABLES_4_3_4_4",
+    "THESIS_TABLE_4_5",
     "CalibrationData",
     "CalibrationResult",
-    "TABLE_4_2",
-    "THESIS_TABLE_4_5",
-    "THESIS_TABLES_4_3_4_4",
-    "NOMINAL_SENSOR_IN_BASE",
-    "NOMINAL_TARGET_IN_EFFECTOR",
     "collect",
+    "default_placement",
     "draw_errors",
     "draw_external",
     "implicit",
@@ -56,7 +53,13 @@ F64 = NDArray[np.float64]
 
 #: Table 4.2 error standard deviations: lengths/positions (m), η (rad/bit), Δθ (rad), external
 #: position (m) and angle (rad).
-TABLE_4_2 = {"length": 1e-3, "eta": 5e-5, "dtheta": 0.05, "ext_position": 0.5e-3, "ext_angle": 0.017}
+TABLE_4_2 = {
+    "length": 1e-3,
+    "eta": 5e-5,
+    "dtheta": 0.05,
+    "ext_position": 0.5e-3,
+    "ext_angle": 0.017,
+}
 
 #: Table 4.5 (thesis, simulation): RMS relative pose errors [x, y, z, α, β, γ] (m, rad).
 THESIS_TABLE_4_5 = {
@@ -70,16 +73,24 @@ THESIS_TABLES_4_3_4_4 = {
     "RPBA": {"param_error": (3.1630, 0.6616), "residual": (0.00542206, 2.38881e-05)},
 }
 
-#: Default placement of the simulated optical CMM ᴼχ_C and target ᴱχ_t (shared with rss6-ident).
-NOMINAL_SENSOR_IN_BASE = np.array([0.0, -1.2, 0.8, -2.2, 0.0, 0.1])
-NOMINAL_TARGET_IN_EFFECTOR = np.array([0.02, -0.01, 0.03, 0.0, 0.0, 0.0])
+
+
+def default_placement() -> tuple[F64, F64]:
+    """The design placement (ᴼχ_C, ᴱχ_t) of the simulated optical CMM and its target (rss6-sim's
+    defaults): what a user knows nominally before calibration."""
+    t = _rss6.ModelSim(KinematicParams.nominal(), _rss6.DynamicParams.nominal()).truth()
+    return np.asarray(t["sensor_in_base"]), np.asarray(t["target_in_effector"])
 
 
 def draw_errors(seed: int = 0) -> F64:
     """A 60-vector b of kinematic errors drawn with Table 4.2's sizes (DESIGN.md order)."""
     rng = np.random.default_rng(seed)
-    sd = np.r_[np.full(48, TABLE_4_2["length"]), np.full(6, TABLE_4_2["eta"]), np.full(6, TABLE_4_2["dtheta"])]
-    return rng.normal(0.0, sd)
+    sd = np.r_[
+        np.full(48, TABLE_4_2["length"]),
+        np.full(6, TABLE_4_2["eta"]),
+        np.full(6, TABLE_4_2["dtheta"]),
+    ]
+    return np.asarray(rng.normal(0.0, sd), dtype=np.float64)
 
 
 def draw_external(pose: Any, seed: int = 0) -> F64:
@@ -87,7 +98,7 @@ def draw_external(pose: Any, seed: int = 0) -> F64:
     rng = np.random.default_rng(seed)
     p = np.asarray(pose, dtype=np.float64)
     sd = np.r_[np.full(3, TABLE_4_2["ext_position"]), np.full(3, TABLE_4_2["ext_angle"])]
-    return p + rng.normal(0.0, sd)
+    return np.asarray(p + rng.normal(0.0, sd), dtype=np.float64)
 
 
 def collect(
@@ -103,7 +114,9 @@ def collect(
     potentiometers (500 Hz) and the camera (ᶜχ_t) over ``dwell`` s at rest (thesis §4.5: 2 s). The
     plant should be at rest (e.g. just reset); the first move starts from its current readings.
     ``progress(done, total)`` is called after each configuration."""
-    return _rss6.collect(plant, thetas, dwell, move_time=move_time, settle_time=settle_time, progress=progress)
+    return _rss6.collect(
+        plant, thetas, dwell, move_time=move_time, settle_time=settle_time, progress=progress
+    )
 
 
 def _truth_of(plant_or_truth: Any) -> dict[str, Any]:
@@ -130,14 +143,15 @@ def relative_pose_errors(
 ) -> dict[str, Any]:
     """RMS relative pose errors of Table 4.5 (procedure steps 1–4) over ``n`` random test
     configurations: ``result`` is a :class:`CalibrationResult`, or kinematic parameters (with
-    ``target_in_effector``, default the nominal target) — ``None`` means the uncalibrated nominal model.
+    ``target_in_effector``, default the design target of :func:`default_placement`) — ``None`` means
+    the uncalibrated nominal model.
     Returns ``{"rms": (6,), "errors": (n', 6), "skipped": int}`` (m, rad)."""
     t = _truth_of(plant_or_truth)
     if isinstance(result, CalibrationResult):
         params, target = result.params, result.target_in_effector
     else:
         params = result if result is not None else KinematicParams.nominal()
-        target = NOMINAL_TARGET_IN_EFFECTOR if target_in_effector is None else target_in_effector
+        target = default_placement()[1] if target_in_effector is None else target_in_effector
     return _rss6.relative_pose_errors_raw(
         params,
         target,
@@ -160,4 +174,36 @@ def sensor_in_base_from_reference(data: CalibrationData, result: CalibrationResu
     if not np.all(np.isfinite(z0)):
         raise InvalidInputError("configuration 0 has no camera frames")
     pose0 = _rss6.fk(kp, kp.theta_from_reading(data.kappa[0]), _rss6.home_pose())
-    return _rss6.compose_poses(_rss6.compose_poses(pose0, result.target_in_effector), _rss6.invert_pose(z0))
+    return _rss6.compose_poses(
+        _rss6.compose_poses(pose0, result.target_in_effector), _rss6.invert_pose(z0)
+    )
+
+
+def rpba(
+    data: CalibrationData,
+    kp: KinematicParams,
+    *,
+    target_guess: Any = None,
+    max_iterations: int = 60,
+    progress: Callable[[int, float], Any] | None = None,
+) -> CalibrationResult:
+    """RPBA (eq. 4.16–4.21): 60 kinematic + 6 external (ᴱχ_t) parameters from ``data``, starting at
+    ``kp`` and ``target_guess`` (default: the design target of :func:`default_placement`).
+    Levenberg–Marquardt with analytic Jacobians; ``progress(iteration, cost)`` per iteration."""
+    guess = default_placement()[1] if target_guess is None else target_guess
+    return _rss6.rpba(data, kp, max_iterations=max_iterations, target_guess=guess, progress=progress)
+
+
+def implicit(
+    data: CalibrationData,
+    kp: KinematicParams,
+    sensor_pose_guess: Any,
+    *,
+    target_guess: Any = None,
+    max_iterations: int = 60,
+) -> CalibrationResult:
+    """Implicit calibration (eq. 4.10–4.15): 60 kinematic + 12 external parameters (ᴼχ_C, ᴱχ_t) from
+    ``data``, starting at ``kp``, the rough sensor pose ``sensor_pose_guess`` and ``target_guess``
+    (default: the design target of :func:`default_placement`)."""
+    guess = default_placement()[1] if target_guess is None else target_guess
+    return _rss6.implicit(data, kp, sensor_pose_guess, max_iterations=max_iterations, target_guess=guess)

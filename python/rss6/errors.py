@@ -9,20 +9,20 @@ and sets the fields of the Rust variant as attributes (e.g. ``NotConvergedError.
 from __future__ import annotations
 
 __all__ = [
-    "Rss6Error",
-    "InvalidInputError",
-    "ShapeError",
-    "NonFiniteError",
-    "InvalidParameterError",
-    "UnreachableError",
-    "OutOfBranchError",
-    "NotConvergedError",
-    "SingularError",
-    "ControllerFaultError",
-    "SimulationError",
     "CalibrationError",
+    "ControllerFaultError",
+    "InvalidInputError",
+    "InvalidParameterError",
     "LogError",
+    "NonFiniteError",
+    "NotConvergedError",
+    "OutOfBranchError",
     "ParamsFileError",
+    "Rss6Error",
+    "ShapeError",
+    "SimulationError",
+    "SingularError",
+    "UnreachableError",
 ]
 
 

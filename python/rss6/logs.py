@@ -32,8 +32,8 @@ __all__ = [
     "VECTOR_TOPICS",
     "euler_to_quaternion",
     "quaternion_to_euler",
-    "write_run",
     "read_run",
+    "write_run",
 ]
 
 F64 = NDArray[np.float64]
@@ -68,7 +68,11 @@ _FRAME_TRANSFORM_SCHEMA = {
         "child_frame_id": {"type": "string"},
         "translation": {
             "type": "object",
-            "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}},
+            "properties": {
+                "x": {"type": "number"},
+                "y": {"type": "number"},
+                "z": {"type": "number"},
+            },
         },
         "rotation": {
             "type": "object",
@@ -127,7 +131,7 @@ def quaternion_to_euler(q: Any) -> F64:
 
 
 def _stamp(t: float) -> dict[str, int]:
-    ns = int(round(t * 1e9))
+    ns = round(t * 1e9)
     return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
 
 
@@ -185,7 +189,9 @@ def write_run(
         events: list[tuple[int, int, bytes]] = []
         for name, (t, v) in checked.items():
             if name in POSE_TOPICS:
-                ch = w.register_channel(topic=f"/rss6/{name}", message_encoding="json", schema_id=ft)
+                ch = w.register_channel(
+                    topic=f"/rss6/{name}", message_encoding="json", schema_id=ft
+                )
                 q = euler_to_quaternion(v) if len(v) else np.zeros((0, 4))
                 for k in range(len(t)):
                     msg = {
@@ -195,14 +201,16 @@ def write_run(
                         "translation": {"x": v[k, 0], "y": v[k, 1], "z": v[k, 2]},
                         "rotation": {"x": q[k, 0], "y": q[k, 1], "z": q[k, 2], "w": q[k, 3]},
                     }
-                    ns = int(round((t0 + t[k]) * 1e9))
+                    ns = round((t0 + t[k]) * 1e9)
                     events.append((ns, ch, json.dumps(msg).encode()))
             else:
-                ch = w.register_channel(topic=f"/rss6/{name}", message_encoding="json", schema_id=jv)
+                ch = w.register_channel(
+                    topic=f"/rss6/{name}", message_encoding="json", schema_id=jv
+                )
                 unit = VECTOR_TOPICS[name]
                 for k in range(len(t)):
                     msg = {"timestamp": _stamp(t0 + t[k]), "unit": unit, "values": v[k].tolist()}
-                    ns = int(round((t0 + t[k]) * 1e9))
+                    ns = round((t0 + t[k]) * 1e9)
                     events.append((ns, ch, json.dumps(msg).encode()))
         events.sort(key=lambda e: (e[0], e[1]))
         for seq, (ns, ch, data) in enumerate(events):

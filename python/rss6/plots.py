@@ -17,7 +17,14 @@ import numpy as np
 __all__ = ["relative_pose_errors", "tracking", "tracking_errors"]
 
 _LABELS = ("x (mm)", "y (mm)", "z (mm)", "α (mrad)", "β (mrad)", "γ (mrad)")
-_TITLES = ("(a) along X", "(b) along Y", "(c) along Z", "(d) around α", "(e) around β", "(f) around γ")
+_TITLES = (
+    "(a) along X",
+    "(b) along Y",
+    "(c) along Z",
+    "(d) around α",
+    "(e) around β",
+    "(f) around γ",
+)
 # Thesis line styles: KJSC purple dashed, KCSC black dotted, DSMC red dash-dotted.
 _STYLE = {"KJSC": ("tab:purple", "--"), "KCSC": ("black", ":"), "DSMC": ("tab:red", "-.")}
 
@@ -71,7 +78,9 @@ def tracking(results: Sequence[Any], path: str | PathLike[str], title: str = "")
         ax.plot(first.time, first.desired[:, k] * 1e3, "tab:blue", lw=1.2, label="desired")
         for r in results:
             color, ls = _STYLE.get(r.controller, ("gray", "-"))
-            ax.plot(r.frame_time, r.measured[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller)
+            ax.plot(
+                r.frame_time, r.measured[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
+            )
         ax.set_ylabel(_LABELS[k])
         ax.set_title(_TITLES[k], fontsize=9)
         ax.grid(alpha=0.3)
@@ -89,7 +98,9 @@ def tracking_errors(results: Sequence[Any], path: str | PathLike[str], title: st
     for k, ax in enumerate(axes):
         for r in results:
             color, ls = _STYLE.get(r.controller, ("gray", "-"))
-            ax.plot(r.frame_time, r.errors[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller)
+            ax.plot(
+                r.frame_time, r.errors[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
+            )
         ax.set_ylabel(_LABELS[k])
         ax.set_title(_TITLES[k], fontsize=9)
         ax.grid(alpha=0.3)
@@ -108,7 +119,9 @@ def table_text(
     names = ["KJSC", "KCSC", "DSMC"]
     axes = ["x (mm)", "y (mm)", "z (mm)", "α (1e-3 rad)", "β (1e-3 rad)", "γ (1e-3 rad)"]
     lines = [title, ""]
-    head = f"{'axis':14s} {'stat':5s} " + " ".join(f"{n + ' rss6':>10s} {n + ' thesis':>11s}" for n in names)
+    head = f"{'axis':14s} {'stat':5s} " + " ".join(
+        f"{n + ' rss6':>10s} {n + ' thesis':>11s}" for n in names
+    )
     lines.append(head)
     lines.append("-" * len(head))
     for k, ax in enumerate(axes):

@@ -30,8 +30,8 @@ __all__ = [
     "AXES",
     "THESIS_TABLES",
     "TrackingResult",
-    "track",
     "named_trajectory",
+    "track",
 ]
 
 F64 = NDArray[np.float64]
@@ -77,7 +77,9 @@ def named_trajectory(name: str) -> _rss6.Trajectory:
         return _rss6.Trajectory.experiment1()
     if name == "exp2":
         return _rss6.Trajectory.experiment2()
-    raise InvalidInputError(f"trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable, got {name!r}")
+    raise InvalidInputError(
+        f"trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable, got {name!r}"
+    )
 
 
 @dataclass
@@ -152,18 +154,26 @@ class TrackingResult:
 
 
 def _tabulate(fn: Callable[[float], Any], dt: float, duration: float) -> tuple[F64, F64, F64]:
-    n = int(round(duration / dt)) + 1
+    n = round(duration / dt) + 1
     p, v, a = np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 6))
     for k in range(n):
         out = fn(k * dt)
         if not (isinstance(out, tuple) and len(out) == 3):
             raise InvalidInputError("a trajectory callable must return (pose, pose_dot, pose_ddot)")
-        for arr, val, name in ((p, out[0], "pose"), (v, out[1], "pose_dot"), (a, out[2], "pose_ddot")):
+        for arr, val, name in (
+            (p, out[0], "pose"),
+            (v, out[1], "pose_dot"),
+            (a, out[2], "pose_ddot"),
+        ):
             x = np.asarray(val, dtype=np.float64)
             if x.shape != (6,):
-                raise ShapeError(f"trajectory {name} at t = {k * dt:.3f} s must have shape (6,), got {x.shape}")
+                raise ShapeError(
+                    f"trajectory {name} at t = {k * dt:.3f} s must have shape (6,), got {x.shape}"
+                )
             if not np.all(np.isfinite(x)):
-                raise NonFiniteError(f"trajectory {name} at t = {k * dt:.3f} s contains NaN or infinity")
+                raise NonFiniteError(
+                    f"trajectory {name} at t = {k * dt:.3f} s contains NaN or infinity"
+                )
             arr[k] = x
     return p, v, a
 
@@ -204,9 +214,14 @@ def track(
     elif isinstance(trajectory, _rss6.Trajectory):
         traj, name = trajectory, trajectory.name
     elif callable(trajectory):
-        traj, name = _tabulate(trajectory, float(plant.dt), duration), getattr(trajectory, "__name__", "callable")
+        traj, name = (
+            _tabulate(trajectory, float(plant.dt), duration),
+            getattr(trajectory, "__name__", "callable"),
+        )
     else:
-        raise InvalidInputError("trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable")
+        raise InvalidInputError(
+            "trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable"
+        )
     d = _rss6.run_servo(
         plant,
         controller,

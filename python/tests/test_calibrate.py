@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 import rss6
 from rss6 import calibrate
 
@@ -26,7 +25,9 @@ def setup():
     truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=7))
     plant = rss6.ModelSim(truth, DP, seed=7)
     lo, hi = calibrate.stroke(NOMINAL)
-    thetas = calibrate.select_configurations(NOMINAL, "rpba", seed=0, candidates=300, stroke=(lo, hi))
+    thetas = calibrate.select_configurations(
+        NOMINAL, "rpba", seed=0, candidates=300, stroke=(lo, hi)
+    )
     data = calibrate.collect(plant, thetas, dwell=0.4, move_time=0.4, settle_time=0.3)
     return plant, thetas, data, (lo, hi)
 
@@ -65,13 +66,16 @@ def test_rpba_recovers_the_robot(setup):
     kp = res.params
     res_ = np.array(
         [
-            rss6.compose_poses(rss6.compose_poses(est, z), inv_t) - rss6.fk(kp, kp.theta_from_reading(kappa))
+            rss6.compose_poses(rss6.compose_poses(est, z), inv_t)
+            - rss6.fk(kp, kp.theta_from_reading(kappa))
             for kappa, z in zip(data.kappa, data.sensor_pose)
         ]
     )
     rms = np.sqrt((res_**2).mean(0))
     # within the noise of a dwell mean: the simulated CMM's per-frame σ (measured at rest) / √frames
-    bound = 2.5 * camera_sigma(rss6.ModelSim(NOMINAL, DP, seed=8)) / np.sqrt(data.camera_frames.min())
+    bound = (
+        2.5 * camera_sigma(rss6.ModelSim(NOMINAL, DP, seed=8)) / np.sqrt(data.camera_frames.min())
+    )
     # (norms over the three axes: the sensor-frame noise is anisotropic and rotates into the base frame)
     assert np.linalg.norm(rms[:3]) < np.linalg.norm(bound[:3]), (rms, bound)
     assert np.linalg.norm(rms[3:]) < np.linalg.norm(bound[3:]), (rms, bound)

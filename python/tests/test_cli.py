@@ -5,13 +5,16 @@ import subprocess
 import sys
 
 import pytest
-
 from rss6 import cli
 
 
 def run(*args, timeout=300):
     return subprocess.run(
-        [sys.executable, "-m", "rss6.cli", *args], capture_output=True, text=True, timeout=timeout
+        [sys.executable, "-m", "rss6.cli", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
     )
 
 
@@ -30,7 +33,7 @@ def test_console_script_is_installed():
     exe = shutil.which("rss6")
     if exe is None:
         pytest.skip("rss6 console script not on PATH (package not installed with pip)")
-    r = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=60)
+    r = subprocess.run([exe, "--help"], check=False, capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and "demo" in r.stdout
 
 
@@ -60,6 +63,16 @@ def test_demo_quick_writes_logs_figures_and_tables(tmp_path):
 
 
 def test_track_subcommand(tmp_path):
-    r = run("track", "--controller", "kcsc", "--duration", "1", "--plant", "model", "--mcap", str(tmp_path / "t.mcap"))
+    r = run(
+        "track",
+        "--controller",
+        "kcsc",
+        "--duration",
+        "1",
+        "--plant",
+        "model",
+        "--mcap",
+        str(tmp_path / "t.mcap"),
+    )
     assert r.returncode == 0, r.stderr
     assert "RMSE" in r.stdout and (tmp_path / "t.mcap").exists()

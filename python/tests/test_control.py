@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 import rss6
 
 KP = rss6.KinematicParams.nominal()
@@ -18,7 +17,7 @@ def test_trajectory_derivatives_are_analytic(traj):
     pp, vp, _ = traj.sample(t + h)
     np.testing.assert_allclose(v, (pp - pm) / (2 * h), atol=1e-7)
     np.testing.assert_allclose(a, (vp - vm) / (2 * h), atol=1e-6)
-    ps, vs, as_ = traj.sample_many(np.linspace(0, 2, 11))
+    ps, _vs, _as = traj.sample_many(np.linspace(0, 2, 11))
     assert ps.shape == (11, 6)
     np.testing.assert_allclose(ps[0], traj.sample(0.0)[0])
 
@@ -35,7 +34,7 @@ def test_experiment_trajectories_start_with_a_step_and_stay_reachable():
 
 def test_custom_trajectories_and_their_errors():
     s = rss6.Trajectory.sinusoid(rss6.home_pose(), np.full(6, 1e-3), np.zeros(6), 2.0)
-    p, v, _ = s.sample(0.0)
+    _p, v, _ = s.sample(0.0)
     np.testing.assert_allclose(v, np.full(6, 2e-3))
     f = rss6.Trajectory.fourier(np.full((6, 3), 1e-3), np.zeros((6, 3)), rss6.home_pose(), 0.2)
     assert f.name == "fourier"

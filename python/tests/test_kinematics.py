@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 import rss6
 
 KP = rss6.KinematicParams.nominal()
@@ -151,7 +150,15 @@ def test_reading_conversion_is_eq_4_2():
 def test_kinematic_dict_round_trip():
     kp = rss6.KinematicParams.perturbed(np.random.default_rng(2).normal(0, 1e-3, 60))
     d = kp.to_dict()
-    assert set(d) == {"base_joints", "platform_joints", "wrench_lengths", "link_lengths", "theta0", "eta", "dtheta"}
+    assert set(d) == {
+        "base_joints",
+        "platform_joints",
+        "wrench_lengths",
+        "link_lengths",
+        "theta0",
+        "eta",
+        "dtheta",
+    }
     assert d["base_joints"].shape == (6, 3)
     assert rss6.KinematicParams.from_dict(d) == kp
     # lists work as well
@@ -178,7 +185,15 @@ def test_toml_round_trip(tmp_path):
     path = tmp_path / "kp.toml"
     kp.to_toml(path)
     text = path.read_text()
-    for key in ("base_joints", "platform_joints", "wrench_lengths", "link_lengths", "theta0", "eta", "dtheta"):
+    for key in (
+        "base_joints",
+        "platform_joints",
+        "wrench_lengths",
+        "link_lengths",
+        "theta0",
+        "eta",
+        "dtheta",
+    ):
         assert key in text
     assert rss6.KinematicParams.load(path) == kp
     dp = rss6.DynamicParams.from_vector(rss6.DynamicParams.nominal().to_vector() * 1.1)

@@ -4,7 +4,6 @@ import json
 
 import numpy as np
 import pytest
-
 import rss6
 from rss6 import logs
 
@@ -36,7 +35,12 @@ def test_poses_are_foxglove_frame_transforms(tmp_path):
         reader = make_reader(f)
         seen = {}
         for schema, channel, message in reader.iter_messages():
-            seen[channel.topic] = (schema.name, schema.encoding, channel.message_encoding, json.loads(message.data))
+            seen[channel.topic] = (
+                schema.name,
+                schema.encoding,
+                channel.message_encoding,
+                json.loads(message.data),
+            )
     name, enc, menc, msg = seen["/rss6/true_pose"]
     assert (name, enc, menc) == ("foxglove.FrameTransform", "jsonschema", "json")
     assert msg["parent_frame_id"] == "base" and set(msg["rotation"]) == {"x", "y", "z", "w"}
@@ -47,7 +51,9 @@ def test_quaternion_convention_matches_the_core_rotation():
     pose = np.array([0.0, 0.0, 0.0, 0.3, -0.2, 0.5])
     x, y, z, w = logs.euler_to_quaternion(pose)[0]
     first_column = [1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)]
-    np.testing.assert_allclose(rss6.compose_poses(pose, [1, 0, 0, 0, 0, 0])[:3], first_column, atol=1e-14)
+    np.testing.assert_allclose(
+        rss6.compose_poses(pose, [1, 0, 0, 0, 0, 0])[:3], first_column, atol=1e-14
+    )
     np.testing.assert_allclose(logs.quaternion_to_euler([[x, y, z, w]])[0], pose[3:], atol=1e-14)
 
 

@@ -2,13 +2,14 @@
 
 import numpy as np
 import pytest
-
 import rss6
 from rss6 import servo
 
 KP = rss6.KinematicParams.nominal()
 DP = rss6.DynamicParams.nominal()
-B = np.random.default_rng(42).normal(0, np.r_[np.full(48, 1e-3), np.full(6, 5e-5), np.full(6, 0.05)])
+B = np.random.default_rng(42).normal(
+    0, np.r_[np.full(48, 1e-3), np.full(6, 5e-5), np.full(6, 0.05)]
+)
 
 
 def test_track_shapes_and_statistics():
@@ -59,7 +60,7 @@ def test_track_writes_and_reads_back_an_mcap_log(tmp_path):
     t, poses = back["true_pose"]
     np.testing.assert_allclose(t, r.time, atol=1e-9)
     np.testing.assert_allclose(poses, r.true, atol=1e-12)
-    tc, cam = back["camera_pose"]
+    _tc, cam = back["camera_pose"]
     np.testing.assert_allclose(cam, r.measured, atol=1e-12)
     np.testing.assert_allclose(back["theta_cmd"][1], r.theta_cmd)
     assert back["metadata"] == {"controller": "KCSC", "trajectory": "exp2"}

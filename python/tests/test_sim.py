@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 import rss6
 
 KP = rss6.KinematicParams.nominal()
@@ -37,7 +36,14 @@ def test_call_shape_and_rates(cls):
 def test_truth_and_camera_geometry(cls):
     sim = cls(KP, DP, seed=2)
     t = sim.truth()
-    assert set(t) == {"kinematics", "dynamics", "pid", "sensor_in_base", "target_in_effector", "effects"}
+    assert set(t) == {
+        "kinematics",
+        "dynamics",
+        "pid",
+        "sensor_in_base",
+        "target_in_effector",
+        "effects",
+    }
     assert t["kinematics"] == KP and t["dynamics"] == DP and t["effects"] == {}
     # ᶜχ_t = (ᴼχ_C)⁻¹ ∘ χ_E ∘ ᴱχ_t, within the CMM noise
     errors = []
@@ -48,7 +54,8 @@ def test_truth_and_camera_geometry(cls):
         if z is not None:
             pose = 0.5 * (before + sim.true_pose())  # exposed within this tick
             expected = rss6.compose_poses(
-                rss6.compose_poses(rss6.invert_pose(t["sensor_in_base"]), pose), t["target_in_effector"]
+                rss6.compose_poses(rss6.invert_pose(t["sensor_in_base"]), pose),
+                t["target_in_effector"],
             )
             errors.append(z - expected)
     e = np.array(errors)
