@@ -177,6 +177,8 @@ fn sim_config(
     torque_limit: f64,
     camera_latency: f64,
     solver_iterations: Option<usize>,
+    potentiometer_noise: Option<f64>,
+    pixel_noise: Option<f64>,
 ) -> PyResult<SimConfig> {
     let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
     cfg.seed = seed;
@@ -191,6 +193,12 @@ fn sim_config(
     }
     if let Some(n) = solver_iterations {
         cfg.solver.iterations = n;
+    }
+    if let Some(n) = potentiometer_noise {
+        cfg.pot_noise = n;
+    }
+    if let Some(n) = pixel_noise {
+        cfg.cmm.pixel_noise = n;
     }
     cfg.effects = effect_specs(effects)?;
     cfg.validate().map_err(sim_error)?;
@@ -216,9 +224,11 @@ macro_rules! sim_class {
             /// `kp`, `dp`: the true robot. `pid` = (l_p, l_i, l_d) of the drive (N·m/rad,
             /// N·m/(rad·s), N·m·s/rad). `effects`: hidden effects {name: {param: value}} (names:
             /// joint_friction, backlash, camera_latency, payload, base_tilt). `sensor_in_base` (ᴼχ_C)
-            /// and `target_in_effector` (ᴱχ_t) default to rss6-sim's placement. Starts at home.
+            /// and `target_in_effector` (ᴱχ_t) default to rss6-sim's placement; `camera_latency` (s),
+            /// `potentiometer_noise` (bit, default Table 4.1's 0.2233) and `pixel_noise` (px) tune the
+            /// sensors. Starts at home.
             #[new]
-            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None))]
+            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None))]
             #[allow(clippy::too_many_arguments)]
             fn py_new(
                 py: Python<'_>,
@@ -233,8 +243,10 @@ macro_rules! sim_class {
                 torque_limit: f64,
                 camera_latency: f64,
                 solver_iterations: Option<usize>,
+                potentiometer_noise: Option<f64>,
+                pixel_noise: Option<f64>,
             ) -> PyResult<Self> {
-                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations)?;
+                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise)?;
                 let dt = cfg.dt;
                 let robot = py.detach(move || $ctor(cfg)).map_err(sim_error)?;
                 Ok($name { robot: Mutex::new(Box::new(SimWrap { robot, dt })) })

@@ -109,7 +109,7 @@ struct Log {
 /// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t) convert camera frames to χ_E; default: the
 /// plant's truth. `pid`: the drive's PID gains the converter inverts (default rss6-ctrl's nominal).
 #[pyfunction]
-#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false))]
+#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_servo<'py>(
     py: Python<'py>,
@@ -124,6 +124,9 @@ pub(crate) fn run_servo<'py>(
     pid: Option<(f64, f64, f64)>,
     torque_limit: f64,
     steady_state_kalman: bool,
+    kalman_r: Option<&Bound<'py, PyAny>>,
+    kalman_q_jerk: Option<&Bound<'py, PyAny>>,
+    camera_latency: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(duration.is_finite() && duration > 0.0) {
         return Err(invalid(format!("duration must be finite and > 0 s, got {duration}")));
@@ -162,6 +165,13 @@ pub(crate) fn run_servo<'py>(
     }
     config.torque_limit = torque_limit;
     config.kalman.steady_state = steady_state_kalman;
+    if let Some(r) = kalman_r {
+        config.kalman.r = vec6(r, "kalman_r")?;
+    }
+    if let Some(q) = kalman_q_jerk {
+        config.kalman.q_jerk = vec6(q, "kalman_q_jerk")?;
+    }
+    config.camera_latency = camera_latency;
     let controller = controller.to_ascii_lowercase();
 
     let result = with_robot(plant, |robot| -> PyResult<Log> {
