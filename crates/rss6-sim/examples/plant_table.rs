@@ -2,6 +2,7 @@
 //! solver iterations, on the default exciting trajectory (plant alone, nominal robot, 3 s).
 //!
 //! `cargo run --release -p rss6-sim --example plant_table`
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::KinematicParams;
 use rss6_sim::{ExcitingTrajectory, Plant, RobotSim, SimConfig, TJoint};
@@ -20,7 +21,9 @@ fn run(iterations: usize, pgs: usize, t_joint: TJoint, secs: f64) -> (f64, f64, 
     let mut plant = Plant::new(cfg).expect("plant");
     let traj = ExcitingTrajectory::default();
     let n = (secs / 1e-3) as usize;
-    let cmds: Vec<_> = (0..n).map(|k| traj.joint_command(&nominal, k as f64 * 1e-3).expect("ik")).collect();
+    let cmds: Vec<_> = (0..n)
+        .map(|k| traj.joint_command(&nominal, k as f64 * 1e-3).expect("ik"))
+        .collect();
     let (mut worst, mut worst_late, mut spin) = (0.0f64, 0.0f64, 0.0f64);
     let start = Instant::now();
     for (k, c) in cmds.iter().enumerate() {
@@ -30,7 +33,10 @@ fn run(iterations: usize, pgs: usize, t_joint: TJoint, secs: f64) -> (f64, f64, 
         if k as f64 * 1e-3 > 1.0 {
             worst_late = worst_late.max(e);
         }
-        spin = plant.link_spin_rates().iter().fold(spin, |m, s| m.max(s.abs()));
+        spin = plant
+            .link_spin_rates()
+            .iter()
+            .fold(spin, |m, s| m.max(s.abs()));
     }
     let per_step = start.elapsed().as_secs_f64() / n as f64;
     (worst, worst_late, per_step, spin)
@@ -42,7 +48,13 @@ fn main() {
     for pgs in [1, 2, 3] {
         for it in [4, 8, 16] {
             let (w, wl, s, _) = run(it, pgs, TJoint::Spherical, 3.0);
-            println!("| {it} | {pgs} | {:.2} | {:.2} | {:.1} | {:.1}x |", w * 1e6, wl * 1e6, s * 1e6, 1e-3 / s);
+            println!(
+                "| {it} | {pgs} | {:.2} | {:.2} | {:.1} | {:.1}x |",
+                w * 1e6,
+                wl * 1e6,
+                s * 1e6,
+                1e-3 / s
+            );
         }
     }
     println!();

@@ -130,7 +130,11 @@ pub fn make_effect(spec: &EffectSpec) -> Result<Box<dyn Effect>> {
     }
     Err(SimError::UnknownEffect {
         name: spec.name.clone(),
-        known: REGISTRY.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+        known: REGISTRY
+            .iter()
+            .map(|(n, _)| *n)
+            .collect::<Vec<_>>()
+            .join(", "),
     })
 }
 
@@ -150,7 +154,10 @@ pub fn build_effects(specs: &[EffectSpec]) -> Result<(Vec<Box<dyn Effect>>, Effe
 }
 
 fn param_err(effect: &str, message: &str) -> SimError {
-    SimError::EffectParameter { effect: effect.to_string(), message: message.to_string() }
+    SimError::EffectParameter {
+        effect: effect.to_string(),
+        message: message.to_string(),
+    }
 }
 
 /// Reads parameters by name, rejecting unknown ones.
@@ -185,7 +192,10 @@ impl<'a> Params<'a> {
     }
     fn non_negative(&self, k: &str, v: f64) -> Result<f64> {
         if v < 0.0 {
-            Err(param_err(self.effect, &format!("`{k}` must be >= 0, got {v}")))
+            Err(param_err(
+                self.effect,
+                &format!("`{k}` must be >= 0, got {v}"),
+            ))
         } else {
             Ok(v)
         }
@@ -213,7 +223,11 @@ impl JointFriction {
             Some(&j) if j >= 0.0 && j < LEGS as f64 && j.fract() == 0.0 => Some(j as usize),
             Some(j) => return Err(param_err("joint_friction", &format!("bad joint index {j}"))),
         };
-        Ok(Box::new(JointFriction { coulomb, viscous, joint }))
+        Ok(Box::new(JointFriction {
+            coulomb,
+            viscous,
+            joint,
+        }))
     }
 }
 
@@ -259,7 +273,10 @@ impl BacklashEffect {
             rotor_inertia: p.non_negative("rotor_inertia", p.optional("rotor_inertia", 0.01))?,
         };
         if b.rotor_inertia <= 0.0 || b.stiffness <= 0.0 {
-            return Err(param_err("backlash", "stiffness and rotor_inertia must be > 0"));
+            return Err(param_err(
+                "backlash",
+                "stiffness and rotor_inertia must be > 0",
+            ));
         }
         Ok(Box::new(BacklashEffect(b)))
     }
@@ -292,7 +309,9 @@ pub struct CameraLatency {
 impl CameraLatency {
     fn from_params(m: &BTreeMap<String, f64>) -> Result<Box<dyn Effect>> {
         let p = Params::new("camera_latency", m, &["latency"])?;
-        Ok(Box::new(CameraLatency { latency: p.non_negative("latency", p.required("latency")?)? }))
+        Ok(Box::new(CameraLatency {
+            latency: p.non_negative("latency", p.required("latency")?)?,
+        }))
     }
 }
 
@@ -321,7 +340,11 @@ impl PayloadEffect {
         }
         Ok(Box::new(PayloadEffect(Payload {
             mass,
-            com: Vec3::new(p.optional("x", 0.0), p.optional("y", 0.0), p.optional("z", 0.0)),
+            com: Vec3::new(
+                p.optional("x", 0.0),
+                p.optional("y", 0.0),
+                p.optional("z", 0.0),
+            ),
             inertia: p.non_negative("inertia", p.optional("inertia", 0.0))?,
         })))
     }
@@ -357,7 +380,10 @@ pub struct BaseTilt {
 impl BaseTilt {
     fn from_params(m: &BTreeMap<String, f64>) -> Result<Box<dyn Effect>> {
         let p = Params::new("base_tilt", m, &["roll", "pitch"])?;
-        Ok(Box::new(BaseTilt { roll: p.optional("roll", 0.0), pitch: p.optional("pitch", 0.0) }))
+        Ok(Box::new(BaseTilt {
+            roll: p.optional("roll", 0.0),
+            pitch: p.optional("pitch", 0.0),
+        }))
     }
 
     /// Gravity in the tilted base frame: R_baseᵀ·[0, 0, −g] with R_base = R_x(roll)·R_y(pitch).
@@ -372,7 +398,10 @@ impl Effect for BaseTilt {
         "base_tilt"
     }
     fn params(&self) -> BTreeMap<String, f64> {
-        BTreeMap::from([("roll".to_string(), self.roll), ("pitch".to_string(), self.pitch)])
+        BTreeMap::from([
+            ("roll".to_string(), self.roll),
+            ("pitch".to_string(), self.pitch),
+        ])
     }
     fn apply(&self, s: &mut EffectSetup) {
         s.gravity = self.gravity();
@@ -380,6 +409,7 @@ impl Effect for BaseTilt {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 
@@ -391,7 +421,10 @@ mod tests {
         assert!(e.to_string().contains("unknown parameter `mas`"), "{e}");
         let e = make_effect(&EffectSpec::new("payload", &[("x", 0.1)])).unwrap_err();
         assert!(e.to_string().contains("missing parameter `mass`"), "{e}");
-        let dup = [EffectSpec::new("base_tilt", &[]), EffectSpec::new("base_tilt", &[])];
+        let dup = [
+            EffectSpec::new("base_tilt", &[]),
+            EffectSpec::new("base_tilt", &[]),
+        ];
         assert!(build_effects(&dup).is_err());
     }
 
@@ -401,6 +434,10 @@ mod tests {
         assert_eq!(s, EffectSetup::default());
         let (_, s) = build_effects(&[EffectSpec::new("base_tilt", &[("roll", 0.1)])]).unwrap();
         assert!((s.gravity.norm() - G0).abs() < 1e-12);
-        assert!((s.gravity[1] - (-G0 * 0.1f64.sin())).abs() < 1e-12, "{:?}", s.gravity);
+        assert!(
+            (s.gravity[1] - (-G0 * 0.1f64.sin())).abs() < 1e-12,
+            "{:?}",
+            s.gravity
+        );
     }
 }

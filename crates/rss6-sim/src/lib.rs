@@ -19,10 +19,13 @@ pub use crate::effects::{
     REGISTRY,
 };
 pub use crate::error::{Result, SimError};
-pub use crate::log::{read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS};
+pub use crate::log::{
+    read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS,
+};
 pub use crate::params_file::{
-    load_dynamic_params, load_kinematic_params, load_pid_gains, save_dynamic_params,
-    save_kinematic_params, save_pid_gains, DynamicParamsFile, KinematicParamsFile, PidGainsFile,
+    load_dynamic_params, load_kinematic_params, load_pid_gains, load_truth, save_dynamic_params,
+    save_kinematic_params, save_pid_gains, save_truth, DynamicParamsFile, KinematicParamsFile,
+    PidGainsFile, TruthFile,
 };
 pub use crate::plant::{Plant, RapierPhysics};
 pub use crate::sensors::{

@@ -23,8 +23,13 @@ use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
 /// Topic names, in the order true pose, camera pose, readings, commands, torques.
-pub const TOPICS: [&str; 5] =
-    ["/plant/true_pose", "/cmm/pose", "/joints/readings", "/joints/commands", "/joints/torques"];
+pub const TOPICS: [&str; 5] = [
+    "/plant/true_pose",
+    "/cmm/pose",
+    "/joints/readings",
+    "/joints/commands",
+    "/joints/torques",
+];
 
 const FRAME_TRANSFORM_SCHEMA: &str = r#"{
   "title": "foxglove.FrameTransform",
@@ -78,15 +83,19 @@ pub struct McapLogger<W: Write + Seek> {
 
 impl<W: Write + Seek> std::fmt::Debug for McapLogger<W> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("McapLogger").field("messages", &self.sequence).finish_non_exhaustive()
+        f.debug_struct("McapLogger")
+            .field("messages", &self.sequence)
+            .finish_non_exhaustive()
     }
 }
 
 impl McapLogger<BufWriter<File>> {
     /// Creates (truncates) `path` and writes the header, schemas and channels.
     pub fn create(path: &Path) -> Result<Self> {
-        let file = File::create(path)
-            .map_err(|source| SimError::Io { path: path.display().to_string(), source })?;
+        let file = File::create(path).map_err(|source| SimError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::new(BufWriter::new(file), DEFAULT_CHUNK_SIZE)
     }
 }
@@ -102,11 +111,20 @@ impl<W: Write + Seek> McapLogger<W> {
             .profile("")
             .library("rss6-sim")
             .create(w)?;
-        let ft = writer.add_schema("foxglove.FrameTransform", "jsonschema", FRAME_TRANSFORM_SCHEMA.as_bytes())?;
+        let ft = writer.add_schema(
+            "foxglove.FrameTransform",
+            "jsonschema",
+            FRAME_TRANSFORM_SCHEMA.as_bytes(),
+        )?;
         let s_read = writer.add_schema(
             "rss6.JointReadings",
             "jsonschema",
-            joint_schema("rss6.JointReadings", "kappa", "potentiometer readings (bit)").as_bytes(),
+            joint_schema(
+                "rss6.JointReadings",
+                "kappa",
+                "potentiometer readings (bit)",
+            )
+            .as_bytes(),
         )?;
         let s_cmd = writer.add_schema(
             "rss6.JointCommands",
@@ -126,7 +144,11 @@ impl<W: Write + Seek> McapLogger<W> {
             writer.add_channel(s_cmd, TOPICS[3], "json", &meta)?,
             writer.add_channel(s_tau, TOPICS[4], "json", &meta)?,
         ];
-        Ok(McapLogger { writer, channels, sequence: 0 })
+        Ok(McapLogger {
+            writer,
+            channels,
+            sequence: 0,
+        })
     }
 
     fn put(&mut self, k: usize, time: f64, data: &serde_json::Value) -> Result<()> {
@@ -145,13 +167,29 @@ impl<W: Write + Seek> McapLogger<W> {
 
     /// Logs one tick.
     pub fn log(&mut self, r: &TickRecord) -> Result<()> {
-        self.put(0, r.time, &frame_transform(r.time, "base", "effector", &r.true_pose))?;
+        self.put(
+            0,
+            r.time,
+            &frame_transform(r.time, "base", "effector", &r.true_pose),
+        )?;
         if let Some(c) = r.camera {
             self.put(1, r.time, &frame_transform(r.time, "sensor", "target", &c))?;
         }
-        self.put(2, r.time, &json!({"time": r.time, "kappa": r.kappa.as_slice()}))?;
-        self.put(3, r.time, &json!({"time": r.time, "theta_cmd": r.theta_cmd.as_slice()}))?;
-        self.put(4, r.time, &json!({"time": r.time, "tau": r.torque.as_slice()}))?;
+        self.put(
+            2,
+            r.time,
+            &json!({"time": r.time, "kappa": r.kappa.as_slice()}),
+        )?;
+        self.put(
+            3,
+            r.time,
+            &json!({"time": r.time, "theta_cmd": r.theta_cmd.as_slice()}),
+        )?;
+        self.put(
+            4,
+            r.time,
+            &json!({"time": r.time, "tau": r.torque.as_slice()}),
+        )?;
         Ok(())
     }
 
@@ -235,15 +273,18 @@ fn parse_err(topic: &str, e: serde_json::Error) -> SimError {
 
 /// Reads an MCAP run log, tolerating a missing end (see [`RunLog::complete`]).
 pub fn read_log(path: &Path) -> Result<RunLog> {
-    let buf = std::fs::read(path)
-        .map_err(|source| SimError::Io { path: path.display().to_string(), source })?;
+    let buf = std::fs::read(path).map_err(|source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
     read_log_bytes(&buf)
 }
 
 /// [`read_log`] on bytes in memory.
 pub fn read_log_bytes(buf: &[u8]) -> Result<RunLog> {
     let mut log = RunLog::default();
-    let stream = mcap::MessageStream::new_with_options(buf, mcap::read::Options::IgnoreEndMagic.into())?;
+    let stream =
+        mcap::MessageStream::new_with_options(buf, mcap::read::Options::IgnoreEndMagic.into())?;
     let mut ended_cleanly = true;
     for m in stream {
         let m = match m {

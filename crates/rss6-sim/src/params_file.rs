@@ -9,7 +9,33 @@
 use crate::error::{Result, SimError};
 use rss6_core::{Body, DynamicParams, KinematicParams, Vec3, LEGS};
 use rss6_ctrl::PidGains;
-use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use serde::{de::DeserializeOwned, Deserialize, Deserializer, Serialize};
+
+/// Deserialises a fixed-size array, rejecting too many elements as well as too few (serde's own
+/// array impl ignores extra elements in some formats).
+fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+    d: D,
+) -> std::result::Result<[T; N], D::Error> {
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let n = v.len();
+    v.try_into().map_err(|_| {
+        serde::de::Error::invalid_length(n, &format!("an array of {N} elements").as_str())
+    })
+}
+
+/// [`exact`] for N × 3 arrays of points.
+fn exact_points<'de, D: Deserializer<'de>, const N: usize>(
+    d: D,
+) -> std::result::Result<[[f64; 3]; N], D::Error> {
+    #[derive(Deserialize)]
+    struct P(#[serde(deserialize_with = "exact")] [f64; 3]);
+    let v: Vec<P> = Vec::deserialize(d)?;
+    let n = v.len();
+    let pts: Vec<[f64; 3]> = v.into_iter().map(|p| p.0).collect();
+    pts.try_into().map_err(|_| {
+        serde::de::Error::invalid_length(n, &format!("an array of {N} points").as_str())
+    })
+}
 use std::path::Path;
 
 /// Kinematic parameter file.
@@ -17,18 +43,25 @@ use std::path::Path;
 #[serde(deny_unknown_fields)]
 pub struct KinematicParamsFile {
     /// B_i (m).
+    #[serde(deserialize_with = "exact_points")]
     pub base_joints: [[f64; 3]; LEGS],
     /// A'_i in ΣE (m).
+    #[serde(deserialize_with = "exact_points")]
     pub platform_joints: [[f64; 3]; LEGS],
     /// l_TB,i (m).
+    #[serde(deserialize_with = "exact")]
     pub wrench_lengths: [f64; LEGS],
     /// l_AT,i (m).
+    #[serde(deserialize_with = "exact")]
     pub link_lengths: [f64; LEGS],
     /// θ0_i (rad).
+    #[serde(deserialize_with = "exact")]
     pub theta0: [f64; LEGS],
     /// η_i (rad/bit).
+    #[serde(deserialize_with = "exact")]
     pub eta: [f64; LEGS],
     /// Δθ_i (rad).
+    #[serde(deserialize_with = "exact")]
     pub dtheta: [f64; LEGS],
 }
 
@@ -68,6 +101,7 @@ pub struct BodyFile {
     /// Mass (kg).
     pub mass: f64,
     /// Principal moments (kg·m²).
+    #[serde(deserialize_with = "exact")]
     pub inertia: [f64; 3],
 }
 
@@ -76,8 +110,10 @@ pub struct BodyFile {
 #[serde(deny_unknown_fields)]
 pub struct BodiesFile {
     /// Masses (kg).
+    #[serde(deserialize_with = "exact")]
     pub mass: [f64; LEGS],
     /// Principal moments (kg·m²).
+    #[serde(deserialize_with = "exact_points")]
     pub inertia: [[f64; 3]; LEGS],
 }
 
@@ -92,8 +128,10 @@ pub struct DynamicParamsFile {
     /// The links.
     pub links: BodiesFile,
     /// f_c,i (N·m).
+    #[serde(deserialize_with = "exact")]
     pub coulomb: [f64; LEGS],
     /// f_v,i (N·m·s/rad).
+    #[serde(deserialize_with = "exact")]
     pub viscous: [f64; LEGS],
 }
 
@@ -105,7 +143,10 @@ impl From<&DynamicParams> for DynamicParamsFile {
         };
         let pi = d.platform.inertia;
         DynamicParamsFile {
-            platform: BodyFile { mass: d.platform.mass, inertia: [pi[0], pi[1], pi[2]] },
+            platform: BodyFile {
+                mass: d.platform.mass,
+                inertia: [pi[0], pi[1], pi[2]],
+            },
             wrenches: bodies(&d.wrenches),
             links: bodies(&d.links),
             coulomb: d.coulomb,
@@ -149,13 +190,17 @@ fn write<T: Serialize>(path: &Path, value: &T) -> Result<()> {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
-    std::fs::write(path, text)
-        .map_err(|source| SimError::Io { path: path.display().to_string(), source })
+    std::fs::write(path, text).map_err(|source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    })
 }
 
 fn read<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| SimError::Io { path: path.display().to_string(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
     toml::from_str(&text).map_err(|e| SimError::ParamFile {
         path: path.display().to_string(),
         message: e.to_string(),
@@ -163,7 +208,10 @@ fn read<T: DeserializeOwned>(path: &Path) -> Result<T> {
 }
 
 fn invalid(path: &Path, e: rss6_core::CoreError) -> SimError {
-    SimError::ParamFile { path: path.display().to_string(), message: e.to_string() }
+    SimError::ParamFile {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
 }
 
 /// Writes kinematic parameters to a TOML file.
@@ -192,17 +240,97 @@ pub fn load_dynamic_params(path: &Path) -> Result<DynamicParams> {
 
 /// Writes PID gains to a TOML file.
 pub fn save_pid_gains(path: &Path, g: &PidGains) -> Result<()> {
-    write(path, &PidGainsFile { lp: g.lp, li: g.li, ld: g.ld })
+    write(
+        path,
+        &PidGainsFile {
+            lp: g.lp,
+            li: g.li,
+            ld: g.ld,
+        },
+    )
 }
 
 /// Reads PID gains from a TOML file (finite, ≥ 0).
 pub fn load_pid_gains(path: &Path) -> Result<PidGains> {
     let f: PidGainsFile = read(path)?;
-    if ![f.lp, f.li, f.ld].iter().all(|g| g.is_finite() && *g >= 0.0) {
+    if ![f.lp, f.li, f.ld]
+        .iter()
+        .all(|g| g.is_finite() && *g >= 0.0)
+    {
         return Err(SimError::ParamFile {
             path: path.display().to_string(),
             message: "PID gains must be finite and >= 0".into(),
         });
     }
-    Ok(PidGains { lp: f.lp, li: f.li, ld: f.ld })
+    Ok(PidGains {
+        lp: f.lp,
+        li: f.li,
+        ld: f.ld,
+    })
+}
+
+/// The plant's truth record as a file (written only when asked for, see [`save_truth`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruthFile {
+    /// True kinematics.
+    pub kinematics: KinematicParamsFile,
+    /// True dynamics.
+    pub dynamics: DynamicParamsFile,
+    /// True PID gains.
+    pub pid: PidGainsFile,
+    /// ᴼχ_C (m, rad).
+    #[serde(deserialize_with = "exact")]
+    pub sensor_in_base: [f64; 6],
+    /// ᴱχ_t (m, rad).
+    #[serde(deserialize_with = "exact")]
+    pub target_in_effector: [f64; 6],
+    /// Hidden effects that were on.
+    #[serde(default)]
+    pub effects: Vec<crate::effects::EffectSpec>,
+}
+
+impl From<&crate::sim::Truth> for TruthFile {
+    fn from(t: &crate::sim::Truth) -> Self {
+        let six = |v: &rss6_core::Vec6| core::array::from_fn(|i| v[i]);
+        TruthFile {
+            kinematics: (&t.kinematics).into(),
+            dynamics: (&t.dynamics).into(),
+            pid: PidGainsFile {
+                lp: t.pid.lp,
+                li: t.pid.li,
+                ld: t.pid.ld,
+            },
+            sensor_in_base: six(&t.sensor_in_base),
+            target_in_effector: six(&t.target_in_effector),
+            effects: t.effects.clone(),
+        }
+    }
+}
+
+impl From<&TruthFile> for crate::sim::Truth {
+    fn from(f: &TruthFile) -> Self {
+        crate::sim::Truth {
+            kinematics: (&f.kinematics).into(),
+            dynamics: (&f.dynamics).into(),
+            pid: PidGains {
+                lp: f.pid.lp,
+                li: f.pid.li,
+                ld: f.pid.ld,
+            },
+            sensor_in_base: f.sensor_in_base.into(),
+            target_in_effector: f.target_in_effector.into(),
+            effects: f.effects.clone(),
+        }
+    }
+}
+
+/// Writes the truth record of a run (kinematics, dynamics, PID, ᴼχ_C, ᴱχ_t, effects) to TOML.
+pub fn save_truth(path: &Path, truth: &crate::sim::Truth) -> Result<()> {
+    write(path, &TruthFile::from(truth))
+}
+
+/// Reads a truth record written by [`save_truth`].
+pub fn load_truth(path: &Path) -> Result<crate::sim::Truth> {
+    Ok((&read::<TruthFile>(path)?).into())
 }

@@ -85,8 +85,9 @@ impl RapierPhysics {
         world.integration_parameters.num_solver_iterations = cfg.solver.iterations;
         world.integration_parameters.warmstart_joints = cfg.solver.warmstart_joints;
         world.integration_parameters.num_internal_pgs_iterations = cfg.solver.pgs_iterations.max(1);
-        world.integration_parameters.num_internal_stabilization_iterations =
-            cfg.solver.stabilization_iterations;
+        world
+            .integration_parameters
+            .num_internal_stabilization_iterations = cfg.solver.stabilization_iterations;
         RapierPhysics {
             kp: cfg.kinematics,
             dp: cfg.dynamics,

@@ -85,15 +85,15 @@ pub struct CmmConfig {
 }
 
 impl CmmConfig {
-    /// Default stereo head: baseline 0.8 m, f = 2400 px, 2048 × 2048 images, both cameras toed in to
+    /// Default stereo head: baseline 0.8 m, f = 4000 px, 2048 × 2048 images, both cameras toed in to
     /// converge at 2.05 m (where the robot is, see [`crate::default_sensor_in_base`]); 6 reflectors on
-    /// a 3 cm target; pixel noise chosen so the pose noise matches Table 4.1 (see `docs/sim.md`).
+    /// a 2.3 cm-radius target (±1 cm in depth); pixel noise chosen so the pose noise matches Table 4.1 (see `docs/sim.md`).
     pub fn c_track() -> Self {
         let (b, d): (f64, f64) = (0.8, 2.05);
         let toe = (0.5 * b / d).atan();
         let cam = |x: f64, yaw: f64| Camera {
             pose_in_sensor: [x, 0.0, 0.0, 0.0, yaw, 0.0],
-            focal: 2400.0,
+            focal: 4000.0,
             principal: [1024.0, 1024.0],
             size: [2048.0, 2048.0],
         };
@@ -117,7 +117,9 @@ impl CmmConfig {
     /// Checks the configuration.
     pub fn validate(&self) -> Result<()> {
         if self.reflectors.len() < 4 {
-            return Err(SimError::InvalidConfig("the CMM needs at least 4 reflectors".into()));
+            return Err(SimError::InvalidConfig(
+                "the CMM needs at least 4 reflectors".into(),
+            ));
         }
         if !(self.period > 0.0 && self.latency >= 0.0 && self.pixel_noise >= 0.0) {
             return Err(SimError::InvalidConfig(
@@ -129,9 +131,9 @@ impl CmmConfig {
 }
 
 /// Radius of the default reflector target (m).
-pub const TARGET_RADIUS: f64 = 0.03;
+pub const TARGET_RADIUS: f64 = 0.023;
 /// Default pixel noise (px), tuned so the pose noise matches Table 4.1.
-pub const DEFAULT_PIXEL_NOISE: f64 = 0.05;
+pub const DEFAULT_PIXEL_NOISE: f64 = 0.021;
 
 /// Closest-approach midpoint of two rays (o + s d).
 fn triangulate(o1: &Vec3, d1: &Vec3, o2: &Vec3, d2: &Vec3) -> Option<Vec3> {
@@ -215,7 +217,8 @@ impl OpticalCmm {
         const EPS: f64 = 1e-9;
         if time + EPS >= self.next_capture {
             let m = self.measure(truth)?;
-            self.pending.push_back((self.next_capture + self.latency, m));
+            self.pending
+                .push_back((self.next_capture + self.latency, m));
             self.next_capture += self.cfg.period;
         }
         self.out = None;
@@ -312,6 +315,7 @@ impl Potentiometers {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
     use rand::SeedableRng;
@@ -319,8 +323,15 @@ mod tests {
     #[test]
     fn kabsch_recovers_a_rigid_transform_exactly() {
         let iso = pose_to_isometry(&Vec6::new(0.3, -0.2, 2.0, 0.4, -0.3, 1.2));
-        let model: Vec<Vec3> = CmmConfig::c_track().reflectors.iter().map(|r| Vec3::from(*r)).collect();
-        let meas: Vec<Vec3> = model.iter().map(|p| (iso * Point3::from(*p)).coords).collect();
+        let model: Vec<Vec3> = CmmConfig::c_track()
+            .reflectors
+            .iter()
+            .map(|r| Vec3::from(*r))
+            .collect();
+        let meas: Vec<Vec3> = model
+            .iter()
+            .map(|p| (iso * Point3::from(*p)).coords)
+            .collect();
         let est = kabsch(&model, &meas).unwrap();
         assert!((est.to_homogeneous() - iso.to_homogeneous()).amax() < 1e-12);
     }

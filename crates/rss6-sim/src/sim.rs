@@ -120,7 +120,11 @@ impl SimConfig {
 
     /// The nominal robot, nominal dynamics and nominal PID.
     pub fn nominal() -> Self {
-        Self::new(KinematicParams::nominal(), DynamicParams::nominal(), PidGains::nominal())
+        Self::new(
+            KinematicParams::nominal(),
+            DynamicParams::nominal(),
+            PidGains::nominal(),
+        )
     }
 
     /// Checks ranges.
@@ -131,16 +135,28 @@ impl SimConfig {
         self.cmm.validate()?;
         let pid = self.pid.to_array();
         if !(self.dt > 0.0 && self.dt <= 0.01) {
-            return Err(SimError::InvalidConfig(format!("dt must be in (0, 0.01] s, got {}", self.dt)));
+            return Err(SimError::InvalidConfig(format!(
+                "dt must be in (0, 0.01] s, got {}",
+                self.dt
+            )));
         }
-        if !(self.torque_limit > 0.0) || pid.iter().any(|g| !g.is_finite()) {
-            return Err(SimError::InvalidConfig("torque limit must be > 0, gains finite".into()));
+        if self.torque_limit.is_nan()
+            || self.torque_limit <= 0.0
+            || pid.iter().any(|g| !g.is_finite())
+        {
+            return Err(SimError::InvalidConfig(
+                "torque limit must be > 0, gains finite".into(),
+            ));
         }
         if !(self.pot_noise >= 0.0 && self.pot_period >= self.dt) {
-            return Err(SimError::InvalidConfig("potentiometer noise >= 0, period >= dt".into()));
+            return Err(SimError::InvalidConfig(
+                "potentiometer noise >= 0, period >= dt".into(),
+            ));
         }
         if self.solver.iterations == 0 {
-            return Err(SimError::InvalidConfig("solver iterations must be >= 1".into()));
+            return Err(SimError::InvalidConfig(
+                "solver iterations must be >= 1".into(),
+            ));
         }
         Ok(())
     }
@@ -249,7 +265,9 @@ pub struct Robot<P: Physics> {
 impl<P: Physics> std::fmt::Debug for Robot<P> {
     // Deliberately silent about effects and truth.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Robot").field("time", &self.time()).finish_non_exhaustive()
+        f.debug_struct("Robot")
+            .field("time", &self.time())
+            .finish_non_exhaustive()
     }
 }
 
@@ -349,9 +367,12 @@ impl<P: Physics> RobotSim for Robot<P> {
         self.pid.reset();
         self.tick = 0;
         self.last_tau = Vec6::zeros();
-        self.rotors = self
-            .backlash()
-            .map(|_| core::array::from_fn(|i| Rotor { theta: theta[i], omega: 0.0 }));
+        self.rotors = self.backlash().map(|_| {
+            core::array::from_fn(|i| Rotor {
+                theta: theta[i],
+                omega: 0.0,
+            })
+        });
         let drive = self.drive_theta();
         self.pots.tick(0, &drive);
         self.cmm.reset(0.0);
@@ -386,7 +407,11 @@ impl<P: Physics> RobotSim for Robot<P> {
                     } else {
                         0.0
                     };
-                    let tg = if pen != 0.0 { b.stiffness * pen + b.damping * (r.omega - thd[i]) } else { 0.0 };
+                    let tg = if pen != 0.0 {
+                        b.stiffness * pen + b.damping * (r.omega - thd[i])
+                    } else {
+                        0.0
+                    };
                     r.omega += (tau[i] - tg) / b.rotor_inertia * dt;
                     r.theta += r.omega * dt;
                     tg
@@ -398,7 +423,10 @@ impl<P: Physics> RobotSim for Robot<P> {
         self.tick += 1;
         let p = self.physics.pose();
         if p.iter().any(|x| !x.is_finite()) {
-            return Err(SimError::Diverged { time: self.time(), message: "non-finite pose".into() });
+            return Err(SimError::Diverged {
+                time: self.time(),
+                message: "non-finite pose".into(),
+            });
         }
         let truth = self.true_camera_pose();
         let t = self.time();
@@ -440,14 +468,20 @@ impl<P: Physics> RobotSim for Robot<P> {
             effects: self
                 .effects
                 .iter()
-                .map(|e| EffectSpec { name: e.name().to_string(), params: e.params() })
+                .map(|e| EffectSpec {
+                    name: e.name().to_string(),
+                    params: e.params(),
+                })
                 .collect(),
         }
     }
 }
 
 /// Friction of the truth plus the friction effect, per joint: (f_c, f_v).
-pub(crate) fn total_friction(dp: &DynamicParams, setup: &EffectSetup) -> ([f64; LEGS], [f64; LEGS]) {
+pub(crate) fn total_friction(
+    dp: &DynamicParams,
+    setup: &EffectSetup,
+) -> ([f64; LEGS], [f64; LEGS]) {
     (
         core::array::from_fn(|i| dp.coulomb[i] + setup.extra_coulomb[i]),
         core::array::from_fn(|i| dp.viscous[i] + setup.extra_viscous[i]),

@@ -45,7 +45,10 @@ impl ModelPhysics {
             dp,
             gravity: setup.gravity,
             dt: cfg.dt,
-            state: ModelState { pose: rss6_core::home_pose(), pose_dot: Vec6::zeros() },
+            state: ModelState {
+                pose: rss6_core::home_pose(),
+                pose_dot: Vec6::zeros(),
+            },
             theta: Vec6::zeros(),
         }
     }
@@ -58,7 +61,10 @@ impl ModelPhysics {
 
 impl Physics for ModelPhysics {
     fn place(&mut self, pose: &Vec6, theta: &Vec6) -> Result<()> {
-        self.state = ModelState { pose: *pose, pose_dot: Vec6::zeros() };
+        self.state = ModelState {
+            pose: *pose,
+            pose_dot: Vec6::zeros(),
+        };
         self.theta = *theta;
         Ok(())
     }

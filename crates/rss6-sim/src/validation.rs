@@ -32,7 +32,11 @@ impl Default for ExcitingTrajectory {
 impl ExcitingTrajectory {
     /// Desired pose χ_d(t).
     pub fn pose(&self, t: f64) -> Vec6 {
-        let s = if t >= self.ramp { 1.0 } else { 0.5 * (1.0 - (PI * t.max(0.0) / self.ramp).cos()) };
+        let s = if t >= self.ramp {
+            1.0
+        } else {
+            0.5 * (1.0 - (PI * t.max(0.0) / self.ramp).cos())
+        };
         home_pose()
             + Vec6::from_fn(|i, _| s * self.amplitude[i] * (2.0 * PI * self.frequency[i] * t).sin())
     }
@@ -54,6 +58,8 @@ pub struct DiffSample {
     pub angle: f64,
     /// Plant loop-closure gap (m).
     pub loop_closure: f64,
+    /// Distance of robot `a`'s platform from the home position (m): shows the motion is real.
+    pub excursion: f64,
 }
 
 /// Position and orientation distance between two poses (m, rad).
@@ -90,6 +96,7 @@ pub fn compare<P: Physics, Q: Physics>(
                 position,
                 angle,
                 loop_closure: a.loop_closure_error().max(b.loop_closure_error()),
+                excursion: pose_distance(&a.true_pose(), &home_pose()).0,
             });
         }
     }

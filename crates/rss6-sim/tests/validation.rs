@@ -1,0 +1,76 @@
+//! Model validation like the thesis's Fig. 5.5–5.6: rapier plant vs analytic twin, same nominal
+//! parameters, same PID, same exciting trajectory, same sensor noise stream.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use rss6_core::KinematicParams;
+use rss6_sim::{compare, ExcitingTrajectory, ModelSim, Plant, SimConfig};
+use std::io::Write;
+
+/// End of the start-up transient (s): the ramp of the trajectory and the PID's integral build-up.
+const TRANSIENT: f64 = 1.0;
+
+#[test]
+fn plant_and_twin_agree_like_fig_5_5() {
+    let cfg = SimConfig::nominal();
+    let mut plant = Plant::new(cfg.clone()).unwrap();
+    let mut twin = ModelSim::new(cfg).unwrap();
+    let traj = ExcitingTrajectory::default();
+    let diffs = compare(
+        &mut plant,
+        &mut twin,
+        &traj,
+        &KinematicParams::nominal(),
+        4.0,
+        1,
+    )
+    .unwrap();
+    let worst = |f: &dyn Fn(&rss6_sim::DiffSample) -> f64, t0: f64| {
+        diffs
+            .iter()
+            .filter(|d| d.time >= t0)
+            .map(f)
+            .fold(0.0f64, f64::max)
+    };
+    let (p_all, a_all) = (worst(&|d| d.position, 0.0), worst(&|d| d.angle, 0.0));
+    let (p_late, a_late) = (
+        worst(&|d| d.position, TRANSIENT),
+        worst(&|d| d.angle, TRANSIENT),
+    );
+    let gap = worst(&|d| d.loop_closure, 0.0);
+    println!(
+        "worst: {:.4} mm {:.4} mrad; after {TRANSIENT} s: {:.4} mm {:.4} mrad; loop gap {:.2} µm",
+        p_all * 1e3,
+        a_all * 1e3,
+        p_late * 1e3,
+        a_late * 1e3,
+        gap * 1e6
+    );
+    // CSV of the difference over time (plotted in docs/sim.md).
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("sim_validation.csv");
+    let mut f = std::fs::File::create(&path).unwrap();
+    writeln!(f, "time_s,position_mm,angle_mrad,loop_gap_um").unwrap();
+    for d in diffs.iter().step_by(10) {
+        writeln!(
+            f,
+            "{},{},{},{}",
+            d.time,
+            d.position * 1e3,
+            d.angle * 1e3,
+            d.loop_closure * 1e6
+        )
+        .unwrap();
+    }
+    assert!(
+        p_all <= 1.25e-3 && a_all <= 3.25e-3,
+        "worst {p_all} m / {a_all} rad"
+    );
+    assert!(
+        p_late <= 0.1e-3 && a_late <= 0.25e-3,
+        "after transient {p_late} m / {a_late} rad"
+    );
+    assert!(gap <= 10e-6, "loop-closure gap {gap} m");
+    // The robots really moved: the comparison is not trivially satisfied at rest.
+    assert_eq!(diffs.len(), 4000);
+    let excursion = worst(&|d| d.excursion, 0.0);
+    assert!(excursion > 0.01, "platform moved only {excursion} m");
+}
