@@ -74,7 +74,6 @@ THESIS_TABLES_4_3_4_4 = {
 }
 
 
-
 def default_placement() -> tuple[F64, F64]:
     """The design placement (ᴼχ_C, ᴱχ_t) of the simulated optical CMM and its target (rss6-sim's
     defaults): what a user knows nominally before calibration."""
@@ -191,7 +190,9 @@ def rpba(
     ``kp`` and ``target_guess`` (default: the design target of :func:`default_placement`).
     Levenberg–Marquardt with analytic Jacobians; ``progress(iteration, cost)`` per iteration."""
     guess = default_placement()[1] if target_guess is None else target_guess
-    return _rss6.rpba(data, kp, max_iterations=max_iterations, target_guess=guess, progress=progress)
+    return _rss6.rpba(
+        data, kp, max_iterations=max_iterations, target_guess=guess, progress=progress
+    )
 
 
 def implicit(
@@ -206,4 +207,6 @@ def implicit(
     ``data``, starting at ``kp``, the rough sensor pose ``sensor_pose_guess`` and ``target_guess``
     (default: the design target of :func:`default_placement`)."""
     guess = default_placement()[1] if target_guess is None else target_guess
-    return _rss6.implicit(data, kp, sensor_pose_guess, max_iterations=max_iterations, target_guess=guess)
+    return _rss6.implicit(
+        data, kp, sensor_pose_guess, max_iterations=max_iterations, target_guess=guess
+    )

@@ -147,7 +147,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
                 results[exp][r.controller] = r
                 bar.update(1)
     tables = []
-    verdicts = []
+    verdicts: list[tuple[str, str, bool, bool]] = []
+    faults: list[str] = []
     for exp, fig_t, fig_e, tab in (("exp1", "6_4", "6_5", "6.1"), ("exp2", "6_7", "6_8", "6.2")):
         runs = [results[exp][n] for n in ("KJSC", "KCSC", "DSMC")]
         plots.tracking(
@@ -168,18 +169,23 @@ def cmd_demo(args: argparse.Namespace) -> int:
         tables.append(text)
         for k, ax in enumerate(servo.AXES):
             rm = {n: results[exp][n].rmse[k] for n in ("KJSC", "KCSC", "DSMC")}
-            ok = rm["DSMC"] < rm["KCSC"] < rm["KJSC"]
-            verdicts.append((exp, ax, ok))
+            verdicts.append((exp, ax, rm["DSMC"] < rm["KCSC"], rm["KCSC"] < rm["KJSC"]))
         for n in ("KJSC", "KCSC", "DSMC"):
             if results[exp][n].fault is not None:
-                verdicts.append((exp, f"{n} fault: {results[exp][n].fault}", False))
+                faults.append(f"{exp} {n}: {results[exp][n].fault}")
     report = "\n\n".join(tables)
-    bad = [f"{e} {a}" for e, a, ok in verdicts if not ok]
+    n = len(verdicts)
+    dk = [f"{e} {a}" for e, a, d, _ in verdicts if not d]
+    kj = [f"{e} {a}" for e, a, _, k in verdicts if not k]
     summary = (
-        "RMSE ordering DSMC < KCSC < KJSC holds on every axis of both experiments"
-        if not bad
-        else "RMSE ordering DSMC < KCSC < KJSC fails on: " + ", ".join(bad)
+        f"RMSE ordering (thesis: DSMC < KCSC < KJSC on every axis): DSMC < KCSC on {n - len(dk)}/{n} axes"
+        + (f" (not on {', '.join(dk)})" if dk else "")
+        + f"; KCSC < KJSC on {n - len(kj)}/{n} axes"
+        + (f" (not on {', '.join(kj)})" if kj else "")
+        + "."
     )
+    if faults:
+        summary += "\nController faults: " + "; ".join(faults)
     (out / "tables.txt").write_text(report + "\n\n" + summary + "\n")
     _say("\n2. Servo experiments (rss6 = this run; thesis = Tables 6.1/6.2)\n", quiet)
     _say(report, quiet)
