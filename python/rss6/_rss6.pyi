@@ -276,6 +276,8 @@ class _SimBase:
         torque_limit: float = 30.0,
         camera_latency: float = 0.0,
         solver_iterations: int | None = None,
+        potentiometer_noise: float | None = None,
+        pixel_noise: float | None = None,
     ) -> Any: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
@@ -309,6 +311,9 @@ def run_servo(
     pid: tuple[float, float, float] | None = None,
     torque_limit: float = 30.0,
     steady_state_kalman: bool = False,
+    kalman_r: ArrayLike | None = None,
+    kalman_q_jerk: ArrayLike | None = None,
+    camera_latency: float = 0.0,
 ) -> dict[str, Any]: ...
 
 # --- calibration ------------------------------------------------------------------------------
