@@ -22,9 +22,16 @@ pub(crate) fn ident_err(e: IdentError) -> PyErr {
         IdentError::TooFewConfigurations { got, needed, .. } => make(
             "CalibrationError",
             msg,
-            vec![("got", Attr::I(got as i64)), ("needed", Attr::I(needed as i64))],
+            vec![
+                ("got", Attr::I(got as i64)),
+                ("needed", Attr::I(needed as i64)),
+            ],
         ),
-        IdentError::RankDeficient { rank, expected, unseen } => make(
+        IdentError::RankDeficient {
+            rank,
+            expected,
+            unseen,
+        } => make(
             "CalibrationError",
             msg,
             vec![
@@ -50,7 +57,9 @@ fn method(name: &str) -> PyResult<Method> {
     match name.to_ascii_lowercase().as_str() {
         "rpba" => Ok(Method::Rpba),
         "implicit" => Ok(Method::Implicit),
-        other => Err(invalid(format!("method must be 'rpba' or 'implicit', got '{other}'"))),
+        other => Err(invalid(format!(
+            "method must be 'rpba' or 'implicit', got '{other}'"
+        ))),
     }
 }
 
@@ -76,11 +85,18 @@ impl PyCalibrationData {
     /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional).
     #[staticmethod]
     #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None))]
-    fn from_arrays(kappa: &Bound<'_, PyAny>, sensor_pose: &Bound<'_, PyAny>, theta_cmd: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+    fn from_arrays(
+        kappa: &Bound<'_, PyAny>,
+        sensor_pose: &Bound<'_, PyAny>,
+        theta_cmd: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
         let kappa = rows6(kappa, "kappa")?;
         let (dims, data) = array(sensor_pose, "sensor_pose")?;
         if dims.len() != 2 || dims[1] != 6 || dims[0] != kappa.len() {
-            return Err(shape(format!("sensor_pose must have shape ({}, 6), got {dims:?}", kappa.len())));
+            return Err(shape(format!(
+                "sensor_pose must have shape ({}, 6), got {dims:?}",
+                kappa.len()
+            )));
         }
         let theta = match theta_cmd {
             Some(t) => rows6(t, "theta_cmd")?,
@@ -107,7 +123,9 @@ impl PyCalibrationData {
                 camera_frames: u32::from(!s.iter().any(|x| x.is_nan())),
             })
             .collect();
-        Ok(PyCalibrationData { inner: CalibrationData { configurations } })
+        Ok(PyCalibrationData {
+            inner: CalibrationData { configurations },
+        })
     }
 
     fn __len__(&self) -> usize {
@@ -124,21 +142,36 @@ impl PyCalibrationData {
     /// Mean sensor poses ᶜχ_t (m, 6); NaN rows where no frame arrived.
     #[getter]
     fn sensor_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let r: Vec<[f64; 6]> = self.inner.configurations.iter().map(|c| c.sensor_pose.unwrap_or([f64::NAN; 6])).collect();
+        let r: Vec<[f64; 6]> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| c.sensor_pose.unwrap_or([f64::NAN; 6]))
+            .collect();
         out_rows::<6>(py, &r)
     }
 
     /// Commanded joint angles (m, 6) rad (nominal convention).
     #[getter]
     fn theta_cmd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let r: Vec<[f64; 6]> = self.inner.configurations.iter().map(|c| c.theta_cmd).collect();
+        let r: Vec<[f64; 6]> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| c.theta_cmd)
+            .collect();
         out_rows::<6>(py, &r)
     }
 
     /// Camera frames averaged per configuration (m,).
     #[getter]
     fn camera_frames<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let r: Vec<f64> = self.inner.configurations.iter().map(|c| f64::from(c.camera_frames)).collect();
+        let r: Vec<f64> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| f64::from(c.camera_frames))
+            .collect();
         out1(py, &r)
     }
 
@@ -234,7 +267,11 @@ impl PyCalibrationResult {
     /// Dropped configurations as (index, reason).
     #[getter]
     fn dropped(&self) -> Vec<(usize, String)> {
-        self.inner.dropped.iter().map(|d| (d.index, d.reason.clone())).collect()
+        self.inner
+            .dropped
+            .iter()
+            .map(|d| (d.index, d.reason.clone()))
+            .collect()
     }
 
     /// Indices of the configurations used.
@@ -278,7 +315,11 @@ pub(crate) fn select_configurations<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let m = self::method(method)?;
     let k = kp.inner;
-    let opts = SelectionOptions { start, candidates, stroke };
+    let opts = SelectionOptions {
+        start,
+        candidates,
+        stroke,
+    };
     let rep = py
         .detach(move || rss6_ident::select_configurations_with(&k, m, seed, &opts))
         .map_err(ident_err)?;
@@ -321,7 +362,8 @@ pub(crate) fn collect(
     if thetas.is_empty() {
         return Err(invalid("thetas must contain at least one configuration"));
     }
-    if !(move_time.is_finite() && move_time > 0.0 && settle_time.is_finite() && settle_time >= 0.0) {
+    if !(move_time.is_finite() && move_time > 0.0 && settle_time.is_finite() && settle_time >= 0.0)
+    {
         return Err(invalid("move_time must be > 0 and settle_time >= 0"));
     }
     let data = with_robot(plant, |robot| {
@@ -331,15 +373,23 @@ pub(crate) fn collect(
             let mut src = Stepped::new(Stepper(robot), start);
             src.move_time = move_time;
             src.settle_time = settle_time;
-            rss6_ident::collect_with_progress(&mut src, &thetas, dwell, &mut |d, t| call_progress(&progress, d, t))
+            rss6_ident::collect_with_progress(&mut src, &thetas, dwell, &mut |d, t| {
+                call_progress(&progress, d, t)
+            })
         })
     })?
     .map_err(ident_err)?;
     Ok(PyCalibrationData { inner: data })
 }
 
-fn options(max_iterations: usize, target_guess: Option<&Bound<'_, PyAny>>) -> PyResult<CalibrationOptions> {
-    let mut o = CalibrationOptions { max_iterations, ..CalibrationOptions::default() };
+fn options(
+    max_iterations: usize,
+    target_guess: Option<&Bound<'_, PyAny>>,
+) -> PyResult<CalibrationOptions> {
+    let mut o = CalibrationOptions {
+        max_iterations,
+        ..CalibrationOptions::default()
+    };
     if let Some(t) = target_guess {
         o.target_guess = vec6(t, "target_guess")?.into();
     }
@@ -389,7 +439,9 @@ pub(crate) fn implicit(
     let opts = options(max_iterations, target_guess)?;
     let s = vec6(sensor_pose_guess, "sensor_pose_guess")?;
     let (d, k) = (&data.inner, kp.inner);
-    let r = py.detach(|| rss6_ident::implicit(d, &k, &s, &opts)).map_err(ident_err)?;
+    let r = py
+        .detach(|| rss6_ident::implicit(d, &k, &s, &opts))
+        .map_err(ident_err)?;
     Ok(PyCalibrationResult { inner: r })
 }
 
@@ -481,4 +533,3 @@ pub(crate) fn calibration_study<'py>(
     }
     Ok(out)
 }
-

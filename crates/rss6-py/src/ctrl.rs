@@ -9,9 +9,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use rss6_core::Vec6;
 use rss6_ctrl::{
-    CartesianPidGains, CommandGuard, CommandLimits, CtrlError, Dsmc, DsmcGains, FaultReason, Fourier,
-    JointSpaceGains, KalmanConfig, Kcsc, Kjsc, PidGains, PoseEstimate, PoseKalman, Reference,
-    Sinusoid, TorqueToPosition, Trajectory,
+    CartesianPidGains, CommandGuard, CommandLimits, CtrlError, Dsmc, DsmcGains, FaultReason,
+    Fourier, JointSpaceGains, KalmanConfig, Kcsc, Kjsc, PidGains, PoseEstimate, PoseKalman,
+    Reference, Sinusoid, TorqueToPosition, Trajectory,
 };
 
 use crate::convert::{array, out6, out_rows6, vec6};
@@ -49,43 +49,72 @@ fn opt6(obj: Option<&Bound<'_, PyAny>>, name: &str, default: Vec6) -> PyResult<V
 /// Reads a (pose, pose_dot, pose_ddot) tuple (the third entry may be omitted: zeros).
 fn triple(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec6, Vec6, Vec6)> {
     let t = obj.cast::<PyTuple>().map_err(|_| {
-        invalid(format!("{name} must be a tuple (pose, pose_dot[, pose_ddot]) of (6,) arrays"))
+        invalid(format!(
+            "{name} must be a tuple (pose, pose_dot[, pose_ddot]) of (6,) arrays"
+        ))
     })?;
     if !(t.len() == 2 || t.len() == 3) {
-        return Err(invalid(format!("{name} must have 2 or 3 entries, got {}", t.len())));
+        return Err(invalid(format!(
+            "{name} must have 2 or 3 entries, got {}",
+            t.len()
+        )));
     }
     let p = vec6(&t.get_item(0)?, &format!("{name}[0]"))?;
     let v = vec6(&t.get_item(1)?, &format!("{name}[1]"))?;
-    let a = if t.len() == 3 { vec6(&t.get_item(2)?, &format!("{name}[2]"))? } else { Vec6::zeros() };
+    let a = if t.len() == 3 {
+        vec6(&t.get_item(2)?, &format!("{name}[2]"))?
+    } else {
+        Vec6::zeros()
+    };
     Ok((p, v, a))
 }
 
 fn reference(obj: &Bound<'_, PyAny>) -> PyResult<Reference> {
     let (pose, pose_dot, pose_ddot) = triple(obj, "reference")?;
-    Ok(Reference { pose, pose_dot, pose_ddot })
+    Ok(Reference {
+        pose,
+        pose_dot,
+        pose_ddot,
+    })
 }
 
 fn estimate(obj: &Bound<'_, PyAny>) -> PyResult<PoseEstimate> {
     let (pose, pose_dot, pose_ddot) = triple(obj, "estimate")?;
-    Ok(PoseEstimate { pose, pose_dot, pose_ddot })
+    Ok(PoseEstimate {
+        pose,
+        pose_dot,
+        pose_ddot,
+    })
 }
 
-type Triple<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+/// Three (6,) arrays.
+type Triple<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
 
 fn out_triple<'py>(py: Python<'py>, p: &Vec6, v: &Vec6, a: &Vec6) -> Triple<'py> {
     (out6(py, p), out6(py, v), out6(py, a))
 }
 
+/// Three (N, 6) arrays.
+type Triple2<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
 /// Highest number of harmonics a Fourier trajectory may have.
 const MAX_HARMONICS: usize = 10;
 
 /// A reference trajectory with analytic derivatives.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(crate) enum Traj {
     /// Sinusoid (Experiment 1).
     Sin(Sinusoid),
     /// Finite Fourier series (Experiment 2), zero-padded to [`MAX_HARMONICS`].
-    Fourier(Fourier<MAX_HARMONICS>),
+    Fourier(Box<Fourier<MAX_HARMONICS>>),
 }
 
 impl Traj {
@@ -110,7 +139,12 @@ fn pad_fourier(f: &Fourier<5>) -> Fourier<MAX_HARMONICS> {
         s[i][..5].copy_from_slice(&f.s[i]);
         c[i][..5].copy_from_slice(&f.c[i]);
     }
-    Fourier { s, c, offset: f.offset, omega0: f.omega0 }
+    Fourier {
+        s,
+        c,
+        offset: f.offset,
+        omega0: f.omega0,
+    }
 }
 
 /// Reference trajectory χ_d(t) with analytic χ̇_d, χ̈_d (thesis §6.5: Experiments 1 and 2).
@@ -126,13 +160,19 @@ impl PyTrajectory {
     /// Experiment 1: sinusoid with an initial step, ω = 0.5 rad/s.
     #[staticmethod]
     fn experiment1() -> Self {
-        PyTrajectory { inner: Traj::Sin(Sinusoid::experiment1()), name: "exp1".into() }
+        PyTrajectory {
+            inner: Traj::Sin(Sinusoid::experiment1()),
+            name: "exp1".into(),
+        }
     }
 
     /// Experiment 2: finite Fourier series (eq. 6.43), n = 5, ω0 = 0.15 rad/s.
     #[staticmethod]
     fn experiment2() -> Self {
-        PyTrajectory { inner: Traj::Fourier(pad_fourier(&Fourier::experiment2())), name: "exp2".into() }
+        PyTrajectory {
+            inner: Traj::Fourier(Box::new(pad_fourier(&Fourier::experiment2()))),
+            name: "exp2".into(),
+        }
     }
 
     /// χ_d,i = center_i + amplitude_i·sin(ω t + phase_i); all (6,), ω in rad/s.
@@ -160,30 +200,47 @@ impl PyTrajectory {
     /// Finite Fourier series of eq. 5.11/6.43: s, c of shape (6, n) (m/s, rad/s), n ≤ 10 harmonics,
     /// offset χ0 (6,), fundamental ω0 (rad/s).
     #[staticmethod]
-    fn fourier(s: &Bound<'_, PyAny>, c: &Bound<'_, PyAny>, offset: &Bound<'_, PyAny>, omega0: f64) -> PyResult<Self> {
+    fn fourier(
+        s: &Bound<'_, PyAny>,
+        c: &Bound<'_, PyAny>,
+        offset: &Bound<'_, PyAny>,
+        omega0: f64,
+    ) -> PyResult<Self> {
         if !(omega0.is_finite() && omega0 > 0.0) {
-            return Err(invalid(format!("omega0 must be finite and > 0, got {omega0}")));
+            return Err(invalid(format!(
+                "omega0 must be finite and > 0, got {omega0}"
+            )));
         }
-        let read = |o: &Bound<'_, PyAny>, name: &str| -> PyResult<(usize, [[f64; MAX_HARMONICS]; 6])> {
-            let (dims, data) = array(o, name)?;
-            if dims.len() != 2 || dims[0] != 6 || dims[1] == 0 || dims[1] > MAX_HARMONICS {
-                return Err(shape(format!("{name} must have shape (6, n) with 1 <= n <= {MAX_HARMONICS}, got {dims:?}")));
-            }
-            crate::convert::check_finite(&data, &dims, name)?;
-            let n = dims[1];
-            let mut out = [[0.0; MAX_HARMONICS]; 6];
-            for i in 0..6 {
-                out[i][..n].copy_from_slice(&data[i * n..(i + 1) * n]);
-            }
-            Ok((n, out))
-        };
+        let read =
+            |o: &Bound<'_, PyAny>, name: &str| -> PyResult<(usize, [[f64; MAX_HARMONICS]; 6])> {
+                let (dims, data) = array(o, name)?;
+                if dims.len() != 2 || dims[0] != 6 || dims[1] == 0 || dims[1] > MAX_HARMONICS {
+                    return Err(shape(format!(
+                    "{name} must have shape (6, n) with 1 <= n <= {MAX_HARMONICS}, got {dims:?}"
+                )));
+                }
+                crate::convert::check_finite(&data, &dims, name)?;
+                let n = dims[1];
+                let mut out = [[0.0; MAX_HARMONICS]; 6];
+                for i in 0..6 {
+                    out[i][..n].copy_from_slice(&data[i * n..(i + 1) * n]);
+                }
+                Ok((n, out))
+            };
         let (ns, s) = read(s, "s")?;
         let (nc, c) = read(c, "c")?;
         if ns != nc {
-            return Err(shape(format!("s and c must have the same shape, got (6, {ns}) and (6, {nc})")));
+            return Err(shape(format!(
+                "s and c must have the same shape, got (6, {ns}) and (6, {nc})"
+            )));
         }
         Ok(PyTrajectory {
-            inner: Traj::Fourier(Fourier { s, c, offset: vec6(offset, "offset")?, omega0 }),
+            inner: Traj::Fourier(Box::new(Fourier {
+                s,
+                c,
+                offset: vec6(offset, "offset")?,
+                omega0,
+            })),
             name: "fourier".into(),
         })
     }
@@ -202,7 +259,7 @@ impl PyTrajectory {
         &self,
         py: Python<'py>,
         times: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+    ) -> PyResult<Triple2<'py>> {
         let (dims, ts) = array(times, "times")?;
         if dims.len() != 1 {
             return Err(shape(format!("times must be 1-D, got shape {dims:?}")));
@@ -258,13 +315,20 @@ impl PyKalmanFilter {
         };
         cfg.validate().map_err(ctrl_err)?;
         let p = vec6(initial_pose, "initial_pose")?;
-        Ok(PyKalmanFilter { inner: PoseKalman::new(cfg, &p).map_err(ctrl_err)? })
+        Ok(PyKalmanFilter {
+            inner: PoseKalman::new(cfg, &p).map_err(ctrl_err)?,
+        })
     }
 
     /// Advances by dt (s) and fuses `measurement` (6,) if given (None: predict only, a missing frame).
     /// Returns (χ_m, χ̇_m, χ̈_m).
     #[pyo3(signature = (dt, measurement=None))]
-    fn step<'py>(&mut self, py: Python<'py>, dt: f64, measurement: Option<&Bound<'py, PyAny>>) -> PyResult<Triple<'py>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        dt: f64,
+        measurement: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Triple<'py>> {
         let z = match measurement {
             Some(m) => Some(vec6(m, "measurement")?),
             None => None,
@@ -324,12 +388,20 @@ impl PyDsmc {
             epsilon: opt6(epsilon, "epsilon", d.epsilon)?,
             integral_limit: opt6(integral_limit, "integral_limit", d.integral_limit)?,
         };
-        Ok(PyDsmc { inner: Dsmc::new(kp_model.inner, dp_model.inner, g).map_err(ctrl_err)? })
+        Ok(PyDsmc {
+            inner: Dsmc::new(kp_model.inner, dp_model.inner, g).map_err(ctrl_err)?,
+        })
     }
 
     /// One camera-rate step of dt (s): returns dict tau_a (actuator torques, N·m), sliding (F),
     /// generalized (τ in χ coordinates), tau_model (model part), in_boundary_layer (bool).
-    fn step<'py>(&mut self, py: Python<'py>, reference: &Bound<'py, PyAny>, estimate: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyDict>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        reference: &Bound<'py, PyAny>,
+        estimate: &Bound<'py, PyAny>,
+        dt: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
         let r = self::reference(reference)?;
         let e = self::estimate(estimate)?;
         let o = self.inner.step(&r, &e, dt).map_err(ctrl_err)?;
@@ -387,14 +459,25 @@ impl PyKcsc {
             ..d
         };
         let b = opt6(bias, "bias", Vec6::zeros())?;
-        Ok(PyKcsc { inner: Kcsc::new(kp_model.inner, g, &b).map_err(ctrl_err)? })
+        Ok(PyKcsc {
+            inner: Kcsc::new(kp_model.inner, g, &b).map_err(ctrl_err)?,
+        })
     }
 
     /// One camera-rate step: joint command θ_d (6,) rad from the reference and the Kalman estimate.
-    fn step<'py>(&mut self, py: Python<'py>, reference: &Bound<'py, PyAny>, estimate: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        reference: &Bound<'py, PyAny>,
+        estimate: &Bound<'py, PyAny>,
+        dt: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let r = self::reference(reference)?;
         let e = self::estimate(estimate)?;
-        Ok(out6(py, &self.inner.step(&r, &e, dt).map_err(ctrl_err)?.theta_d))
+        Ok(out6(
+            py,
+            &self.inner.step(&r, &e, dt).map_err(ctrl_err)?.theta_d,
+        ))
     }
 
     /// The latched fault reason, or None.
@@ -436,14 +519,25 @@ impl PyKjsc {
             ..d
         };
         let b = opt6(bias, "bias", Vec6::zeros())?;
-        Ok(PyKjsc { inner: Kjsc::new(kp_model.inner, g, &b).map_err(ctrl_err)? })
+        Ok(PyKjsc {
+            inner: Kjsc::new(kp_model.inner, g, &b).map_err(ctrl_err)?,
+        })
     }
 
     /// One step: joint command θ_d (6,) rad from the reference and the measured joint angles θ (6,).
-    fn step<'py>(&mut self, py: Python<'py>, reference: &Bound<'py, PyAny>, theta: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        reference: &Bound<'py, PyAny>,
+        theta: &Bound<'py, PyAny>,
+        dt: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let r = self::reference(reference)?;
         let th = vec6(theta, "theta")?;
-        Ok(out6(py, &self.inner.step(&r, &th, dt).map_err(ctrl_err)?.theta_d))
+        Ok(out6(
+            py,
+            &self.inner.step(&r, &th, dt).map_err(ctrl_err)?.theta_d,
+        ))
     }
 
     /// The latched fault reason, or None.
@@ -489,18 +583,34 @@ impl PyTorqueToPosition {
         limits.max_rate = max_rate;
         limits.validate().map_err(ctrl_err)?;
         let init = opt6(initial_command, "initial_command", Vec6::zeros())?;
-        let inner = TorqueToPosition::new(PidGains { lp: pid.0, li: pid.1, ld: pid.2 }, dt, torque_limit)
-            .map_err(ctrl_err)?;
+        let inner = TorqueToPosition::new(
+            PidGains {
+                lp: pid.0,
+                li: pid.1,
+                ld: pid.2,
+            },
+            dt,
+            torque_limit,
+        )
+        .map_err(ctrl_err)?;
         let guard = CommandGuard::new(limits, &init).map_err(ctrl_err)?;
         Ok(PyTorqueToPosition { inner, guard })
     }
 
     /// One joint-rate tick: θ_cmd (6,) that makes the drive PID produce tau_a (6,) N·m given the
     /// potentiometer angles θ (6,). Returns dict theta_cmd, tau_expected, stroke_limited, rate_limited.
-    fn step<'py>(&mut self, py: Python<'py>, tau_a: &Bound<'py, PyAny>, theta: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        tau_a: &Bound<'py, PyAny>,
+        theta: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         let tau = vec6(tau_a, "tau_a")?;
         let th = vec6(theta, "theta")?;
-        let o = self.inner.step(&tau, &th, &mut self.guard).map_err(ctrl_err)?;
+        let o = self
+            .inner
+            .step(&tau, &th, &mut self.guard)
+            .map_err(ctrl_err)?;
         let d = PyDict::new(py);
         d.set_item("theta_cmd", out6(py, &o.theta_cmd))?;
         d.set_item("tau_expected", out6(py, &o.tau_expected))?;

@@ -10,6 +10,9 @@ use crate::convert::{out6, out_mat6, out_rows, vec6, vecn};
 use crate::errors::{core, invalid};
 use crate::params::{PyDynamicParams, PyKinematicParams};
 
+/// Two (6,) arrays.
+type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 fn grav(g: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
     match g {
         Some(g) => Ok(Vec3::from(vecn::<3>(g, "g")?)),
@@ -26,7 +29,10 @@ pub(crate) fn mass_matrix<'py>(
     pose: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let pose = vec6(pose, "pose")?;
-    Ok(out_mat6(py, &rss6_core::mass_matrix(&kp.inner, &dp.inner, &pose).map_err(core)?))
+    Ok(out_mat6(
+        py,
+        &rss6_core::mass_matrix(&kp.inner, &dp.inner, &pose).map_err(core)?,
+    ))
 }
 
 /// Coriolis/centrifugal matrix C̃(χ, χ̇) (6, 6) (eq. 6.2); the velocity force is C̃ χ̇.
@@ -40,7 +46,10 @@ pub(crate) fn coriolis<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let pose = vec6(pose, "pose")?;
     let pd = vec6(pose_dot, "pose_dot")?;
-    Ok(out_mat6(py, &rss6_core::coriolis(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?))
+    Ok(out_mat6(
+        py,
+        &rss6_core::coriolis(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?,
+    ))
 }
 
 /// Gravity vector G̃(χ) (6,) (eq. 6.2), N and N·m.
@@ -55,7 +64,10 @@ pub(crate) fn gravity<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let pose = vec6(pose, "pose")?;
     let g = grav(g)?;
-    Ok(out6(py, &rss6_core::gravity_with(&kp.inner, &dp.inner, &pose, &g).map_err(core)?))
+    Ok(out6(
+        py,
+        &rss6_core::gravity_with(&kp.inner, &dp.inner, &pose, &g).map_err(core)?,
+    ))
 }
 
 /// Joint friction mapped to χ coordinates τ̃_f(χ, χ̇) (6,) (eq. 6.4).
@@ -69,7 +81,10 @@ pub(crate) fn friction<'py>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let pose = vec6(pose, "pose")?;
     let pd = vec6(pose_dot, "pose_dot")?;
-    Ok(out6(py, &rss6_core::friction(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?))
+    Ok(out6(
+        py,
+        &rss6_core::friction(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?,
+    ))
 }
 
 /// Actuator torques τ_a (6,) N·m for the motion (χ, χ̇, χ̈) (eq. 6.1–6.4).
@@ -178,11 +193,14 @@ pub(crate) fn rk4_step<'py>(
     tau_a: &Bound<'py, PyAny>,
     dt: f64,
     g: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+) -> PyResult<Pair<'py>> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(invalid(format!("dt must be finite and > 0, got {dt}")));
     }
-    let state = ModelState { pose: vec6(pose, "pose")?, pose_dot: vec6(pose_dot, "pose_dot")? };
+    let state = ModelState {
+        pose: vec6(pose, "pose")?,
+        pose_dot: vec6(pose_dot, "pose_dot")?,
+    };
     let tau = vec6(tau_a, "tau_a")?;
     let g = grav(g)?;
     let s = rss6_core::rk4_step_with_gravity(&kp.inner, &dp.inner, &state, &tau, dt, &g)

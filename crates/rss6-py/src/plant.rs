@@ -68,7 +68,9 @@ impl<R: RobotSim + Send> SimRobot for SimWrap<R> {
         self.robot.reset(pose).map_err(|e| e.to_string())
     }
     fn step(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
-        self.robot.step_joint_command(theta_cmd).map_err(|e| e.to_string())
+        self.robot
+            .step_joint_command(theta_cmd)
+            .map_err(|e| e.to_string())
     }
     fn camera(&mut self) -> Option<Vec6> {
         self.robot.camera()
@@ -103,9 +105,9 @@ pub(crate) fn sim_error(e: SimError) -> PyErr {
     let msg = e.to_string();
     match e {
         SimError::Core(c) => core(c),
-        SimError::InvalidConfig(_) | SimError::UnknownEffect { .. } | SimError::EffectParameter { .. } => {
-            make("InvalidParameterError", msg, vec![])
-        }
+        SimError::InvalidConfig(_)
+        | SimError::UnknownEffect { .. }
+        | SimError::EffectParameter { .. } => make("InvalidParameterError", msg, vec![]),
         SimError::Io { .. } => make("LogError", msg, vec![]),
         _ => make("SimulationError", msg, vec![]),
     }
@@ -117,13 +119,21 @@ pub(crate) fn sim_err(msg: impl Into<String>) -> PyErr {
 }
 
 fn pid_gains(pid: (f64, f64, f64)) -> PyResult<PidGains> {
-    let g = PidGains { lp: pid.0, li: pid.1, ld: pid.2 };
-    if ![g.lp, g.li, g.ld].iter().all(|x| x.is_finite() && *x >= 0.0) {
-        return Err(invalid(format!("pid gains must be finite and >= 0, got {pid:?}")));
+    let g = PidGains {
+        lp: pid.0,
+        li: pid.1,
+        ld: pid.2,
+    };
+    if ![g.lp, g.li, g.ld]
+        .iter()
+        .all(|x| x.is_finite() && *x >= 0.0)
+    {
+        return Err(invalid(format!(
+            "pid gains must be finite and >= 0, got {pid:?}"
+        )));
     }
     Ok(g)
 }
-
 
 /// Builds the `truth()` dict.
 pub(crate) fn truth_dict<'py>(py: Python<'py>, t: &Truth) -> PyResult<Bound<'py, PyDict>> {
@@ -145,23 +155,39 @@ pub(crate) fn truth_dict<'py>(py: Python<'py>, t: &Truth) -> PyResult<Bound<'py,
     Ok(d)
 }
 
-
 /// Reads `effects`: None, a dict {name: {param: value}} or a list of (name, {param: value}).
 fn effect_specs(effects: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<EffectSpec>> {
-    let Some(e) = effects else { return Ok(Vec::new()) };
+    let Some(e) = effects else {
+        return Ok(Vec::new());
+    };
     if e.is_none() {
         return Ok(Vec::new());
     }
     let pairs: Vec<(String, BTreeMap<String, f64>)> = if let Ok(d) = e.cast::<PyDict>() {
         d.iter()
-            .map(|(k, v)| Ok((k.extract::<String>()?, v.extract::<BTreeMap<String, f64>>()?)))
+            .map(|(k, v)| {
+                Ok((
+                    k.extract::<String>()?,
+                    v.extract::<BTreeMap<String, f64>>()?,
+                ))
+            })
             .collect::<PyResult<_>>()
-            .map_err(|err| invalid(format!("effects must map names to {{parameter: value}} dicts ({err})")))?
+            .map_err(|err| {
+                invalid(format!(
+                    "effects must map names to {{parameter: value}} dicts ({err})"
+                ))
+            })?
     } else {
-        e.extract()
-            .map_err(|err| invalid(format!("effects must be a dict or a list of (name, params) ({err})")))?
+        e.extract().map_err(|err| {
+            invalid(format!(
+                "effects must be a dict or a list of (name, params) ({err})"
+            ))
+        })?
     };
-    Ok(pairs.into_iter().map(|(name, params)| EffectSpec { name, params }).collect())
+    Ok(pairs
+        .into_iter()
+        .map(|(name, params)| EffectSpec { name, params })
+        .collect())
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -329,7 +355,10 @@ sim_class!(
 );
 
 /// Runs `f` on the robot behind a `rss6.Plant` or `rss6.ModelSim` object.
-pub(crate) fn with_robot<R>(obj: &Bound<'_, PyAny>, f: impl FnOnce(&mut dyn SimRobot) -> R) -> PyResult<R> {
+pub(crate) fn with_robot<R>(
+    obj: &Bound<'_, PyAny>,
+    f: impl FnOnce(&mut dyn SimRobot) -> R,
+) -> PyResult<R> {
     if let Ok(m) = obj.cast::<PyModelSim>() {
         let m = m.borrow();
         let mut g = m.lock()?;

@@ -68,7 +68,10 @@ impl Trajectory for Table {
     fn sample(&self, t: f64) -> Reference {
         let k = (t / self.dt).round().max(0.0) as usize;
         let k = k.min(self.rows.len().saturating_sub(1));
-        self.rows.get(k).copied().unwrap_or(Reference::hold(&Vec6::repeat(f64::NAN)))
+        self.rows
+            .get(k)
+            .copied()
+            .unwrap_or(Reference::hold(&Vec6::repeat(f64::NAN)))
     }
 }
 
@@ -129,24 +132,40 @@ pub(crate) fn run_servo<'py>(
     camera_latency: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(duration.is_finite() && duration > 0.0) {
-        return Err(invalid(format!("duration must be finite and > 0 s, got {duration}")));
+        return Err(invalid(format!(
+            "duration must be finite and > 0 s, got {duration}"
+        )));
     }
     let traj = if let Ok(t) = trajectory.cast::<PyTrajectory>() {
-        AnyTraj::Builtin(t.get().inner)
-    } else if let Ok((p, v, a)) = trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>() {
-        let (p, v, a) = (rows6(&p, "trajectory[0]")?, rows6(&v, "trajectory[1]")?, rows6(&a, "trajectory[2]")?);
+        AnyTraj::Builtin(t.get().inner.clone())
+    } else if let Ok((p, v, a)) =
+        trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
+    {
+        let (p, v, a) = (
+            rows6(&p, "trajectory[0]")?,
+            rows6(&v, "trajectory[1]")?,
+            rows6(&a, "trajectory[2]")?,
+        );
         if p.len() != v.len() || p.len() != a.len() || p.is_empty() {
-            return Err(shape("tabulated trajectory arrays must have the same non-zero length"));
+            return Err(shape(
+                "tabulated trajectory arrays must have the same non-zero length",
+            ));
         }
         let dt = with_robot(plant, |r| r.dt())?;
         let rows = p
             .iter()
             .zip(v.iter().zip(a.iter()))
-            .map(|(pose, (pose_dot, pose_ddot))| Reference { pose: *pose, pose_dot: *pose_dot, pose_ddot: *pose_ddot })
+            .map(|(pose, (pose_dot, pose_ddot))| Reference {
+                pose: *pose,
+                pose_dot: *pose_dot,
+                pose_ddot: *pose_ddot,
+            })
             .collect();
         AnyTraj::Table(Table { dt, rows })
     } else {
-        return Err(invalid("trajectory must be an rss6.Trajectory or a tuple of three (N, 6) arrays"));
+        return Err(invalid(
+            "trajectory must be an rss6.Trajectory or a tuple of three (N, 6) arrays",
+        ));
     };
     let kp_model = kp_model.inner;
     let dp_model = dp_model.inner;
@@ -198,44 +217,71 @@ pub(crate) fn run_servo<'py>(
         // Kalman start: the first camera frame if one is pending, else the model's FK of the readings.
         let start = match adapter.camera() {
             Some(p) => p,
-            None => rss6_core::fk(&kp_model, &kp_model.theta_from_reading(&kappa0), &rss6_core::home_pose(), &rss6_core::FkOptions::default())
+            None => {
+                rss6_core::fk(
+                    &kp_model,
+                    &kp_model.theta_from_reading(&kappa0),
+                    &rss6_core::home_pose(),
+                    &rss6_core::FkOptions::default(),
+                )
                 .map_err(core)?
-                .pose,
+                .pose
+            }
         };
         let scheme = match controller.as_str() {
-            "dsmc" => Scheme::Dsmc(Dsmc::new(kp_model, dp_model, DsmcGains::tuned()).map_err(ctrl_err)?),
-            "kcsc" => Scheme::Kcsc(Kcsc::new(kp_model, CartesianPidGains::thesis(), &theta0).map_err(ctrl_err)?),
-            "kjsc" => Scheme::Kjsc(Kjsc::new(kp_model, JointSpaceGains::thesis(), &theta0).map_err(ctrl_err)?),
-            other => return Err(invalid(format!("controller must be 'dsmc', 'kcsc' or 'kjsc', got '{other}'"))),
+            "dsmc" => {
+                Scheme::Dsmc(Dsmc::new(kp_model, dp_model, DsmcGains::tuned()).map_err(ctrl_err)?)
+            }
+            "kcsc" => Scheme::Kcsc(
+                Kcsc::new(kp_model, CartesianPidGains::thesis(), &theta0).map_err(ctrl_err)?,
+            ),
+            "kjsc" => Scheme::Kjsc(
+                Kjsc::new(kp_model, JointSpaceGains::thesis(), &theta0).map_err(ctrl_err)?,
+            ),
+            other => {
+                return Err(invalid(format!(
+                    "controller must be 'dsmc', 'kcsc' or 'kjsc', got '{other}'"
+                )))
+            }
         };
-        let mut servo = Servo::new(kp_servo, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
+        let mut servo =
+            Servo::new(kp_servo, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
         let ticks = (duration / dt).round() as u32;
         let mut log = Log::default();
         // The observer sees the plant after the tick's step; record the true pose at the start of the
         // tick, when the reference was sampled and the consumed camera frame was taken.
         let mut start_pose = adapter.robot.true_pose();
         let summary = py.detach(|| {
-            run(&mut adapter, &mut servo, &traj, t0, ticks, |rec: &TickRecord, p: &Adapter<'_>| {
-                let t = rec.t - t0;
-                let true_pose = start_pose;
-                start_pose = p.robot.true_pose();
-                log.t.push(t);
-                log.desired.push(rec.reference.pose);
-                log.truth.push(true_pose);
-                log.theta_cmd.push(rec.theta_cmd);
-                log.torque.push(p.robot.torque());
-                if let Some(z) = rec.camera {
-                    log.frame_t.push(t);
-                    log.frame_desired.push(rec.reference.pose);
-                    log.frame_truth.push(true_pose);
-                    log.measured.push(z);
-                    let est = rec.tick.and_then(|k| k.estimate);
-                    log.estimate.push(est.map(|e| e.pose).unwrap_or(Vec6::repeat(f64::NAN)));
-                    log.estimate_dot.push(est.map(|e| e.pose_dot).unwrap_or(Vec6::repeat(f64::NAN)));
-                    let f = rec.tick.and_then(|k| k.dsmc).map(|(_, f)| f);
-                    log.sliding.push(f.unwrap_or(Vec6::repeat(f64::NAN)));
-                }
-            })
+            run(
+                &mut adapter,
+                &mut servo,
+                &traj,
+                t0,
+                ticks,
+                |rec: &TickRecord, p: &Adapter<'_>| {
+                    let t = rec.t - t0;
+                    let true_pose = start_pose;
+                    start_pose = p.robot.true_pose();
+                    log.t.push(t);
+                    log.desired.push(rec.reference.pose);
+                    log.truth.push(true_pose);
+                    log.theta_cmd.push(rec.theta_cmd);
+                    log.torque.push(p.robot.torque());
+                    if let Some(z) = rec.camera {
+                        log.frame_t.push(t);
+                        log.frame_desired.push(rec.reference.pose);
+                        log.frame_truth.push(true_pose);
+                        log.measured.push(z);
+                        let est = rec.tick.and_then(|k| k.estimate);
+                        log.estimate
+                            .push(est.map(|e| e.pose).unwrap_or(Vec6::repeat(f64::NAN)));
+                        log.estimate_dot
+                            .push(est.map(|e| e.pose_dot).unwrap_or(Vec6::repeat(f64::NAN)));
+                        let f = rec.tick.and_then(|k| k.dsmc).map(|(_, f)| f);
+                        log.sliding.push(f.unwrap_or(Vec6::repeat(f64::NAN)));
+                    }
+                },
+            )
         });
         let summary = summary.map_err(sim_err)?;
         log.fault = summary.first_fault.map(|(t, r)| (t - t0, r.to_string()));
@@ -265,14 +311,21 @@ pub(crate) fn run_servo<'py>(
 
 /// Pose composition a ∘ b (6,) (4×4 transform product of eq. 3.2 poses).
 #[pyfunction]
-pub(crate) fn compose_poses<'py>(py: Python<'py>, a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+pub(crate) fn compose_poses<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (a, b) = (vec6(a, "a")?, vec6(b, "b")?);
     Ok(crate::convert::out6(py, &compose(&a, &b)))
 }
 
 /// Inverse pose a⁻¹ (6,).
 #[pyfunction]
-pub(crate) fn invert_pose<'py>(py: Python<'py>, a: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+pub(crate) fn invert_pose<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let a = vec6(a, "a")?;
     Ok(crate::convert::out6(py, &pose_inverse(&a)))
 }
