@@ -1,5 +1,5 @@
 //! Python bindings of rss6 (module `rss6._rss6`, issue 7). The pure-Python package `rss6` re-exports
-//! everything here; exceptions live in `rss6.errors` (see [`errors`]). Arrays cross as numpy float64;
+//! everything here; exceptions live in `rss6.errors` (mapped in `errors.rs`). Arrays cross as numpy float64;
 //! every input is shape- and finiteness-checked before it reaches Rust, and long calls release the GIL.
 
 use pyo3::prelude::*;
