@@ -46,6 +46,7 @@ from rss6._rss6 import (
     mass_matrix,
     regressor,
     rk4_step,
+    simulate,
 )
 from rss6.errors import (
     CalibrationError,
@@ -88,6 +89,7 @@ __all__ = [
     "Kjsc",
     "LogError",
     "ModelSim",
+    "simulate",
     "NonFiniteError",
     "NotConvergedError",
     "OutOfBranchError",

@@ -76,3 +76,11 @@ def test_track_subcommand(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     assert "RMSE" in r.stdout and (tmp_path / "t.mcap").exists()
+
+
+def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():
+    r = run("calibrate", "--simulate", "--quick", "--robots", "2")
+    assert r.returncode == 0, r.stderr[-2000:]
+    for t in ("Table 4.3", "Table 4.4", "Table 4.5", "§4.4.1 stroke"):
+        assert t in r.stdout
+    assert run("calibrate").returncode == 2  # without --simulate: explains and fails

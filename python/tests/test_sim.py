@@ -81,3 +81,22 @@ def test_sim_bad_input():
         sim.reset([0, 0, 0.5, 0, 0, 0])
     with pytest.raises(rss6.InvalidParameterError):
         rss6.ModelSim(KP, DP, dt=0.5)
+
+
+@pytest.mark.parametrize("cls", SIMS)
+def test_simulate_runs_a_command_sequence(cls):
+    sim = cls(KP, DP, seed=3)
+    n = 400
+    cmds = np.zeros((n, 6))
+    cmds[:, 0] = np.linspace(0, 0.05, n)
+    out = rss6.simulate(sim, cmds)
+    assert out["time"].shape == (n,) and out["time"][-1] == pytest.approx(0.4)
+    for k in ("true_pose", "true_theta", "kappa", "torque"):
+        assert out[k].shape == (n, 6) and out[k].dtype == np.float64
+    assert 10 <= len(out["camera_time"]) <= 14 and out["camera"].shape == (
+        len(out["camera_time"]),
+        6,
+    )
+    assert out["true_theta"][-1, 0] > 0.02  # joint 1 followed its ramp
+    with pytest.raises(rss6.NonFiniteError):
+        rss6.simulate(sim, np.full((2, 6), np.nan))

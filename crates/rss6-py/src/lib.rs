@@ -43,6 +43,7 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ctrl::PyTorqueToPosition>()?;
     m.add_class::<plant::PyModelSim>()?;
     m.add_class::<plant::PyPlant>()?;
+    m.add_function(wrap_pyfunction!(plant::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(servo::run_servo, m)?)?;
     m.add_function(wrap_pyfunction!(servo::compose_poses, m)?)?;
     m.add_function(wrap_pyfunction!(servo::invert_pose, m)?)?;

@@ -374,3 +374,55 @@ pub(crate) fn with_robot<R>(
         obj.get_type().name()?
     )))
 }
+
+/// Drives `plant` (rss6.Plant or rss6.ModelSim) with one joint command per tick, `commands` (N, 6)
+/// rad in the nominal joint convention, from its current state; releases the GIL. Returns a dict:
+/// time (N,) s after each tick, true_pose (N, 6), true_theta (N, 6), kappa (N, 6) bits, torque (N, 6)
+/// N·m, camera_time (M,), camera (M, 6) ᶜχ_t frames.
+#[pyfunction]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    plant: &Bound<'py, PyAny>,
+    commands: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cmds = crate::convert::rows6(commands, "commands")?;
+    #[derive(Default)]
+    struct Rec {
+        t: Vec<f64>,
+        pose: Vec<Vec6>,
+        theta: Vec<Vec6>,
+        kappa: Vec<Vec6>,
+        tau: Vec<Vec6>,
+        cam_t: Vec<f64>,
+        cam: Vec<Vec6>,
+    }
+    let rec = with_robot(plant, |robot| {
+        py.detach(|| {
+            let mut r = Rec::default();
+            for c in &cmds {
+                robot.step(c)?;
+                let t = robot.time();
+                r.t.push(t);
+                r.pose.push(robot.true_pose());
+                r.theta.push(robot.true_theta());
+                r.kappa.push(robot.potentiometers());
+                r.tau.push(robot.torque());
+                if let Some(z) = robot.camera() {
+                    r.cam_t.push(t);
+                    r.cam.push(z);
+                }
+            }
+            Ok::<_, String>(r)
+        })
+    })?
+    .map_err(sim_err)?;
+    let d = PyDict::new(py);
+    d.set_item("time", crate::convert::out1(py, &rec.t))?;
+    d.set_item("true_pose", crate::convert::out_rows6(py, &rec.pose))?;
+    d.set_item("true_theta", crate::convert::out_rows6(py, &rec.theta))?;
+    d.set_item("kappa", crate::convert::out_rows6(py, &rec.kappa))?;
+    d.set_item("torque", crate::convert::out_rows6(py, &rec.tau))?;
+    d.set_item("camera_time", crate::convert::out1(py, &rec.cam_t))?;
+    d.set_item("camera", crate::convert::out_rows6(py, &rec.cam))?;
+    Ok(d)
+}
