@@ -89,7 +89,6 @@ __all__ = [
     "Kjsc",
     "LogError",
     "ModelSim",
-    "simulate",
     "NonFiniteError",
     "NotConvergedError",
     "OutOfBranchError",
@@ -124,4 +123,5 @@ __all__ = [
     "regressor",
     "rk4_step",
     "servo",
+    "simulate",
 ]
