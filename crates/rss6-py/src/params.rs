@@ -4,15 +4,13 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
 use rss6_core::{Body, DynamicParams, KinematicParams, Vec3, LEGS, N_DYN, N_KIN_ERRORS};
-use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 use crate::convert::{exact, out1, out_rows, vec6, vecn};
 use crate::errors::{core, invalid, make};
 
-/// Kinematic parameter file: the `to_dict` keys of DESIGN.md, SI units.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Kinematic parameters as plain arrays: the `to_dict` keys of DESIGN.md, SI units.
+#[derive(Debug, Clone)]
 struct KinFile {
     base_joints: [[f64; 3]; LEGS],
     platform_joints: [[f64; 3]; LEGS],
@@ -53,24 +51,21 @@ impl From<&KinFile> for KinematicParams {
 }
 
 /// One group of bodies in a dynamic parameter file.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone)]
 struct BodiesFile {
     mass: [f64; LEGS],
     inertia: [[f64; 3]; LEGS],
 }
 
 /// The platform in a dynamic parameter file.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone)]
 struct BodyFile {
     mass: f64,
     inertia: [f64; 3],
 }
 
-/// Dynamic parameter file (Table 5.1 layout), SI units.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Dynamic parameters as plain arrays (Table 5.1 layout), SI units; the layout of rss6-sim's TOML files.
+#[derive(Debug, Clone)]
 struct DynFile {
     platform: BodyFile,
     wrenches: BodiesFile,
@@ -130,38 +125,12 @@ impl From<&DynFile> for DynamicParams {
     }
 }
 
-fn write_toml<T: Serialize>(value: &T, path: &PathBuf) -> PyResult<()> {
-    let text = toml::to_string(value).map_err(|e| {
-        make(
-            "ParamsFileError",
-            format!("cannot encode TOML: {e}"),
-            vec![],
-        )
-    })?;
-    std::fs::write(path, text).map_err(|e| {
-        make(
-            "ParamsFileError",
-            format!("cannot write {}: {e}", path.display()),
-            vec![],
-        )
-    })
-}
-
-fn read_toml<T: for<'de> Deserialize<'de>>(path: &PathBuf) -> PyResult<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        make(
-            "ParamsFileError",
-            format!("cannot read {}: {e}", path.display()),
-            vec![],
-        )
-    })?;
-    toml::from_str(&text).map_err(|e| {
-        make(
-            "ParamsFileError",
-            format!("{}: {e}", path.display()),
-            vec![],
-        )
-    })
+/// Maps a parameter-file error of rss6-sim onto `rss6.ParamsFileError` (or the core error inside).
+fn file_err(e: rss6_sim::SimError) -> PyErr {
+    match e {
+        rss6_sim::SimError::Core(c) => core(c),
+        other => make("ParamsFileError", other.to_string(), vec![]),
+    }
 }
 
 /// Looks up `key` in a dict, naming it when missing.
@@ -367,16 +336,15 @@ impl PyKinematicParams {
         )
     }
 
-    /// Writes a TOML file with the `to_dict` keys.
+    /// Writes a TOML file with the `to_dict` keys (rss6-sim's parameter-file format).
     fn to_toml(&self, path: PathBuf) -> PyResult<()> {
-        write_toml(&KinFile::from(&self.inner), &path)
+        rss6_sim::save_kinematic_params(&path, &self.inner).map_err(file_err)
     }
 
     /// Reads a TOML file written by `to_toml` (validated).
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
-        let f: KinFile = read_toml(&path)?;
-        let kp = KinematicParams::from(&f);
+        let kp = rss6_sim::load_kinematic_params(&path).map_err(file_err)?;
         kp.validate().map_err(core)?;
         Ok(Self::wrap(kp))
     }
@@ -504,14 +472,13 @@ impl PyDynamicParams {
 
     /// Writes a TOML file with the `to_dict` layout.
     fn to_toml(&self, path: PathBuf) -> PyResult<()> {
-        write_toml(&DynFile::from(&self.inner), &path)
+        rss6_sim::save_dynamic_params(&path, &self.inner).map_err(file_err)
     }
 
     /// Reads a TOML file written by `to_toml` (validated).
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
-        let f: DynFile = read_toml(&path)?;
-        let dp = DynamicParams::from(&f);
+        let dp = rss6_sim::load_dynamic_params(&path).map_err(file_err)?;
         dp.validate().map_err(core)?;
         Ok(PyDynamicParams { inner: dp })
     }
