@@ -1,6 +1,7 @@
 //! Criterion benches of the rss6-core dynamics (target: inverse dynamics ≤ 2 µs).
 //!
-//! `cargo bench -p rss6-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`
+//! `cargo bench -p rss6-benches --bench dynamics -- --warm-up-time 1 --measurement-time 2`, or
+//! `scripts/bench.sh dynamics`; load-robust CPU times: `cargo run --release -p rss6-benches --example dyn_cpu`.
 #![allow(missing_docs, clippy::unwrap_used)]
 use criterion::{criterion_group, criterion_main, Criterion};
 use rss6_core::*;
@@ -26,27 +27,32 @@ fn bench_dynamics(c: &mut Criterion) {
         pose: p,
         pose_dot: pd,
     };
-    c.bench_function("inverse_dynamics", |b| {
+    let mut g = c.benchmark_group("dynamics");
+    g.bench_function("leg_geometry_ik", |b| {
+        b.iter(|| LegGeometry::at_pose(black_box(&kp), black_box(&p)))
+    });
+    g.bench_function("inverse_dynamics", |b| {
         b.iter(|| inverse_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &pdd))
     });
-    c.bench_function("mass_matrix", |b| {
+    g.bench_function("mass_matrix", |b| {
         b.iter(|| mass_matrix(black_box(&kp), &dp, black_box(&p)))
     });
-    c.bench_function("forward_dynamics", |b| {
+    g.bench_function("forward_dynamics", |b| {
         b.iter(|| forward_dynamics(black_box(&kp), &dp, black_box(&p), &pd, &tau))
     });
-    c.bench_function("regressor", |b| {
+    g.bench_function("regressor", |b| {
         b.iter(|| regressor(black_box(&kp), black_box(&p), &pd, &pdd))
     });
-    c.bench_function("dynamics_terms", |b| {
+    g.bench_function("dynamics_terms", |b| {
         b.iter(|| dynamics_terms(black_box(&kp), &dp, black_box(&p), &pd))
     });
-    c.bench_function("leg_jacobians", |b| {
+    g.bench_function("leg_jacobians", |b| {
         b.iter(|| leg_jacobians(black_box(&kp), black_box(&p), &pd))
     });
-    c.bench_function("rk4_step", |b| {
+    g.bench_function("rk4_step", |b| {
         b.iter(|| rk4_step(black_box(&kp), &dp, black_box(&s), &tau, 1e-3))
     });
+    g.finish();
 }
 
 criterion_group!(benches, bench_dynamics);

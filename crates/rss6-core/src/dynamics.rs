@@ -49,9 +49,12 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::{leg_kin, leg_m, LegKin, S_HAT};
+use crate::leg_jacobians::{leg_kin, leg_m, leg_static, LegKin};
 use crate::params::{Body, DynamicParams, KinematicParams};
-use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
+use crate::pose::{
+    euler_rate_jacobian, euler_rate_jacobian_dot, twist_jacobian, twist_jacobian_dot,
+    twist_jacobian_inverse,
+};
 use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
 
 /// Standard gravity in the base frame, g = [0, 0, −9.81] m/s² (the base's z axis points up).
@@ -100,6 +103,18 @@ pub fn joint_friction_smooth(dp: &DynamicParams, theta_dot: &Vec6, eps: f64) -> 
     })
 }
 
+/// ŝ × u for ŝ = ẑ: [−u_y, u_x, 0].
+#[inline(always)]
+fn z_cross(u: &Vec3) -> Vec3 {
+    Vec3::new(-u[1], u[0], 0.0)
+}
+
+/// ŝ·(u × v) for ŝ = ẑ: u_x v_y − u_y v_x.
+#[inline(always)]
+fn z_triple(u: &Vec3, v: &Vec3) -> f64 {
+    u[0] * v[1] - u[1] * v[0]
+}
+
 // ---------------------------------------------------------------------------------------------
 // Vector (Newton–Euler) path: body accelerations of one leg.
 
@@ -130,7 +145,7 @@ impl LegAcc {
     pub(crate) fn jbd_t(&self, u: &Vec3) -> Vec6 {
         let p = u.cross(&self.l);
         let ap = self.a.cross(&p);
-        let k = S_HAT.dot(&p.cross(&self.w));
+        let k = z_triple(&p, &self.w);
         (Vec6::new(p[0], p[1], p[2], ap[0], ap[1], ap[2]) + self.r * k) * self.inv_l2
     }
 
@@ -138,10 +153,11 @@ impl LegAcc {
     #[inline]
     pub(crate) fn jbu_t(&self, f: &Vec3) -> Vec6 {
         let cl = self.l * 0.5;
-        self.r * S_HAT.dot(&self.w.cross(f)) + self.jbd_t(&cl.cross(f))
+        self.r * z_triple(&self.w, f) + self.jbd_t(&cl.cross(f))
     }
 }
 
+#[inline(always)]
 pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
     let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
     let e_dot = Vec3::new(v[0], v[1], v[2]);
@@ -153,18 +169,17 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
     let al = a.cross(&l);
     let r = Vec6::new(l[0], l[1], l[2], al[0], al[1], al[2]) * inv_m;
     let theta_dot = r.dot(v);
-    let w_dot = S_HAT.cross(&w) * theta_dot;
+    let s_w = z_cross(&w);
+    let w_dot = s_w * theta_dot;
     let a_dot = omega.cross(&a);
     let l_dot = e_dot + a_dot - w_dot;
     let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
     let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-    let r_dot = (Vec6::new(
-        l_dot[0], l_dot[1], l_dot[2], al_dot[0], al_dot[1], al_dot[2],
-    ) - r * m_dot)
-        * inv_m;
-    let theta_ddot = r.dot(v_dot) + r_dot.dot(v);
+    // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
+    let theta_ddot =
+        r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
     // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
-    let t_acc = S_HAT.cross(&w) * theta_ddot + S_HAT.cross(&w_dot) * theta_dot;
+    let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
     let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
     let inv_l2 = 1.0 / l.norm_squared();
     // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
@@ -178,7 +193,7 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
         l,
         a,
         inv_l2,
-        s_cw: S_HAT.cross(&(w * 0.5)),
+        s_cw: s_w * 0.5,
         cw_acc: t_acc * 0.5,
         cl_acc: t_acc + l_acc * 0.5,
         omega2_dot,
@@ -186,14 +201,14 @@ pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> R
 }
 
 /// Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g): the twist-space generalised force, i.e. J_adᵀ(τ_a − τ_f).
-/// Also returns θ̇.
+/// Also returns θ̇ and J_adᵀ (its columns are the rows J_ad,i).
 fn twist_force(
     geom: &LegGeometry,
     dp: &DynamicParams,
     v: &Vec6,
     v_dot: &Vec6,
     g: &Vec3,
-) -> Result<(Vec6, Vec6)> {
+) -> Result<(Vec6, Vec6, Mat6)> {
     let omega = Vec3::new(v[3], v[4], v[5]);
     let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
     let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
@@ -202,29 +217,87 @@ fn twist_force(
     let f_ang = ip * omega_dot + omega.cross(&(ip * omega));
     let mut f = Vec6::new(f_lin[0], f_lin[1], f_lin[2], f_ang[0], f_ang[1], f_ang[2]);
     let mut theta_dot = Vec6::zeros();
+    let mut j_ad_t = Mat6::zeros();
     for i in 0..LEGS {
         let k = leg_acc(geom, i, v, v_dot)?;
         theta_dot[i] = k.theta_dot;
+        j_ad_t.set_column(i, &k.r);
         let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
         let q_w = wb.mass * k.s_cw.dot(&(k.cw_acc - g)) + wrench_axial_inertia(wb) * k.theta_ddot;
         let f_l = (k.cl_acc - g) * lb.mass;
         let n_l = k.omega2_dot * link_transverse_inertia(lb);
         let cl = k.l * 0.5;
-        f += k.r * (q_w + S_HAT.dot(&k.w.cross(&f_l))) + k.jbd_t(&(cl.cross(&f_l) + n_l));
+        f += k.r * (q_w + z_triple(&k.w, &f_l)) + k.jbd_t(&(cl.cross(&f_l) + n_l));
     }
-    Ok((f, theta_dot))
+    Ok((f, theta_dot, j_ad_t))
+}
+
+/// Solves A x = b (6 × 6) by Gaussian elimination with partial pivoting on the stack; `None` if a pivot
+/// is zero or not finite. (nalgebra's `lu().solve()` does the same with copies of A and b; this is
+/// cheaper, and the solve is ~10 % of an inverse-dynamics call.)
+fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
+    for k in 0..6 {
+        let (mut p, mut max) = (k, a[(k, k)].abs());
+        for r in k + 1..6 {
+            let v = a[(r, k)].abs();
+            if v > max {
+                (p, max) = (r, v);
+            }
+        }
+        if max == 0.0 || !max.is_finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(k, p);
+            b.swap_rows(k, p);
+        }
+        let inv = 1.0 / a[(k, k)];
+        for r in k + 1..6 {
+            let f = a[(r, k)] * inv;
+            for c in k + 1..6 {
+                a[(r, c)] -= f * a[(k, c)];
+            }
+            b[r] -= f * b[k];
+        }
+    }
+    let mut x = Vec6::zeros();
+    for k in (0..6).rev() {
+        let mut s = b[k];
+        for c in k + 1..6 {
+            s -= a[(k, c)] * x[c];
+        }
+        x[k] = s / a[(k, k)];
+    }
+    Some(x)
 }
 
 /// Solves J_adᵀ x = f (x = actuator torques that produce twist-space force f).
-fn solve_j_ad_t(geom: &LegGeometry, f: &Vec6) -> Result<Vec6> {
-    let j_ad = geom.j_ad()?;
-    let x = j_ad
-        .transpose()
-        .lu()
-        .solve(f)
-        .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
+    let x = solve6(*j_ad_t, *f).ok_or(CoreError::Singular(SingularKind::TypeII))?;
     check_finite(x.as_slice()).map_err(|_| CoreError::Singular(SingularKind::TypeII))?;
     Ok(x)
+}
+
+/// v_E = J_s χ̇ and v̇_E = J_s χ̈ + J̇_s χ̇ (eq. 3.23, 5.12) with 3 × 3 blocks only (J_s = diag(I, J_e)).
+#[inline]
+fn twist_and_rate(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> (Vec6, Vec6) {
+    let je = euler_rate_jacobian(pose[3], pose[4]);
+    let je_dot = euler_rate_jacobian_dot(pose[3], pose[4], pose_dot[3], pose_dot[4]);
+    let phi_dot = Vec3::new(pose_dot[3], pose_dot[4], pose_dot[5]);
+    let phi_ddot = Vec3::new(pose_ddot[3], pose_ddot[4], pose_ddot[5]);
+    let w = je * phi_dot;
+    let w_dot = je * phi_ddot + je_dot * phi_dot;
+    (
+        Vec6::new(pose_dot[0], pose_dot[1], pose_dot[2], w[0], w[1], w[2]),
+        Vec6::new(
+            pose_ddot[0],
+            pose_ddot[1],
+            pose_ddot[2],
+            w_dot[0],
+            w_dot[1],
+            w_dot[2],
+        ),
+    )
 }
 
 fn check_state(pose_dot: &Vec6, more: &Vec6) -> Result<()> {
@@ -243,14 +316,28 @@ struct TwistTerms {
     theta_dot: Vec6,
 }
 
+/// Twist-coordinate mass matrix M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i) (eq. 3.47).
+fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Result<Mat6> {
+    let mut m = Mat6::zeros();
+    for k in 0..3 {
+        m[(k, k)] = dp.platform.mass;
+    }
+    m.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&platform_inertia(&geom.rot, &dp.platform));
+    for i in 0..LEGS {
+        let k = leg_static(geom, i)?;
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        // J_auᵀ J_au = |ŝ × c_w|² J_ad,iᵀ J_ad,i: the wrench is one rank-1 term.
+        let iw = wb.mass * k.s_cw.norm_squared() + wrench_axial_inertia(wb);
+        m += k.r * k.r.transpose() * iw
+            + k.jbu.transpose() * k.jbu * lb.mass
+            + k.jbd.transpose() * k.jbd * link_transverse_inertia(lb);
+    }
+    Ok(m)
+}
+
 /// M, C (twist coordinates) and G from the per-leg Jacobian blocks.
-fn twist_terms(
-    geom: &LegGeometry,
-    dp: &DynamicParams,
-    v: &Vec6,
-    g: &Vec3,
-    want_c: bool,
-) -> Result<TwistTerms> {
+fn twist_terms(geom: &LegGeometry, dp: &DynamicParams, v: &Vec6, g: &Vec3) -> Result<TwistTerms> {
     let ip = platform_inertia(&geom.rot, &dp.platform);
     let mut m = Mat6::zeros();
     let mut c = Mat6::zeros();
@@ -259,10 +346,8 @@ fn twist_terms(
     }
     m.fixed_view_mut::<3, 3>(3, 3).copy_from(&ip);
     let omega = Vec3::new(v[3], v[4], v[5]);
-    if want_c {
-        c.fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(&(omega.cross_matrix() * ip));
-    }
+    c.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(omega.cross_matrix() * ip));
     let gp = -g * dp.platform.mass;
     let mut gv = Vec6::new(gp[0], gp[1], gp[2], 0.0, 0.0, 0.0);
     let mut theta_dot = Vec6::zeros();
@@ -276,12 +361,10 @@ fn twist_terms(
             + k.r * k.r.transpose() * iw
             + k.jbu.transpose() * k.jbu * ml
             + k.jbd.transpose() * k.jbd * il;
-        if want_c {
-            c += k.jau.transpose() * k.jau_dot * mw
-                + k.r * k.r_dot.transpose() * iw
-                + k.jbu.transpose() * k.jbu_dot * ml
-                + k.jbd.transpose() * k.jbd_dot * il;
-        }
+        c += k.jau.transpose() * k.jau_dot * mw
+            + k.r * k.r_dot.transpose() * iw
+            + k.jbu.transpose() * k.jbu_dot * ml
+            + k.jbd.transpose() * k.jbd_dot * il;
         gv -= k.jau.transpose() * g * mw + k.jbu.transpose() * g * ml;
     }
     Ok(TwistTerms {
@@ -295,6 +378,13 @@ fn twist_terms(
 /// Mass matrix M̃(χ) (eq. 6.2, χ coordinates), 6 × 6, symmetric positive definite in the workspace.
 /// Units: kg (translation block), kg·m (coupling), kg·m² (rotation block).
 ///
+/// Bodies (13): the platform (centre of mass E, inertia R·diag(I_x, I_y, I_z)·Rᵀ, [`platform_inertia`]);
+/// wrench i (centre of mass at the midpoint of B_i T_i, only I_z about the axis through it parallel
+/// to ŝ enters, [`wrench_axial_inertia`]); link i (centre of mass at the midpoint of T_i A_i, no spin
+/// about its axis (Assumption 2), only the transverse moment (I_x + I_y)/2 enters,
+/// [`link_transverse_inertia`]). M̃ = J_sᵀ M J_s with M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i)
+/// (eq. 3.47); see `docs/dynamics.md`.
+///
 /// ```
 /// use rss6_core::{mass_matrix, home_pose, DynamicParams, KinematicParams};
 /// let m = mass_matrix(&KinematicParams::nominal(), &DynamicParams::nominal(), &home_pose()).unwrap();
@@ -303,13 +393,17 @@ fn twist_terms(
 /// ```
 pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let t = twist_terms(&geom, dp, &Vec6::zeros(), &GRAVITY, false)?;
+    let m = twist_mass_matrix(&geom, dp)?;
     let js = twist_jacobian(pose);
-    Ok(js.transpose() * t.m * js)
+    Ok(js.transpose() * m * js)
 }
 
-/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2 with the J_a,i J̇_s terms, see module docs): the
-/// velocity force is C̃·χ̇, and xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2).
+/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2): the velocity force is C̃·χ̇, and
+/// xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2), indeed dM̃/dt = C̃ + C̃ᵀ.
+///
+/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = `[0 0; 0 [ω]× I_p]`. Unlike eq. 6.2 as
+/// printed, the legs' J_a,iᵀ M_w,i J_a,i J̇_s terms (and the links') are kept: d(J_a,i J_s)/dt needs
+/// them, and without them Property 2 fails whenever the Euler angles move.
 pub fn coriolis(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -320,7 +414,7 @@ pub fn coriolis(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let t = twist_terms(&geom, dp, &v, &GRAVITY, true)?;
+    let t = twist_terms(&geom, dp, &v, &GRAVITY)?;
     Ok(js.transpose() * (t.m * twist_jacobian_dot(pose, pose_dot) + t.c * js))
 }
 
@@ -338,7 +432,7 @@ pub fn gravity_with(
 ) -> Result<Vec6> {
     check_finite(g.as_slice())?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let (f, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
+    let (f, _, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
     Ok(twist_jacobian(pose).transpose() * f)
 }
 
@@ -355,10 +449,69 @@ pub fn friction(
     Ok(j_theta.transpose() * joint_friction(dp, &(j_theta * pose_dot)))
 }
 
+// ---------------------------------------------------------------------------------------------
+// Twist-coordinate form (eq. 3.41, 3.47, 3.48): τ_g = J_adᵀ τ_a = M v̇_E + C v_E + G + τ_f.
+
+/// Mass matrix M(χ) of eq. 3.41/3.47 in twist coordinates v_E = [Ė; ω]: M̃ = J_sᵀ M J_s.
+pub fn mass_matrix_twist(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    twist_mass_matrix(&LegGeometry::at_pose(kp, pose)?, dp)
+}
+
+/// Coriolis matrix C(χ, v_E) of eq. 3.41/3.47 for the twist `v_e` = [Ė; ω] (m/s, rad/s):
+/// C = C_p + Σ (J_a,iᵀ M_w,i J̇_a,i + J_b,iᵀ M_l,i J̇_b,i). dM/dt − 2C is skew-symmetric.
+pub fn coriolis_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Mat6> {
+    check_finite(v_e.as_slice())?;
+    Ok(twist_terms(&LegGeometry::at_pose(kp, pose)?, dp, v_e, &GRAVITY)?.c)
+}
+
+/// Gravity G(χ) of eq. 3.41/3.47 in twist coordinates (N, N·m) for gravity `g` (m/s²): G̃ = J_sᵀ G.
+pub fn gravity_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    Ok(twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?.0)
+}
+
+/// Friction τ_f = J_adᵀ [f_c,i sign(θ̇_i) + f_v,i θ̇_i] of eq. 3.48 for the twist `v_e` (θ̇ = J_ad v_E).
+pub fn friction_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Vec6> {
+    check_finite(v_e.as_slice())?;
+    let j_ad = LegGeometry::at_pose(kp, pose)?.j_ad()?;
+    Ok(j_ad.transpose() * joint_friction(dp, &(j_ad * v_e)))
+}
+
 /// Actuator torques τ_a (N·m) for the motion (χ, χ̇, χ̈) (m, rad; /s; /s²), solving
 /// J_sᵀ J_adᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3) with g = [`GRAVITY`].
 ///
 /// Errors: IK errors, [`CoreError::Singular`] (type I or II), [`CoreError::NonFinite`].
+///
+/// ```
+/// use rss6_core::*;
+/// let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+/// let pose = Vec6::new(0.01, -0.01, 0.12, 0.02, 0.0, -0.03);
+/// let (pd, pdd) = (Vec6::new(0.1, 0.0, 0.0, 0.0, 0.5, 0.0), Vec6::new(0.0, 0.0, 1.0, 2.0, 0.0, 0.0));
+/// let tau = inverse_dynamics(&kp, &dp, &pose, &pd, &pdd).unwrap();
+/// // the forward dynamics gives the acceleration back
+/// let acc = forward_dynamics(&kp, &dp, &pose, &pd, &tau).unwrap();
+/// assert!((acc - pdd).amax() < 1e-9);
+/// // and J_θᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3)
+/// let t = dynamics_terms(&kp, &dp, &pose, &pd).unwrap();
+/// let rhs = t.m * pdd + t.c * pd + t.g + t.f;
+/// assert!((t.j_theta.transpose() * tau - rhs).amax() < 1e-9 * rhs.amax());
+/// ```
 pub fn inverse_dynamics(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -381,15 +534,16 @@ pub fn inverse_dynamics_with_gravity(
     check_state(pose_dot, pose_ddot)?;
     check_finite(g.as_slice())?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let js = twist_jacobian(pose);
-    let v = js * pose_dot;
-    let v_dot = js * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot;
-    let (f, theta_dot) = twist_force(&geom, dp, &v, &v_dot, g)?;
-    Ok(solve_j_ad_t(&geom, &f)? + joint_friction(dp, &theta_dot))
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let (f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, g)?;
+    Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
 }
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
 /// torques τ_a (N·m), with g = [`GRAVITY`]. Solves M̃χ̈ = J_θᵀ τ_a − C̃χ̇ − G̃ − τ̃_f by Cholesky.
+///
+/// Errors: IK errors, [`CoreError::Singular`] (type I; `Matrix` if M is not positive definite, which
+/// only happens for non-physical Ξ; `Euler` at |β| = π/2), [`CoreError::NonFinite`].
 pub fn forward_dynamics(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -414,15 +568,14 @@ pub fn forward_dynamics_with_gravity(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let t = twist_terms(&geom, dp, &v, g, false)?;
+    let m = twist_mass_matrix(&geom, dp)?;
     // Velocity and gravity forces at zero twist acceleration.
-    let (bias, theta_dot) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
-    let j_ad = geom.j_ad()?;
-    let rhs = j_ad.transpose() * (tau_a - joint_friction(dp, &theta_dot)) - bias;
-    let v_dot =
-        t.m.cholesky()
-            .ok_or(CoreError::Singular(SingularKind::Matrix))?
-            .solve(&rhs);
+    let (bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
+    let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
+    let v_dot = m
+        .cholesky()
+        .ok_or(CoreError::Singular(SingularKind::Matrix))?
+        .solve(&rhs);
     let chi_ddot =
         twist_jacobian_inverse(pose)? * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
     check_finite(chi_ddot.as_slice())?;
@@ -471,7 +624,7 @@ pub fn dynamics_terms_with_gravity(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let j_s = twist_jacobian(pose);
     let v = j_s * pose_dot;
-    let t = twist_terms(&geom, dp, &v, g, true)?;
+    let t = twist_terms(&geom, dp, &v, g)?;
     let j_ad = geom.j_ad()?;
     let j_theta = j_ad * j_s;
     let js_t = j_s.transpose();
@@ -525,8 +678,19 @@ pub struct ModelState {
     pub pose_dot: Vec6,
 }
 
+impl ModelState {
+    /// The robot at rest at `pose` (χ̇ = 0).
+    pub fn at_rest(pose: &Vec6) -> Self {
+        ModelState {
+            pose: *pose,
+            pose_dot: Vec6::zeros(),
+        }
+    }
+}
+
 /// One classical fourth-order Runge–Kutta step of length `dt` (s) of the forward dynamics with the
-/// actuator torques τ_a (N·m) held constant over the step, g = [`GRAVITY`].
+/// actuator torques τ_a (N·m) held constant over the step, g = [`GRAVITY`]. Errors as
+/// [`forward_dynamics`] at any of the four stages (e.g. a stage state leaving the workspace).
 pub fn rk4_step(
     kp: &KinematicParams,
     dp: &DynamicParams,

@@ -12,10 +12,10 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::ik::{ik, wrench_tips};
-use crate::jacobian::{jacobian_stewart, LegGeometry};
+use crate::jacobian::{stewart_rows, LegGeometry, Rows6};
 use crate::params::KinematicParams;
-use crate::pose::euler_rate_jacobian;
-use crate::types::{Vec3, Vec6};
+use crate::pose::EulerTrig;
+use crate::types::{Vec3, Vec6, LEGS};
 
 /// Stopping rules of the iterative FK solvers (step 1 of §3.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,14 +59,64 @@ fn check_inputs(theta: &Vec6, guess: &Vec6, opts: &FkOptions) -> Result<()> {
     Ok(())
 }
 
-/// Converts a twist-space step [ΔE; Δω] into a pose step [ΔE; Δφ] (Δφ = J_e⁻¹ Δω).
-fn twist_step_to_pose_step(pose: &Vec6, dv: &Vec6) -> Result<Vec6> {
-    let je = euler_rate_jacobian(pose[3], pose[4]);
-    let dphi = je
-        .lu()
-        .solve(&Vec3::new(dv[3], dv[4], dv[5]))
+/// Solves A x = b (6 × 6, A given by rows) by Gaussian elimination with partial pivoting on the stack; `None` if a
+/// pivot is zero or not finite. nalgebra's `lu().solve()` does the same but copies the matrix and the
+/// right-hand side; this was ~40 % of an FK solve, so the two Newton loops use this instead.
+fn solve6(mut m: Rows6, b: Vec6) -> Option<Vec6> {
+    // Rows are contiguous, so the row operations vectorise.
+    let mut y: [f64; 6] = b.into();
+    for k in 0..6 {
+        let (mut p, mut max) = (k, m[k][k].abs());
+        for (r, row) in m.iter().enumerate().skip(k + 1) {
+            let v = row[k].abs();
+            if v > max {
+                (p, max) = (r, v);
+            }
+        }
+        if max == 0.0 || !max.is_finite() {
+            return None;
+        }
+        m.swap(k, p);
+        y.swap(k, p);
+        let pivot = m[k];
+        let yk = y[k];
+        let inv = 1.0 / pivot[k];
+        for (row, yr) in m.iter_mut().zip(y.iter_mut()).skip(k + 1) {
+            let f = row[k] * inv;
+            for (x, pv) in row.iter_mut().zip(pivot.iter()) {
+                *x -= f * pv;
+            }
+            *yr -= f * yk;
+        }
+    }
+    let mut x = [0.0; 6];
+    for k in (0..6).rev() {
+        let mut s = y[k];
+        for c in k + 1..6 {
+            s -= m[k][c] * x[c];
+        }
+        x[k] = s / m[k][k];
+    }
+    Some(Vec6::from(x))
+}
+
+/// Converts a twist-space step [ΔE; Δω] into a pose step [ΔE; Δφ] (Δφ = J_e⁻¹ Δω, eq. 3.22).
+fn twist_step_to_pose_step(trig: &EulerTrig, dv: &Vec6) -> Result<Vec6> {
+    let dphi = trig
+        .euler_rates(&Vec3::new(dv[3], dv[4], dv[5]))
         .ok_or(CoreError::Singular(SingularKind::Euler))?;
     Ok(Vec6::new(dv[0], dv[1], dv[2], dphi[0], dphi[1], dphi[2]))
+}
+
+/// J' and the leg lengths at `pose` (one evaluation of sin/cos shared by R and J_e).
+fn stewart_at(
+    kp: &KinematicParams,
+    pose: &Vec6,
+    tips: &[Vec3; LEGS],
+) -> Result<(EulerTrig, Rows6, Vec6)> {
+    let trig = EulerTrig::of_pose(pose);
+    let (jp, len) = stewart_rows(kp, &trig.rotation(), pose, tips)?;
+    Ok((trig, jp, len))
 }
 
 /// Quasi-Stewart forward kinematics (§3.4): pose χ from physical joint angles θ (rad), starting at
@@ -94,7 +144,7 @@ pub fn fk(
     let mut pose = *guess;
     let mut iterations = 0;
     loop {
-        let (jp, len) = jacobian_stewart(kp, &pose, &tips)?;
+        let (trig, jp, len) = stewart_at(kp, &pose, &tips)?;
         let dl = target - len;
         let residual = dl.amax();
         if !residual.is_finite() {
@@ -113,15 +163,12 @@ pub fn fk(
                 residual,
             });
         }
-        let dv = jp
-            .lu()
-            .solve(&dl)
-            .ok_or(CoreError::Singular(SingularKind::StewartJacobian))?;
-        let step = twist_step_to_pose_step(&pose, &dv)?;
+        let dv = solve6(jp, dl).ok_or(CoreError::Singular(SingularKind::StewartJacobian))?;
+        let step = twist_step_to_pose_step(&trig, &dv)?;
         pose += step;
         iterations += 1;
         if step.amax() < opts.eps_p {
-            let (_, len) = jacobian_stewart(kp, &pose, &tips)?;
+            let (_, _, len) = stewart_at(kp, &pose, &tips)?;
             let residual = (target - len).amax();
             return Ok(FkSolution {
                 pose,
@@ -161,11 +208,8 @@ pub fn fk_theta_newton(
                 residual,
             });
         }
-        let step = geo
-            .j_theta()?
-            .lu()
-            .solve(&dth)
-            .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+        let rows: Rows6 = geo.j_theta()?.transpose().into();
+        let step = solve6(rows, dth).ok_or(CoreError::Singular(SingularKind::TypeII))?;
         pose += step;
         iterations += 1;
         if step.amax() < opts.eps_p {
@@ -176,5 +220,41 @@ pub fn fk_theta_newton(
                 residual,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::Mat6;
+
+    #[test]
+    fn solve6_matches_nalgebra_lu() {
+        // Deterministic, varied matrices incl. ones that need row pivoting.
+        for seed in 0..200u32 {
+            let s = f64::from(seed);
+            let a = Mat6::from_fn(|r, c| {
+                let (r, c) = (r as f64, c as f64);
+                libm::sin(1.3 * r + 0.7 * c * c + s)
+                    + if (r as usize + seed as usize) % 6 == c as usize {
+                        0.0
+                    } else {
+                        0.1 * r
+                    }
+            });
+            let b = Vec6::from_fn(|r, _| libm::cos(r as f64 + 0.3 * s));
+            let x = solve6(a.transpose().into(), b);
+            match a.lu().solve(&b) {
+                Some(y) => {
+                    let x = x.unwrap_or_else(Vec6::zeros);
+                    assert!((a * x - b).amax() <= 1e-9 * (1.0 + y.amax()), "seed {seed}");
+                }
+                None => assert!(x.is_none(), "seed {seed}"),
+            }
+        }
+        let mut singular = Mat6::identity();
+        singular.set_row(4, &singular.row(2).clone_owned());
+        assert!(solve6(singular.transpose().into(), Vec6::repeat(1.0)).is_none());
+        assert!(solve6([[f64::NAN; 6]; 6], Vec6::repeat(1.0)).is_none());
     }
 }

@@ -15,12 +15,16 @@
 use crate::error::{check_finite, CoreError, Result};
 use crate::params::{leg_side, KinematicParams};
 use crate::pose::pose_rotation;
-use crate::types::{Vec3, Vec6, LEGS};
+use crate::types::{Mat3, Vec3, Vec6, LEGS};
 use core::f64::consts::{FRAC_PI_2, PI};
 use libm::{acos, atan2, sqrt};
 
 /// Wraps an angle to (−π, π].
 pub fn wrap_angle(a: f64) -> f64 {
+    // Fast path: the IK's angles are almost always in range already (fmod is slow).
+    if a > -PI && a <= PI {
+        return a;
+    }
     let mut x = a % (2.0 * PI);
     if x <= -PI {
         x += 2.0 * PI;
@@ -32,7 +36,15 @@ pub fn wrap_angle(a: f64) -> f64 {
 
 /// Platform joint centres A_i in the base frame for pose χ (eq. 3.4).
 pub fn platform_joints_in_base(kp: &KinematicParams, pose: &Vec6) -> [Vec3; LEGS] {
-    let r = pose_rotation(pose);
+    platform_joints_with_rotation(kp, &pose_rotation(pose), pose)
+}
+
+/// A_i = R A'_i + E for a rotation already computed from `pose`.
+pub(crate) fn platform_joints_with_rotation(
+    kp: &KinematicParams,
+    r: &Mat3,
+    pose: &Vec6,
+) -> [Vec3; LEGS] {
     let e = Vec3::new(pose[0], pose[1], pose[2]);
     let mut a = [Vec3::zeros(); LEGS];
     for (ai, ap) in a.iter_mut().zip(kp.platform_joints.iter()) {
@@ -45,9 +57,8 @@ pub fn platform_joints_in_base(kp: &KinematicParams, pose: &Vec6) -> [Vec3; LEGS
 pub fn wrench_tips(kp: &KinematicParams, theta: &Vec6) -> [Vec3; LEGS] {
     let mut t = [Vec3::zeros(); LEGS];
     for (i, ti) in t.iter_mut().enumerate() {
-        let phi = theta[i] + kp.theta0[i];
-        *ti = kp.base_joints[i]
-            + kp.wrench_lengths[i] * Vec3::new(libm::cos(phi), libm::sin(phi), 0.0);
+        let (s, c) = libm::sincos(theta[i] + kp.theta0[i]);
+        *ti = kp.base_joints[i] + kp.wrench_lengths[i] * Vec3::new(c, s, 0.0);
     }
     t
 }

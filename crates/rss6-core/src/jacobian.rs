@@ -153,11 +153,25 @@ pub fn jacobian_stewart(
     tips: &[Vec3; LEGS],
 ) -> Result<(Mat6, Vec6)> {
     check_finite(pose.as_slice())?;
-    let rot = pose_rotation(pose);
+    let (rows, len) = stewart_rows(kp, &pose_rotation(pose), pose, tips)?;
+    Ok((Mat6::from_fn(|r, c| rows[r][c]), len))
+}
+
+/// A 6 × 6 matrix stored row by row (the FK's linear solver works on rows).
+pub(crate) type Rows6 = [[f64; 6]; 6];
+
+/// J' (as rows) and the leg lengths for a rotation already computed from `pose` (the FK loop shares
+/// its sines and cosines between R and J_e).
+pub(crate) fn stewart_rows(
+    kp: &KinematicParams,
+    rot: &Mat3,
+    pose: &Vec6,
+    tips: &[Vec3; LEGS],
+) -> Result<(Rows6, Vec6)> {
     let e = Vec3::new(pose[0], pose[1], pose[2]);
-    let mut j = Mat6::zeros();
+    let mut j = [[0.0; 6]; 6];
     let mut len = Vec6::zeros();
-    for i in 0..LEGS {
+    for (i, row) in j.iter_mut().enumerate() {
         let a_rel = rot * kp.platform_joints[i];
         let l = a_rel + e - tips[i];
         let n = l.norm();
@@ -166,10 +180,7 @@ pub fn jacobian_stewart(
         }
         let u = l / n;
         let m = a_rel.cross(&u);
-        for k in 0..3 {
-            j[(i, k)] = u[k];
-            j[(i, 3 + k)] = m[k];
-        }
+        *row = [u[0], u[1], u[2], m[0], m[1], m[2]];
         len[i] = n;
     }
     Ok((j, len))

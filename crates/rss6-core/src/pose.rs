@@ -4,25 +4,81 @@
 
 use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::types::{Mat3, Mat6, Vec3, Vec6};
-use libm::{asin, atan2, cos, sin};
+use libm::{asin, atan2, cos, sin, sincos};
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion};
+
+/// Sines and cosines of the Euler angles of a pose, computed once and shared by R (eq. 3.2) and
+/// J_e (eq. 3.22) in the hot paths.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EulerTrig {
+    sa: f64,
+    ca: f64,
+    sb: f64,
+    cb: f64,
+    sg: f64,
+    cg: f64,
+}
+
+impl EulerTrig {
+    /// sin/cos of α, β, γ.
+    pub(crate) fn new(alpha: f64, beta: f64, gamma: f64) -> Self {
+        let (sa, ca) = sincos(alpha);
+        let (sb, cb) = sincos(beta);
+        let (sg, cg) = sincos(gamma);
+        EulerTrig {
+            sa,
+            ca,
+            sb,
+            cb,
+            sg,
+            cg,
+        }
+    }
+
+    /// sin/cos of the Euler angles of pose χ.
+    pub(crate) fn of_pose(pose: &Vec6) -> Self {
+        Self::new(pose[3], pose[4], pose[5])
+    }
+
+    /// R = Rx(α)·Ry(β)·Rz(γ) (eq. 3.2).
+    pub(crate) fn rotation(&self) -> Mat3 {
+        let EulerTrig {
+            sa,
+            ca,
+            sb,
+            cb,
+            sg,
+            cg,
+        } = *self;
+        Mat3::new(
+            cb * cg,
+            -cb * sg,
+            sb,
+            ca * sg + cg * sb * sa,
+            -sb * sa * sg + ca * cg,
+            -cb * sa,
+            sa * sg - ca * cg * sb,
+            ca * sb * sg + cg * sa,
+            cb * ca,
+        )
+    }
+
+    /// Euler rates φ̇ = J_e⁻¹ ω (closed form of the inverse of eq. 3.22); `None` when cos β = 0.
+    pub(crate) fn euler_rates(&self, omega: &Vec3) -> Option<Vec3> {
+        let EulerTrig { sa, ca, sb, cb, .. } = *self;
+        if cb.abs() < 1e-12 {
+            return None;
+        }
+        let beta_dot = ca * omega[1] + sa * omega[2];
+        let gamma_dot = (ca * omega[2] - sa * omega[1]) / cb;
+        let alpha_dot = omega[0] - sb * gamma_dot;
+        Some(Vec3::new(alpha_dot, beta_dot, gamma_dot))
+    }
+}
 
 /// Rotation matrix R = Rx(α)·Ry(β)·Rz(γ) (eq. 3.2). Angles in rad.
 pub fn rotation(alpha: f64, beta: f64, gamma: f64) -> Mat3 {
-    let (sa, ca) = (sin(alpha), cos(alpha));
-    let (sb, cb) = (sin(beta), cos(beta));
-    let (sg, cg) = (sin(gamma), cos(gamma));
-    Mat3::new(
-        cb * cg,
-        -cb * sg,
-        sb,
-        ca * sg + cg * sb * sa,
-        -sb * sa * sg + ca * cg,
-        -cb * sa,
-        sa * sg - ca * cg * sb,
-        ca * sb * sg + cg * sa,
-        cb * ca,
-    )
+    EulerTrig::new(alpha, beta, gamma).rotation()
 }
 
 /// Rotation of a pose χ (uses χ[3..6]).
@@ -137,4 +193,34 @@ pub fn inverse(a: &Vec6) -> Vec6 {
 /// `Err(NonFinite)` unless all six components are finite.
 pub fn check_pose(pose: &Vec6) -> Result<()> {
     check_finite(pose.as_slice())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shared_trig_matches_the_explicit_formulas() {
+        let (a, b, g) = (0.3, -0.7, 1.1);
+        let (sa, ca, sb, cb, sg, cg) = (sin(a), cos(a), sin(b), cos(b), sin(g), cos(g));
+        let explicit = Mat3::new(
+            cb * cg,
+            -cb * sg,
+            sb,
+            ca * sg + cg * sb * sa,
+            -sb * sa * sg + ca * cg,
+            -cb * sa,
+            sa * sg - ca * cg * sb,
+            ca * sb * sg + cg * sa,
+            cb * ca,
+        );
+        assert!((rotation(a, b, g) - explicit).amax() < 1e-15);
+        let w = Vec3::new(0.2, -0.5, 0.9);
+        let rates = EulerTrig::new(a, b, g).euler_rates(&w);
+        let back = rates.map(|r| euler_rate_jacobian(a, b) * r);
+        assert!(back.is_some_and(|v| (v - w).amax() < 1e-14));
+        assert!(EulerTrig::new(0.0, core::f64::consts::FRAC_PI_2, 0.0)
+            .euler_rates(&w)
+            .is_none());
+    }
 }

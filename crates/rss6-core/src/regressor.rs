@@ -80,6 +80,20 @@ fn body_columns(
 
 /// Actuator-torque regressor Γ (6 × 64) with τ_a = Γ(χ, χ̇, χ̈)·Ξ, g = [`GRAVITY`]. χ in m and rad,
 /// its derivatives per s and s². Agrees with [`crate::inverse_dynamics`] for every Ξ.
+///
+/// ```
+/// use rss6_core::*;
+/// let kp = KinematicParams::nominal();
+/// let mut dp = DynamicParams::nominal();
+/// dp.coulomb = [0.2; 6];
+/// dp.viscous = [0.05; 6];
+/// let pose = Vec6::new(0.01, 0.0, 0.12, 0.0, 0.03, 0.0);
+/// let (pd, pdd) = (Vec6::new(0.0, 0.1, 0.0, 0.3, 0.0, 0.0), Vec6::new(1.0, 0.0, 0.0, 0.0, 0.0, 2.0));
+/// let gamma = regressor(&kp, &pose, &pd, &pdd).unwrap();
+/// let xi = nalgebra::SVector::<f64, 64>::from_column_slice(&dp.to_vector());
+/// let tau = inverse_dynamics(&kp, &dp, &pose, &pd, &pdd).unwrap();
+/// assert!((gamma * xi - tau).amax() < 1e-12 * tau.amax());
+/// ```
 pub fn regressor(
     kp: &KinematicParams,
     pose: &Vec6,

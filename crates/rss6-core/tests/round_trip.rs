@@ -128,3 +128,47 @@ fn fk_reports_non_convergence_with_the_iteration_bound() {
         }
     }
 }
+
+#[test]
+fn invalid_fk_options_are_rejected() {
+    let kp = KinematicParams::nominal();
+    for bad in [
+        FkOptions {
+            eps_c: -1.0,
+            ..FkOptions::default()
+        },
+        FkOptions {
+            eps_p: f64::NAN,
+            ..FkOptions::default()
+        },
+    ] {
+        for r in [
+            fk(&kp, &Vec6::zeros(), &home_pose(), &bad),
+            fk_theta_newton(&kp, &Vec6::zeros(), &home_pose(), &bad),
+        ] {
+            assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
+        }
+    }
+}
+
+#[test]
+fn out_of_branch_is_a_typed_error() {
+    // A platform joint behind leg 1's base joint (opposite its home direction θ0 = −60°): both roots
+    // are ≈ ±95° from θ0, outside (−90°, 90°].
+    let kp = KinematicParams::nominal();
+    let (s, c) = kp.theta0[0].sin_cos();
+    let a = kp.base_joints[0] - 0.15 * Vec3::new(c, s, 0.0);
+    match ik_leg(&kp, 0, &a) {
+        Err(CoreError::OutOfBranch { leg: 0, theta }) => {
+            assert!(
+                theta.abs() > core::f64::consts::FRAC_PI_2 && theta.abs() < 2.0,
+                "{theta}"
+            );
+        }
+        other => panic!("expected OutOfBranch, got {other:?}"),
+    }
+    assert!(matches!(
+        ik_leg(&kp, 6, &a),
+        Err(CoreError::InvalidParameter(_))
+    ));
+}

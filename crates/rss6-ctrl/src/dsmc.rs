@@ -97,6 +97,10 @@ pub struct DsmcOutput {
     pub tau_model: Vec6,
     /// Every |F_i| ≤ ε_i.
     pub in_boundary_layer: bool,
+    /// The acceleration the model predicts for this command,
+    /// χ̈ = M̃0⁻¹(u − C̃0 χ̇_m − G̃0 − τ̃_f0) (m/s², rad/s²): the known input for
+    /// [`crate::PoseKalman::set_input`].
+    pub accel_model: Vec6,
 }
 
 /// The DSMC of eq. 6.25. Runs at the camera rate on the Kalman estimate.
@@ -201,8 +205,17 @@ impl Dsmc {
             Some(t) if all_finite(t.as_slice()) => t,
             _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
         };
+        let accel_model = match terms
+            .m
+            .lu()
+            .solve(&(u - terms.c * estimate.pose_dot - terms.g - terms.f))
+        {
+            Some(a) if all_finite(a.as_slice()) => a,
+            _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
+        };
         self.integral = integral;
         let out = DsmcOutput {
+            accel_model,
             tau_a,
             sliding: f,
             generalized: u,

@@ -55,6 +55,29 @@ impl KalmanConfig {
         }
     }
 
+    /// Smoother tuning for a filter that is told the commanded acceleration ([`PoseKalman::set_input`],
+    /// `ServoConfig::kalman_model_input`): q_jerk = 1e-3 m²/s⁵ for x, y, z (10× below [`Self::thesis`]) and
+    /// 1 rad²/s⁵ for α, β, γ (3× below). With the DSMC's model acceleration as input the filter lags only the
+    /// model residual, so this tuning keeps the loop stable where the same q without the input does not
+    /// (docs/control.md, "Kalman filter in the loop").
+    pub fn model_aided() -> Self {
+        KalmanConfig {
+            q_jerk: Vec6::new(1e-3, 1e-3, 1e-3, 1.0, 1.0, 1.0),
+            ..Self::thesis()
+        }
+    }
+
+    /// Smoothing tuning for monitoring/logging, not for closing a loop: q_jerk 1e-5 × [`Self::thesis`]
+    /// (1e-7 m²/s⁵, 3e-5 rad²/s⁵). On the Experiment 1 and 2 references with Table 4.1 noise it tracks χ̇
+    /// on all six axes (tests/kalman.rs); inside the DSMC loop it destabilises the rotational loop.
+    pub fn smoothing() -> Self {
+        let t = Self::thesis();
+        KalmanConfig {
+            q_jerk: t.q_jerk * 1e-5,
+            ..t
+        }
+    }
+
     /// Checks finiteness and signs.
     pub fn validate(&self) -> Result<()> {
         if !(all_finite(self.q_jerk.as_slice())
@@ -94,6 +117,12 @@ pub struct PoseEstimate {
     pub pose_ddot: Vec6,
 }
 
+/// Response Γ(Δt) = ∫₀^Δt e^{As} B ds = [Δt²/2, Δt, 0] of the state to a known acceleration input held
+/// constant over Δt (B = [0, 1, 0]ᵀ: the input adds to χ̈, the third state is the unexplained residual).
+pub fn input_response(dt: f64) -> Vector3<f64> {
+    Vector3::new(0.5 * dt * dt, dt, 0.0)
+}
+
 /// State transition Φ(Δt) = e^{AΔt} of the third-order integrator.
 pub fn transition(dt: f64) -> Matrix3<f64> {
     Matrix3::new(1.0, dt, 0.5 * dt * dt, 0.0, 1.0, dt, 0.0, 0.0, 1.0)
@@ -128,12 +157,14 @@ struct Axis {
     q_vel: f64,
     q_jerk: f64,
     r: f64,
+    /// Known acceleration input u (held constant over the prediction interval).
+    u: f64,
 }
 
 impl Axis {
     fn predict(&mut self, dt: f64, covariance: bool) {
         let phi = transition(dt);
-        self.s = phi * self.s;
+        self.s = phi * self.s + input_response(dt) * self.u;
         if covariance {
             self.p = phi * self.p * phi.transpose() + discrete_noise(dt, self.q_vel, self.q_jerk);
         }
@@ -184,6 +215,7 @@ impl PoseKalman {
             q_vel: 0.0,
             q_jerk: 0.0,
             r: 1.0,
+            u: 0.0,
         }; 6];
         for (i, ax) in axes.iter_mut().enumerate() {
             ax.q_vel = config.q_vel[i];
@@ -201,6 +233,7 @@ impl PoseKalman {
         for (i, ax) in self.axes.iter_mut().enumerate() {
             ax.s = Vector3::new(pose[i], 0.0, 0.0);
             ax.p = self.p0;
+            ax.u = 0.0;
         }
     }
 
@@ -223,14 +256,37 @@ impl PoseKalman {
         Vec6::from_fn(|i, _| self.axes.get(i).map_or(f64::NAN, |a| a.p[(0, 0)]))
     }
 
-    /// The current estimate without stepping.
+    /// The current estimate without stepping (χ̈_m = known input + estimated residual).
     pub fn estimate(&self) -> PoseEstimate {
         let get = |k: usize| Vec6::from_fn(|i, _| self.axes.get(i).map_or(f64::NAN, |a| a.s[k]));
         PoseEstimate {
             pose: get(0),
             pose_dot: get(1),
-            pose_ddot: get(2),
+            pose_ddot: get(2) + self.input(),
         }
+    }
+
+    /// The known acceleration input u (m/s², rad/s²) currently applied in the prediction.
+    pub fn input(&self) -> Vec6 {
+        Vec6::from_fn(|i, _| self.axes.get(i).map_or(f64::NAN, |a| a.u))
+    }
+
+    /// Sets the known acceleration input u (m/s², rad/s²) used by the following predictions until it is set
+    /// again: the model becomes χ̈ = u + r with the third state r the unexplained residual (still driven by
+    /// white jerk). With u = 0 (the default, and after [`PoseKalman::reset`]) this is the thesis's filter.
+    /// A controller that knows the acceleration it commands (the DSMC, [`crate::DsmcOutput::accel_model`])
+    /// passes it here; the filter then lags only the residual, not the commanded motion, so a smoother tuning
+    /// does not add phase lag to the control loop (separation principle).
+    ///
+    /// Errors: [`CtrlError::NonFinite`] (input left unchanged).
+    pub fn set_input(&mut self, accel: &Vec6) -> Result<()> {
+        if !all_finite(accel.as_slice()) {
+            return Err(CtrlError::NonFinite);
+        }
+        for (i, ax) in self.axes.iter_mut().enumerate() {
+            ax.u = accel[i];
+        }
+        Ok(())
     }
 
     /// The estimate extrapolated `ahead` seconds (≥ 0) with Φ(ahead), without changing the filter: used to
@@ -238,16 +294,17 @@ impl PoseKalman {
     pub fn predicted(&self, ahead: f64) -> PoseEstimate {
         let phi = transition(ahead.max(0.0));
         let s = |i: usize| {
-            self.axes
-                .get(i)
-                .map_or(Vector3::repeat(f64::NAN), |a| phi * a.s)
+            self.axes.get(i).map_or(Vector3::repeat(f64::NAN), |a| {
+                phi * a.s + input_response(ahead.max(0.0)) * a.u
+            })
         };
         let mut out = self.estimate();
+        let u = self.input();
         for i in 0..6 {
             let x = s(i);
             out.pose[i] = x[0];
             out.pose_dot[i] = x[1];
-            out.pose_ddot[i] = x[2];
+            out.pose_ddot[i] = x[2] + u[i];
         }
         out
     }

@@ -23,7 +23,8 @@ pub use crate::converter::{ConverterOutput, TorqueToPosition};
 pub use crate::dsmc::{sat, Dsmc, DsmcGains, DsmcOutput};
 pub use crate::error::{CtrlError, FaultReason, Result};
 pub use crate::kalman::{
-    discrete_noise, transition, KalmanConfig, PoseEstimate, PoseKalman, RICCATI_MAX_ITERATIONS,
+    discrete_noise, input_response, transition, KalmanConfig, PoseEstimate, PoseKalman,
+    RICCATI_MAX_ITERATIONS,
 };
 pub use crate::kcsc::{CartesianPidGains, JointCommand, Kcsc, VisualPid};
 pub use crate::kjsc::{JointSpaceGains, Kjsc};

@@ -61,6 +61,9 @@ pub struct ServoConfig {
     pub limits: CommandLimits,
     /// Kalman filter tuning.
     pub kalman: KalmanConfig,
+    /// Feed the DSMC's model-predicted acceleration ([`crate::DsmcOutput::accel_model`]) to the filter as a
+    /// known input ([`PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
+    pub kalman_model_input: bool,
     /// Gains of the drive's built-in PID (what the converter inverts).
     pub pid: PidGains,
     /// Torque limit of the drive's PID (N·m).
@@ -78,6 +81,7 @@ impl ServoConfig {
             camera_latency: 0.0,
             limits: CommandLimits::nominal(),
             kalman: KalmanConfig::thesis(),
+            kalman_model_input: false,
             pid: PidGains::nominal(),
             torque_limit: 30.0,
         }
@@ -203,6 +207,9 @@ impl Servo {
         match &mut self.scheme {
             Scheme::Dsmc(d) => {
                 let out = d.step(reference, est, dt)?;
+                if self.config.kalman_model_input {
+                    self.kalman.set_input(&out.accel_model)?;
+                }
                 self.held_tau = out.tau_a;
                 self.held_sliding = out.sliding;
             }

@@ -102,7 +102,17 @@ fn every_step_is_allocation_free() {
 
     // The whole servo loop on the analytic plant: Servo::tick + servo::run (the plant is allocation-free
     // too; the observer does nothing).
-    for which in [Which::Dsmc, Which::Kcsc, Which::Kjsc] {
+    let aided = ServoConfig {
+        kalman: rss6_ctrl::KalmanConfig::model_aided(),
+        kalman_model_input: true,
+        ..ServoConfig::nominal()
+    };
+    for (which, config) in [
+        (Which::Dsmc, ServoConfig::nominal()),
+        (Which::Dsmc, aided),
+        (Which::Kcsc, ServoConfig::nominal()),
+        (Which::Kjsc, ServoConfig::nominal()),
+    ] {
         let start = home_pose();
         let mut plant = ModelPlant::new(
             KinematicParams::perturbed(&table_4_2_errors(3)),
@@ -118,7 +128,7 @@ fn every_step_is_allocation_free() {
         let theta0 = kp.theta_from_reading(&kappa0);
         let mut servo = Servo::new(
             kp,
-            ServoConfig::nominal(),
+            config,
             scheme(which, &theta0, DsmcGains::tuned()),
             &start,
             &kappa0,

@@ -186,6 +186,7 @@ pub(crate) struct OpticalCmm {
     pending: std::collections::VecDeque<(f64, Vec6)>,
     out: Option<Vec6>,
     rng: ChaCha8Rng,
+    dropped: u64,
 }
 
 impl OpticalCmm {
@@ -198,6 +199,7 @@ impl OpticalCmm {
             pending: Default::default(),
             out: None,
             rng,
+            dropped: 0,
         }
     }
 
@@ -216,9 +218,15 @@ impl OpticalCmm {
     pub(crate) fn tick(&mut self, time: f64, truth: &Vec6) -> Result<()> {
         const EPS: f64 = 1e-9;
         if time + EPS >= self.next_capture {
-            let m = self.measure(truth)?;
-            self.pending
-                .push_back((self.next_capture + self.latency, m));
+            // A frame in which the target cannot be measured (a reflector outside an image,
+            // degenerate geometry) is dropped, as a tracker drops occluded frames.
+            match self.measure(truth) {
+                Ok(m) => self
+                    .pending
+                    .push_back((self.next_capture + self.latency, m)),
+                Err(SimError::Cmm(_)) => self.dropped += 1,
+                Err(e) => return Err(e),
+            }
             self.next_capture += self.cfg.period;
         }
         self.out = None;
@@ -235,6 +243,11 @@ impl OpticalCmm {
 
     pub(crate) fn output(&self) -> Option<Vec6> {
         self.out
+    }
+
+    /// Frames dropped since construction (target not measurable).
+    pub(crate) fn dropped(&self) -> u64 {
+        self.dropped
     }
 
     pub(crate) fn latency(&self) -> f64 {

@@ -345,6 +345,11 @@ impl<P: Physics> Robot<P> {
         }
     }
 
+    /// CMM frames dropped because the target could not be measured (reflector out of view).
+    pub fn dropped_camera_frames(&self) -> u64 {
+        self.cmm.dropped()
+    }
+
     /// Total CMM latency (s).
     pub fn camera_latency(&self) -> f64 {
         self.cmm.latency()

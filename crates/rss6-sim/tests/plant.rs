@@ -236,3 +236,19 @@ fn outputs_do_not_reveal_effects_but_truth_does() {
     assert_ne!(truth.sensor_in_base, Vec6::zeros());
     assert_ne!(truth.target_in_effector, Vec6::zeros());
 }
+
+#[test]
+fn frames_with_reflectors_out_of_view_are_dropped_not_fatal() {
+    let mut cfg = SimConfig::nominal();
+    // A 1e6 px lens sees only a few millimetres: the reflectors fall outside the images.
+    for cam in cfg.cmm.cameras.iter_mut() {
+        cam.focal = 1e6;
+    }
+    let mut plant = Plant::new(cfg).unwrap();
+    let cmd = ik(&KinematicParams::nominal(), &home_pose()).unwrap();
+    for _ in 0..200 {
+        plant.step_joint_command(&cmd).unwrap();
+        assert!(plant.camera().is_none());
+    }
+    assert!(plant.dropped_camera_frames() >= 6);
+}

@@ -207,6 +207,15 @@ pub struct Stats {
     pub vel_err_sq: [f64; 6],
     pub vel_sq: [f64; 6],
     pub first_fault: Option<(f64, rss6_ctrl::FaultReason)>,
+    /// Monitor filter ([`Setup::monitor`]) after [`MONITOR_FROM`] s: frames, squared camera error, squared
+    /// estimate error, squared velocity error, squared velocity; the servo's filter over the same frames.
+    pub mon_n: usize,
+    pub mon_cam_sq: [f64; 6],
+    pub mon_est_sq: [f64; 6],
+    pub mon_vel_err_sq: [f64; 6],
+    pub mon_vel_sq: [f64; 6],
+    pub mon_servo_est_sq: [f64; 6],
+    pub mon_servo_vel_err_sq: [f64; 6],
     /// Per-tick error trace (t, e = χ_d − χ_true) sampled at camera frames.
     pub trace: Vec<(f64, Vec6)>,
     /// Per-frame true sliding variable F = ė + λe and the DSMC's own F.
@@ -237,7 +246,12 @@ pub struct Setup {
     pub dsmc: DsmcGains,
     /// Camera latency of the plant (ticks of 1 ms).
     pub latency_ticks: u64,
+    /// A second filter run on the same camera frames beside the loop (not used by the controller).
+    pub monitor: Option<rss6_ctrl::KalmanConfig>,
 }
+
+/// Start (s) of the monitor statistics (after the initial step has settled).
+pub const MONITOR_FROM: f64 = 2.0;
 
 impl Setup {
     pub fn new(kp_true: KinematicParams, noise: Noise, seconds: f64, seed: u64) -> Self {
@@ -249,6 +263,7 @@ impl Setup {
             config: ServoConfig::nominal(),
             dsmc: DsmcGains::tuned(),
             latency_ticks: 0,
+            monitor: None,
         }
     }
 }
@@ -280,6 +295,9 @@ pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
     let mut st = Stats::default();
     let ticks = (setup.seconds / 1e-3).round() as u32;
     let mut prev = plant.state;
+    let mut monitor = setup
+        .monitor
+        .map(|c| (rss6_ctrl::PoseKalman::new(c, &start).unwrap(), 0.0_f64));
     let summary = run(
         &mut plant,
         &mut servo,
@@ -310,6 +328,21 @@ pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
                         st.vel_sq[i] += v_true[i].powi(2);
                     }
                     st.kf_n += 1;
+                    if let Some((mf, last_t)) = monitor.as_mut() {
+                        let m = mf.step((rec.t - *last_t).max(1e-6), Some(&z)).unwrap();
+                        *last_t = rec.t;
+                        if rec.t > MONITOR_FROM {
+                            for i in 0..6 {
+                                st.mon_cam_sq[i] += (z[i] - prev.pose[i]).powi(2);
+                                st.mon_est_sq[i] += (m.pose[i] - prev.pose[i]).powi(2);
+                                st.mon_vel_err_sq[i] += (m.pose_dot[i] - v_true[i]).powi(2);
+                                st.mon_vel_sq[i] += v_true[i].powi(2);
+                                st.mon_servo_est_sq[i] += (est.pose[i] - prev.pose[i]).powi(2);
+                                st.mon_servo_vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
+                            }
+                            st.mon_n += 1;
+                        }
+                    }
                 }
             }
             prev = p.state;

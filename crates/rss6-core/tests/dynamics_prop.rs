@@ -1,0 +1,88 @@
+//! Property tests (proptest) of the dynamics round trips and identities over the workspace box
+//! (±20 mm, ±0.05 rad around home), arbitrary rates, accelerations, torques and parameters.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+use proptest::prelude::*;
+use rss6_core::*;
+
+fn vec6(lin: f64, ang: f64) -> impl Strategy<Value = Vec6> {
+    (
+        -lin..=lin,
+        -lin..=lin,
+        -lin..=lin,
+        -ang..=ang,
+        -ang..=ang,
+        -ang..=ang,
+    )
+        .prop_map(|(a, b, c, d, e, f)| Vec6::new(a, b, c, d, e, f))
+}
+
+fn pose() -> impl Strategy<Value = Vec6> {
+    vec6(0.02, 0.05).prop_map(|d| home_pose() + d)
+}
+
+/// Ξ scaled entry-wise by 0.5..1.5 around Table 5.1, friction in [0, 0.5].
+fn params() -> impl Strategy<Value = DynamicParams> {
+    (
+        proptest::collection::vec(0.5f64..1.5, 52),
+        proptest::collection::vec(0.0f64..0.5, 12),
+    )
+        .prop_map(|(s, f)| {
+            let mut x = DynamicParams::nominal().to_vector();
+            for (v, k) in x.iter_mut().zip(s.iter()) {
+                *v *= k;
+            }
+            for (v, k) in x.iter_mut().skip(52).zip(f.iter()) {
+                *v = *k;
+            }
+            DynamicParams::from_vector(&x)
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn inverse_of_forward_is_identity(
+        p in pose(), pd in vec6(0.2, 1.0), dtau in vec6(5.0, 5.0), dp in params()
+    ) {
+        let kp = KinematicParams::nominal();
+        let tau = inverse_dynamics(&kp, &dp, &p, &Vec6::zeros(), &Vec6::zeros()).unwrap() + dtau;
+        let acc = forward_dynamics(&kp, &dp, &p, &pd, &tau).unwrap();
+        let back = inverse_dynamics(&kp, &dp, &p, &pd, &acc).unwrap();
+        prop_assert!((back - tau).amax() <= 1e-10 * tau.amax(), "{} vs {}", back, tau);
+    }
+
+    #[test]
+    fn regressor_is_linear_form_of_inverse_dynamics(
+        p in pose(), pd in vec6(0.2, 1.0), pdd in vec6(2.0, 10.0), dp in params()
+    ) {
+        let kp = KinematicParams::nominal();
+        let xi = nalgebra::SVector::<f64, 64>::from_column_slice(&dp.to_vector());
+        let tau = inverse_dynamics(&kp, &dp, &p, &pd, &pdd).unwrap();
+        let gamma = regressor(&kp, &p, &pd, &pdd).unwrap();
+        prop_assert!((gamma * xi - tau).amax() <= 1e-10 * tau.amax().max(1.0));
+    }
+
+    #[test]
+    fn mass_matrix_is_spd_and_energy_positive(p in pose(), pd in vec6(0.2, 1.0), dp in params()) {
+        let kp = KinematicParams::nominal();
+        let m = mass_matrix(&kp, &dp, &p).unwrap();
+        prop_assert!((m - m.transpose()).amax() <= 1e-14 * m.amax());
+        prop_assert!(m.cholesky().is_some());
+        let t = kinetic_energy(&kp, &dp, &p, &pd).unwrap();
+        prop_assert!(t >= 0.0);
+    }
+
+    #[test]
+    fn coriolis_matrix_is_skew_against_mdot(p in pose(), pd in vec6(0.2, 1.0), x in vec6(1.0, 1.0)) {
+        // xᵀ C̃ x = ½ xᵀ Ṁ̃ x, Ṁ̃ by a 4th-order central difference along χ̇
+        let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+        let m = |t: f64| mass_matrix(&kp, &dp, &(p + pd * t)).unwrap();
+        let h = 1e-4;
+        let m_dot = ((m(h) - m(-h)) * 8.0 - (m(2.0 * h) - m(-2.0 * h))) / (12.0 * h);
+        let c = coriolis(&kp, &dp, &p, &pd).unwrap();
+        let xa = x.abs();
+        let scale = xa.dot(&((m_dot.abs() + c.abs() * 2.0) * xa));
+        prop_assert!((x.dot(&(m_dot * x)) - 2.0 * x.dot(&(c * x))).abs() <= 1e-9 * scale);
+    }
+}
