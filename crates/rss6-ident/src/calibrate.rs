@@ -57,6 +57,9 @@ pub struct CalibrationOptions {
     pub rank_tolerance: f64,
     /// Starting value of ᴱχ_t (m, rad); default [`crate::NOMINAL_TARGET_IN_EFFECTOR`].
     pub target_guess: [f64; 6],
+    /// Implicit only: hold ᴼχ_C at its (rough) guess instead of estimating it, as when the base frame
+    /// is taken from a separate, rough measurement. Default `false`.
+    pub fix_sensor_pose: bool,
 }
 
 impl Default for CalibrationOptions {
@@ -73,6 +76,7 @@ impl Default for CalibrationOptions {
             leg_weight: 1.0 / sp,
             rank_tolerance: 1e-9,
             target_guess: crate::generator::NOMINAL_TARGET_IN_EFFECTOR,
+            fix_sensor_pose: false,
         }
     }
 }
@@ -104,6 +108,8 @@ pub struct CalibrationResult {
     pub method: Method,
     /// Calibrated kinematic parameters.
     pub params: KinematicParams,
+    /// The parameters the calibration started from (the nominal model; b is relative to them).
+    pub reference: KinematicParams,
     /// Calibrated error vector b relative to the parameters passed in (DESIGN.md order).
     pub errors: [f64; N_KIN_ERRORS],
     /// Calibrated ᴱχ_t (m, rad).
@@ -150,7 +156,9 @@ impl Problem {
         let rel = match layout.method {
             Method::Rpba => {
                 let c0_inv = iso(&cam[0]).inverse();
-                cam.iter().map(|c| isometry_to_pose(&(c0_inv * iso(c)))).collect()
+                cam.iter()
+                    .map(|c| isometry_to_pose(&(c0_inv * iso(c))))
+                    .collect()
             }
             Method::Implicit => Vec::new(),
         };
@@ -190,8 +198,10 @@ impl Problem {
             let f = if jac {
                 fk_with_derivative(&kp, &self.kappa[l], &self.guesses[l])
             } else {
-                fk_reading(&kp, &self.kappa[l], &self.guesses[l])
-                    .map(|pose| FkDerivative { pose, d_b: Mat6x60::zeros() })
+                fk_reading(&kp, &self.kappa[l], &self.guesses[l]).map(|pose| FkDerivative {
+                    pose,
+                    d_b: Mat6x60::zeros(),
+                })
             }
             .map_err(|e| (l, e))?;
             fks.push(f);
@@ -201,15 +211,19 @@ impl Problem {
         }
         let n = self.layout.n();
         let mut r = DVector::zeros(self.n_res());
-        let mut j = if jac { Some(DMatrix::zeros(self.n_res(), n)) } else { None };
+        let mut j = if jac {
+            Some(DMatrix::zeros(self.n_res(), n))
+        } else {
+            None
+        };
         let x0_inv = (iso(&fks[0].pose) * mt).inverse();
         let ad_x0_inv = adjoint(&x0_inv);
         let ad_mt_inv = adjoint(&mt.inverse());
         let e0 = twist_from_pose_delta(&fks[0].pose);
         let xi0 = e0 * fks[0].d_b;
         let et = twist_from_pose_delta(&t);
-        for l in 1..m {
-            let p = x0_inv * iso(&fks[l].pose) * mt;
+        for (l, fk_l) in fks.iter().enumerate().skip(1) {
+            let p = x0_inv * iso(&fk_l.pose) * mt;
             let pp = isometry_to_pose(&p);
             let w = self.pose_weights;
             let res = pose_difference(&self.rel[l], &pp).component_mul(&w);
@@ -218,9 +232,10 @@ impl Problem {
                 let d = pose_delta_from_twist(&pp)
                     .ok_or((l, CoreError::Singular(SingularKind::Euler)))?;
                 let wd = Mat6::from_diagonal(&w) * d;
-                let xi_b = ad_x0_inv * (twist_from_pose_delta(&fks[l].pose) * fks[l].d_b - xi0);
+                let xi_b = ad_x0_inv * (twist_from_pose_delta(&fk_l.pose) * fk_l.d_b - xi0);
                 let xi_t = (adjoint(&p) - Mat6::identity()) * ad_mt_inv * et;
-                j.view_mut((6 * (l - 1), 0), (6, N_KIN_ERRORS)).copy_from(&(-(wd * xi_b)));
+                j.view_mut((6 * (l - 1), 0), (6, N_KIN_ERRORS))
+                    .copy_from(&(-(wd * xi_b)));
                 j.view_mut((6 * (l - 1), self.layout.target_offset()), (6, 6))
                     .copy_from(&(-(wd * xi_t)));
             }
@@ -239,13 +254,18 @@ impl Problem {
         let w = self.leg_weight;
         let n = self.layout.n();
         let mut r = DVector::zeros(self.n_res());
-        let mut j = if jac { Some(DMatrix::zeros(self.n_res(), n)) } else { None };
+        let mut j = if jac {
+            Some(DMatrix::zeros(self.n_res(), n))
+        } else {
+            None
+        };
         for l in 0..self.kappa.len() {
             let m_oe = m_oc * iso(&self.cam[l]) * mt_inv;
             let c = leg_closure(&kp, &self.kappa[l], &m_oe);
             r.rows_mut(6 * l, 6).copy_from(&(c.phi * w));
             if let Some(j) = j.as_mut() {
-                j.view_mut((6 * l, 0), (6, N_KIN_ERRORS)).copy_from(&(c.d_b * w));
+                j.view_mut((6 * l, 0), (6, N_KIN_ERRORS))
+                    .copy_from(&(c.d_b * w));
                 if let Some(o) = self.layout.sensor_offset() {
                     j.view_mut((6 * l, o), (6, 6)).copy_from(&(c.d_xi * es * w));
                 }
@@ -388,8 +408,14 @@ pub fn residual_norm_sum(
         ..CalibrationOptions::default()
     };
     let mut p = Problem::new(layout, kappa, cam, &opts);
-    let e = p.eval(&x, false).map_err(|(config, source)| IdentError::Fk { config, source })?;
-    Ok(e.r.as_slice().chunks(6).map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt()).sum())
+    let e = p
+        .eval(&x, false)
+        .map_err(|(config, source)| IdentError::Fk { config, source })?;
+    Ok(e.r
+        .as_slice()
+        .chunks(6)
+        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
+        .sum())
 }
 
 fn usable(data: &CalibrationData) -> (Vec<Vec6>, Vec<Vec6>, Vec<usize>) {
@@ -417,7 +443,9 @@ fn solve(
 ) -> Result<CalibrationResult> {
     let method = layout.method;
     if x0.iter().any(|v| !v.is_finite()) {
-        return Err(IdentError::InvalidInput("starting parameters contain NaN or infinity".into()));
+        return Err(IdentError::InvalidInput(
+            "starting parameters contain NaN or infinity".into(),
+        ));
     }
     layout.kp(&x0).validate()?;
     let mut dropped = Vec::new();
@@ -456,7 +484,10 @@ fn solve(
             Ok(e) => break (p, e),
             Err((l, e)) => {
                 if l == 0 && method == Method::Rpba {
-                    return Err(IdentError::Fk { config: used[0], source: e });
+                    return Err(IdentError::Fk {
+                        config: used[0],
+                        source: e,
+                    });
                 }
                 dropped.push(DroppedConfiguration {
                     index: used[l],
@@ -471,7 +502,12 @@ fn solve(
     };
 
     let s = layout.scales();
-    let q = layout.free_basis(&x0);
+    let fixed_sensor = opts.fix_sensor_pose && method == Method::Implicit;
+    let q = if fixed_sensor {
+        layout.free_basis_fixed_sensor(&x0)
+    } else {
+        layout.free_basis(&x0)
+    };
     let names = layout.names();
     let reduce = |j: &DMatrix<f64>| {
         let mut js = j.clone();
@@ -489,7 +525,7 @@ fn solve(
         let smax = svd.singular_values.max();
         let tol = opts.rank_tolerance * smax;
         let rank = svd.singular_values.iter().filter(|&&v| v > tol).count();
-        if rank < k || !(smax > 0.0) {
+        if rank < k || smax.is_nan() || smax <= 0.0 {
             let mut weight = vec![0.0; layout.n()];
             if let Some(vt) = svd.v_t.as_ref() {
                 for (row, &sv) in svd.singular_values.iter().enumerate() {
@@ -508,13 +544,15 @@ fn solve(
                 .map(|(i, _)| names[i].clone())
                 .collect();
             if unseen.is_empty() {
-                if let Some((i, _)) =
-                    weight.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))
-                {
+                if let Some((i, _)) = weight.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
                     unseen.push(names[i].clone());
                 }
             }
-            return Err(IdentError::RankDeficient { rank, expected: k, unseen });
+            return Err(IdentError::RankDeficient {
+                rank,
+                expected: k,
+                unseen,
+            });
         }
     }
 
@@ -552,13 +590,22 @@ fn solve(
                     r = rn;
                     j = jn;
                 }
-                Err((l, e)) => return Err(IdentError::Fk { config: used[l], source: e }),
+                Err((l, e)) => {
+                    return Err(IdentError::Fk {
+                        config: used[l],
+                        source: e,
+                    })
+                }
             }
             cost = new_cost;
             cost_history.push(cost);
             accepted += 1;
             lambda = (lambda / 10.0).max(1e-15);
-            progress(&Progress { iteration, cost, damping: lambda });
+            progress(&Progress {
+                iteration,
+                cost,
+                damping: lambda,
+            });
             if decrease <= opts.cost_tolerance * cost.max(f64::MIN_POSITIVE)
                 || z.norm() <= opts.step_tolerance
             {
@@ -566,7 +613,11 @@ fn solve(
             }
         } else {
             lambda *= 10.0;
-            progress(&Progress { iteration, cost, damping: lambda });
+            progress(&Progress {
+                iteration,
+                cost,
+                damping: lambda,
+            });
             if lambda > 1e12 {
                 break;
             }
@@ -582,9 +633,14 @@ fn solve(
     let mut singular_values: Vec<f64> = sv.iter().copied().collect();
     singular_values.sort_by(|a, b| b.total_cmp(a));
     let smax = singular_values.first().copied().unwrap_or(0.0);
-    let rank = singular_values.iter().filter(|&&v| v > opts.rank_tolerance * smax).count();
+    let rank = singular_values
+        .iter()
+        .filter(|&&v| v > opts.rank_tolerance * smax)
+        .count();
     // gauge projector diagonal in the scaled metric
-    let proj_diag: Vec<f64> = (0..layout.n()).map(|i| 1.0 - q.row(i).norm_squared()).collect();
+    let proj_diag: Vec<f64> = (0..layout.n())
+        .map(|i| 1.0 - q.row(i).norm_squared())
+        .collect();
     let unidentifiable = proj_diag
         .iter()
         .enumerate()
@@ -605,6 +661,7 @@ fn solve(
     Ok(CalibrationResult {
         method,
         params: layout.kp(&x),
+        reference: layout.reference,
         errors: layout.errors(&x),
         target_in_effector: layout.target(&x),
         sensor_in_base: layout.sensor(&x),
@@ -640,18 +697,28 @@ pub fn residuals_and_jacobian(
     }
     let (kappa, cam, used) = usable(data);
     if kappa.len() < 2 {
-        return Err(IdentError::InvalidInput("fewer than 2 usable configurations".into()));
+        return Err(IdentError::InvalidInput(
+            "fewer than 2 usable configurations".into(),
+        ));
     }
     let mut p = Problem::new(layout, kappa, cam, &CalibrationOptions::default());
-    p.eval_full(x, mode).map_err(|(l, source)| IdentError::Fk { config: used[l], source })
+    p.eval_full(x, mode).map_err(|(l, source)| IdentError::Fk {
+        config: used[l],
+        source,
+    })
 }
 
 /// The 10 gauge directions (columns, unscaled parameter units) of `method` at parameter vector `x`.
-pub fn gauge_directions(method: Method, reference: &KinematicParams, x: &DVector<f64>) -> DMatrix<f64> {
+pub fn gauge_directions(
+    method: Method,
+    reference: &KinematicParams,
+    x: &DVector<f64>,
+) -> DMatrix<f64> {
     Layout::new(method, *reference).gauge_basis(x)
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
     use crate::data::collect;
@@ -669,17 +736,30 @@ mod tests {
         let mut thetas = vec![Vec6::zeros()];
         thetas.extend(crate::validate::test_configurations(8, 1, (-0.4, 0.4)));
         let data = collect(&mut src, &thetas, 2.0).unwrap();
-        let g = [0.01, -0.02, 0.005, 0.03, 0.004, -0.003, 0.01, 0.02, -0.01, 0.05];
+        let g = [
+            0.01, -0.02, 0.005, 0.03, 0.004, -0.003, 0.01, 0.02, -0.01, 0.05,
+        ];
         for method in [Method::Rpba, Method::Implicit] {
             let layout = Layout::new(method, nominal);
-            let x = layout.pack(&truth.kp, Some(&truth.sensor_in_base), &truth.target_in_effector);
+            let x = layout.pack(
+                &truth.kp,
+                Some(&truth.sensor_in_base),
+                &truth.target_in_effector,
+            );
             let xg = layout.apply_gauge(&x, &g);
-            assert!((&xg - &x).amax() > 1e-3, "the gauge must actually move the parameters");
+            assert!(
+                (&xg - &x).amax() > 1e-3,
+                "the gauge must actually move the parameters"
+            );
             let (kappa, cam, _) = usable(&data);
             let mut p = Problem::new(layout, kappa, cam, &CalibrationOptions::default());
             let r = p.eval(&x, false).unwrap().r;
             let rg = p.eval(&xg, false).unwrap().r;
-            assert!((&r - &rg).amax() < 1e-6 * r.amax(), "{method}: {}", (&r - &rg).amax());
+            assert!(
+                (&r - &rg).amax() < 1e-6 * r.amax(),
+                "{method}: {}",
+                (&r - &rg).amax()
+            );
         }
     }
 }

@@ -4,8 +4,8 @@
 use crate::se3::twist_from_pose_delta;
 use nalgebra::{Isometry3, Point3, SMatrix};
 use rss6_core::{
-    fk, pose_to_isometry, CoreError, FkOptions, KinematicParams, Mat6, SingularKind, Vec3, Vec6, LEGS,
-    N_KIN_ERRORS,
+    fk, pose_to_isometry, CoreError, FkOptions, KinematicParams, Mat6, SingularKind, Vec3, Vec6,
+    LEGS, N_KIN_ERRORS,
 };
 
 /// 6 × 60 derivative block ∂(6 equations)/∂b.
@@ -71,10 +71,17 @@ pub(crate) fn fk_reading(
     guess: &Vec6,
 ) -> Result<Vec6, CoreError> {
     let theta = kp.theta_from_reading(kappa);
-    let opts = FkOptions { eps_c: 1e-13, eps_p: 1e-14, max_iterations: 50 };
+    let opts = FkOptions {
+        eps_c: 1e-13,
+        eps_p: 1e-14,
+        max_iterations: 50,
+    };
     let sol = fk(kp, &theta, guess, &opts)?;
     if sol.residual > 1e-9 {
-        return Err(CoreError::NotConverged { iterations: sol.iterations, residual: sol.residual });
+        return Err(CoreError::NotConverged {
+            iterations: sol.iterations,
+            residual: sol.residual,
+        });
     }
     Ok(sol.pose)
 }
@@ -100,6 +107,7 @@ pub(crate) fn fk_with_derivative(
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
     use rss6_core::{home_pose, ik};
@@ -138,7 +146,10 @@ mod tests {
             let minus = fk_reading(&kp.with_errors(&b), &kappa, &d.pose).unwrap();
             let fd = (plus - minus) / (2.0 * step);
             let an = d.d_b.column(j).into_owned();
-            assert!((fd - an).amax() < 1e-5 * (1.0 + an.amax()), "param {j}: fd {fd} an {an}");
+            assert!(
+                (fd - an).amax() < 1e-5 * (1.0 + an.amax()),
+                "param {j}: fd {fd} an {an}"
+            );
         }
     }
 }

@@ -105,7 +105,13 @@ impl<R: SteppedRobot> Stepped<R> {
     /// Wraps `robot`, assumed at rest at the command `start` (rad). Defaults: 1 s move, 0.5 s settle,
     /// 500 Hz potentiometer sampling.
     pub fn new(robot: R, start: Vec6) -> Self {
-        Stepped { robot, move_time: 1.0, settle_time: 0.5, kappa_rate: 500.0, last_cmd: start }
+        Stepped {
+            robot,
+            move_time: 1.0,
+            settle_time: 0.5,
+            kappa_rate: 500.0,
+            last_cmd: start,
+        }
     }
 }
 
@@ -140,7 +146,7 @@ impl PoseMean {
 
 impl<R: SteppedRobot> RobotSource for Stepped<R> {
     fn measure(&mut self, theta_cmd: &Vec6, dwell: f64) -> Result<ConfigurationData> {
-        if !(dwell > 0.0) || theta_cmd.iter().any(|t| !t.is_finite()) {
+        if dwell.is_nan() || dwell <= 0.0 || theta_cmd.iter().any(|t| !t.is_finite()) {
             return Err(IdentError::InvalidInput(format!(
                 "dwell must be > 0 and the command finite (dwell {dwell}, command {theta_cmd:?})"
             )));
@@ -151,7 +157,8 @@ impl<R: SteppedRobot> RobotSource for Stepped<R> {
         let n_move = ticks(self.move_time).max(1);
         for k in 1..=n_move {
             let s = 0.5 - 0.5 * (std::f64::consts::PI * k as f64 / n_move as f64).cos();
-            self.robot.step_joint_command(&(from + (theta_cmd - from) * s))?;
+            self.robot
+                .step_joint_command(&(from + (theta_cmd - from) * s))?;
         }
         self.last_cmd = *theta_cmd;
         for _ in 0..ticks(self.settle_time) {

@@ -5,9 +5,7 @@
 use crate::closure::fk_reading;
 use crate::data::{ConfigurationData, RobotSource};
 use crate::error::{IdentError, Result};
-use crate::model::{
-    parameter_scale, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION,
-};
+use crate::model::{parameter_scale, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -50,7 +48,12 @@ impl Default for NoiseModel {
 impl NoiseModel {
     /// No noise at all (for exactness tests).
     pub fn none() -> Self {
-        NoiseModel { kappa: 0.0, position: 0.0, angle: 0.0, ..Self::default() }
+        NoiseModel {
+            kappa: 0.0,
+            position: 0.0,
+            angle: 0.0,
+            ..Self::default()
+        }
     }
 }
 
@@ -86,7 +89,10 @@ impl TrueRobot {
 
     /// Target pose in the sensor frame for end-effector pose χ_E: (ᴼχ_C)⁻¹ ∘ χ_E ∘ ᴱχ_t.
     pub fn sensor_pose(&self, pose: &Vec6) -> Vec6 {
-        compose(&compose(&pose_inverse(&self.sensor_in_base), pose), &self.target_in_effector)
+        compose(
+            &compose(&pose_inverse(&self.sensor_in_base), pose),
+            &self.target_in_effector,
+        )
     }
 
     /// True end-effector pose reached from potentiometer readings κ (bits), warm-started at `guess`.
@@ -100,7 +106,11 @@ impl TrueRobot {
 /// An external pose perturbed with Table 4.2's sizes (0.5 mm, 0.017 rad per component).
 pub fn perturb_external(pose: &Vec6, rng: &mut impl Rng) -> Vec6 {
     Vec6::from_fn(|k, _| {
-        let s = if k < 3 { SIGMA_EXT_POSITION } else { SIGMA_EXT_ANGLE };
+        let s = if k < 3 {
+            SIGMA_EXT_POSITION
+        } else {
+            SIGMA_EXT_ANGLE
+        };
         pose[k] + s * normal(rng)
     })
 }
@@ -135,7 +145,7 @@ impl AnalyticRobot {
 
 impl RobotSource for AnalyticRobot {
     fn measure(&mut self, theta_cmd: &Vec6, dwell: f64) -> Result<ConfigurationData> {
-        if !(dwell >= 0.0) || theta_cmd.iter().any(|t| !t.is_finite()) {
+        if dwell.is_nan() || dwell < 0.0 || theta_cmd.iter().any(|t| !t.is_finite()) {
             return Err(IdentError::InvalidInput(format!(
                 "dwell must be >= 0 and the command finite (dwell {dwell}, command {theta_cmd:?})"
             )));
@@ -148,7 +158,10 @@ impl RobotSource for AnalyticRobot {
         let n_k = (dwell * self.noise.kappa_rate).floor().max(1.0);
         let n_c = (dwell * self.noise.camera_rate).floor().max(1.0);
         let sk = self.noise.kappa / n_k.sqrt();
-        let (sp, sa) = (self.noise.position / n_c.sqrt(), self.noise.angle / n_c.sqrt());
+        let (sp, sa) = (
+            self.noise.position / n_c.sqrt(),
+            self.noise.angle / n_c.sqrt(),
+        );
         let rng = &mut self.rng;
         let kappa_meas = kappa.map(|k| k + sk * normal(rng));
         let mut cam = self.truth.sensor_pose(&pose);

@@ -19,6 +19,7 @@ mod data;
 mod error;
 mod generator;
 mod model;
+mod plant;
 mod se3;
 mod selection;
 mod study;
@@ -42,10 +43,15 @@ pub use crate::model::{
     gauge_aligned_error, parameter_names, parameter_scale, GAUGE_DESCRIPTIONS, N_GAUGE,
     SIGMA_DTHETA, SIGMA_ETA, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION, SIGMA_LENGTH,
 };
+pub use crate::plant::{plant_nominal_target, random_plant, sim_source, SimRobot};
 pub use crate::selection::{
     observability_index, select_configurations, select_configurations_with, stroke, stroke_with,
     SelectionOptions, SelectionReport, StrokeOptions,
 };
 
-pub use crate::study::{mean_p95, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow};
-pub use crate::validate::{relative_pose_errors, test_configurations, RelativePoseErrors};
+pub use crate::study::{
+    mean_p95, run_plant_robot, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow,
+};
+pub use crate::validate::{
+    relative_pose_errors, result_relative_pose_errors, test_configurations, RelativePoseErrors,
+};

@@ -21,7 +21,9 @@
 use crate::error::Method;
 use crate::se3::iso;
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use rss6_core::{compose, isometry_to_pose, pose_inverse, KinematicParams, Vec6, LEGS, N_KIN_ERRORS};
+use rss6_core::{
+    compose, isometry_to_pose, pose_inverse, KinematicParams, Vec6, LEGS, N_KIN_ERRORS,
+};
 
 /// Number of gauge (frame-choice) directions: 4 for the base frame, 6 for the end-effector frame.
 pub const N_GAUGE: usize = 10;
@@ -68,7 +70,12 @@ impl Layout {
         self.n() - 6
     }
 
-    pub(crate) fn pack(&self, kp: &KinematicParams, sensor: Option<&Vec6>, target: &Vec6) -> DVector<f64> {
+    pub(crate) fn pack(
+        &self,
+        kp: &KinematicParams,
+        sensor: Option<&Vec6>,
+        target: &Vec6,
+    ) -> DVector<f64> {
         let mut x = DVector::zeros(self.n());
         let b = kp.errors_from(&self.reference);
         x.rows_mut(0, N_KIN_ERRORS).copy_from_slice(&b);
@@ -90,7 +97,8 @@ impl Layout {
     }
 
     pub(crate) fn sensor(&self, x: &DVector<f64>) -> Option<Vec6> {
-        self.sensor_offset().map(|o| Vec6::from_iterator(x.rows(o, 6).iter().copied()))
+        self.sensor_offset()
+            .map(|o| Vec6::from_iterator(x.rows(o, 6).iter().copied()))
     }
 
     pub(crate) fn target(&self, x: &DVector<f64>) -> Vec6 {
@@ -99,7 +107,7 @@ impl Layout {
 
     /// Table 4.2 standard deviation of every parameter (the column scaling of the solver).
     pub(crate) fn scales(&self) -> DVector<f64> {
-        DVector::from_iterator(self.n(), (0..self.n()).map(|j| parameter_scale(j)))
+        DVector::from_iterator(self.n(), (0..self.n()).map(parameter_scale))
     }
 
     pub(crate) fn names(&self) -> Vec<String> {
@@ -122,7 +130,9 @@ impl Layout {
             let a = h_inv * Point3::from(kp.platform_joints[i]);
             kp.platform_joints[i] = a.coords;
         }
-        let sensor = self.sensor(x).map(|s| compose(&isometry_to_pose(&base), &s));
+        let sensor = self
+            .sensor(x)
+            .map(|s| compose(&isometry_to_pose(&base), &s));
         let target = compose(&pose_inverse(&h), &self.target(x));
         self.pack(&kp, sensor.as_ref(), &target)
     }
@@ -159,6 +169,30 @@ impl Layout {
             g.row_mut(j).scale_mut(inv);
         }
         complement_basis(&g)
+    }
+
+    /// Free basis when the sensor pose ᴼχ_C is held fixed (implicit only): the base-frame gauge is
+    /// then resolved by the fixed sensor, leaving the 6 end-effector gauge directions and the 6 pinned
+    /// coordinates to remove (n − 12 free directions).
+    pub(crate) fn free_basis_fixed_sensor(&self, x: &DVector<f64>) -> DMatrix<f64> {
+        let Some(o) = self.sensor_offset() else {
+            return self.free_basis(x);
+        };
+        let s = self.scales();
+        let g = self.gauge_basis(x);
+        let mut m = DMatrix::zeros(self.n(), 12);
+        for k in 0..6 {
+            let mut col = g.column(4 + k).into_owned();
+            for j in 0..self.n() {
+                col[j] /= s[j];
+            }
+            for j in o..o + 6 {
+                col[j] = 0.0;
+            }
+            m.set_column(k, &col);
+            m[(o + k, 6 + k)] = 1.0;
+        }
+        complement_basis(&m)
     }
 }
 
@@ -259,7 +293,10 @@ pub fn gauge_aligned_error(
     let scaled = |d: &DVector<f64>| d.component_div(&s);
     let diff = |x: &DVector<f64>| {
         let mut d = x - truth;
-        for o in [layout.sensor_offset(), Some(layout.target_offset())].into_iter().flatten() {
+        for o in [layout.sensor_offset(), Some(layout.target_offset())]
+            .into_iter()
+            .flatten()
+        {
             for k in 3..6 {
                 d[o + k] = rss6_core::wrap_angle(d[o + k]);
             }

@@ -64,6 +64,7 @@ pub(crate) fn pose_difference(a: &Vec6, b: &Vec6) -> Vec6 {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
     use rss6_core::{compose, isometry_to_pose};
@@ -89,7 +90,11 @@ mod tests {
             xi[k] = -h;
             let minus = isometry_to_pose(&perturb(&iso(&pose), &xi));
             let fd = (plus - minus) / (2.0 * h);
-            assert!((fd - d.column(k)).amax() < 1e-6, "column {k}: {fd} vs {}", d.column(k));
+            assert!(
+                (fd - d.column(k)).amax() < 1e-6,
+                "column {k}: {fd} vs {}",
+                d.column(k)
+            );
         }
     }
 

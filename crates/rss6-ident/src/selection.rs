@@ -72,7 +72,8 @@ fn check_point(
     }
     let a2 = g.j_a2();
     let det = a2.determinant();
-    if !(det / det_home > opts.singular_margin) {
+    let rel = det / det_home;
+    if rel.is_nan() || rel <= opts.singular_margin {
         return Err("type-II singularity (det J_a2 sign change or near zero)");
     }
     let Some(a2_inv) = a2.try_inverse() else {
@@ -90,7 +91,9 @@ fn check_point(
 fn det_home(kp: &KinematicParams) -> Result<f64> {
     let pose = fk_reading(kp, &kp.reading_from_theta(&Vec6::zeros()), &home_pose())
         .map_err(IdentError::Core)?;
-    Ok(LegGeometry::from_pose_and_theta(kp, &pose, &Vec6::zeros()).j_a2().determinant())
+    Ok(LegGeometry::from_pose_and_theta(kp, &pose, &Vec6::zeros())
+        .j_a2()
+        .determinant())
 }
 
 /// Whether the whole box [lo, hi]⁶ satisfies the constraints: every vertex reached along a straight
@@ -175,7 +178,11 @@ pub struct SelectionOptions {
 
 impl Default for SelectionOptions {
     fn default() -> Self {
-        SelectionOptions { start: 13, candidates: 5000, stroke: None }
+        SelectionOptions {
+            start: 13,
+            candidates: 5000,
+            stroke: None,
+        }
     }
 }
 
@@ -231,7 +238,13 @@ impl Blocks {
         let sensor = Vec6::from(NOMINAL_SENSOR_IN_BASE);
         let x = layout.pack(kp, Some(&sensor), &Vec6::from(NOMINAL_TARGET_IN_EFFECTOR));
         let q = layout.free_basis(&x);
-        Blocks { method, kp: *kp, x, q, s: layout.scales() }
+        Blocks {
+            method,
+            kp: *kp,
+            x,
+            q,
+            s: layout.scales(),
+        }
     }
 
     fn free(&self) -> usize {
@@ -245,8 +258,13 @@ impl Blocks {
             Method::Implicit => vec![*theta, *theta],
         };
         let data = nominal_data(&self.kp, &thetas)?;
-        let (_, mut j) =
-            residuals_and_jacobian(self.method, &data, &self.kp, &self.x, JacobianMode::Analytic)?;
+        let (_, mut j) = residuals_and_jacobian(
+            self.method,
+            &data,
+            &self.kp,
+            &self.x,
+            JacobianMode::Analytic,
+        )?;
         for c in 0..j.ncols() {
             j.column_mut(c).scale_mut(self.s[c]);
         }
@@ -275,11 +293,15 @@ fn index_from_gram(gram: &DMatrix<f64>, m: usize) -> f64 {
 /// for `method`, on the gauge-reduced Jacobian scaled by Table 4.2 (ς = 56 for RPBA, 62 implicit).
 pub fn observability_index(kp: &KinematicParams, method: Method, thetas: &[Vec6]) -> Result<f64> {
     if thetas.len() < 2 {
-        return Err(IdentError::InvalidInput("need the initial and at least one more configuration".into()));
+        return Err(IdentError::InvalidInput(
+            "need the initial and at least one more configuration".into(),
+        ));
     }
     let blocks = Blocks::new(method, kp);
     let (grams, m) = set_grams(&blocks, thetas)?;
-    let sum = grams.iter().fold(DMatrix::zeros(blocks.free(), blocks.free()), |a, g| a + g);
+    let sum = grams
+        .iter()
+        .fold(DMatrix::zeros(blocks.free(), blocks.free()), |a, g| a + g);
     Ok(index_from_gram(&sum, m))
 }
 
@@ -288,7 +310,10 @@ fn set_grams(blocks: &Blocks, thetas: &[Vec6]) -> Result<(Vec<DMatrix<f64>>, usi
         Method::Rpba => thetas.get(1..).unwrap_or(&[]),
         Method::Implicit => thetas,
     };
-    let grams = members.iter().map(|t| blocks.gram(t)).collect::<Result<Vec<_>>>()?;
+    let grams = members
+        .iter()
+        .map(|t| blocks.gram(t))
+        .collect::<Result<Vec<_>>>()?;
     let m = grams.len();
     Ok((grams, m))
 }
@@ -313,7 +338,9 @@ pub fn select_configurations_with(
         None => stroke(kp)?,
     };
     if !(stroke.0 < 0.0 && stroke.1 > 0.0) {
-        return Err(IdentError::InvalidInput(format!("stroke {stroke:?} must contain 0")));
+        return Err(IdentError::InvalidInput(format!(
+            "stroke {stroke:?} must contain 0"
+        )));
     }
     let blocks = Blocks::new(method, kp);
     let dh = det_home(kp)?;
@@ -328,7 +355,9 @@ pub fn select_configurations_with(
                 }
             }
         }
-        Err(IdentError::InvalidInput("no feasible configuration found in the stroke".into()))
+        Err(IdentError::InvalidInput(
+            "no feasible configuration found in the stroke".into(),
+        ))
     };
     let base = match method {
         Method::Rpba => DMatrix::zeros(blocks.free(), blocks.free()),
@@ -377,5 +406,11 @@ pub fn select_configurations_with(
     let mut thetas = vec![Vec6::zeros()];
     thetas.extend(set.iter().map(|(t, _)| *t));
     let _ = N_GAUGE;
-    Ok(SelectionReport { thetas, index, iterations: opts.candidates, last_improvement, stroke })
+    Ok(SelectionReport {
+        thetas,
+        index,
+        iterations: opts.candidates,
+        last_improvement,
+        stroke,
+    })
 }

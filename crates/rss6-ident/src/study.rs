@@ -1,13 +1,9 @@
 //! The simulation study of §4.4.3 (Tables 4.3–4.5), repeated over random robots in parallel (rayon).
 
-use crate::calibrate::{
-    implicit, parameter_vector, residual_norm_sum, rpba, CalibrationOptions,
-};
+use crate::calibrate::{implicit, parameter_vector, residual_norm_sum, rpba, CalibrationOptions};
 use crate::data::{collect, RobotSource};
 use crate::error::{Method, Result};
-use crate::generator::{
-    perturb_external, AnalyticRobot, NoiseModel, TrueRobot, NOMINAL_TARGET_IN_EFFECTOR,
-};
+use crate::generator::{perturb_external, AnalyticRobot, NoiseModel, TrueRobot};
 use crate::model::gauge_aligned_error;
 use crate::validate::relative_pose_errors;
 use rand::SeedableRng;
@@ -36,6 +32,9 @@ pub struct StudyOptions {
     pub stroke: (f64, f64),
     /// Solver options for both methods.
     pub solver: CalibrationOptions,
+    /// Nominal ᴱχ_t: the starting guess of both methods and the uncalibrated model's target
+    /// ([`crate::NOMINAL_TARGET_IN_EFFECTOR`] for the analytic generator, the simulator's default on the plant).
+    pub target_nominal: [f64; 6],
 }
 
 /// One robot's results: Tables 4.3, 4.4 and 4.5 entries.
@@ -61,6 +60,8 @@ pub struct StudyRow {
     pub rms_implicit: [f64; 6],
     /// Table 4.5, RPBA.
     pub rms_rpba: [f64; 6],
+    /// Table 4.5, implicit with ᴼχ_C held at its rough guess (not estimated): the thesis's setting.
+    pub rms_implicit_fixed_sensor: [f64; 6],
     /// LM iterations (implicit, RPBA).
     pub iterations: (usize, usize),
     /// Jacobian ranks at the solution (implicit of 72, RPBA of 66).
@@ -69,12 +70,11 @@ pub struct StudyRow {
 
 /// Runs the study for one robot: draw the truth, collect both data sets from the analytic generator,
 /// calibrate with both methods, evaluate Tables 4.3–4.5.
-pub fn run_robot(
-    nominal: &KinematicParams,
-    opts: &StudyOptions,
-    robot: usize,
-) -> Result<StudyRow> {
-    let seed = opts.seed.wrapping_add(robot as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+pub fn run_robot(nominal: &KinematicParams, opts: &StudyOptions, robot: usize) -> Result<StudyRow> {
+    let seed = opts
+        .seed
+        .wrapping_add(robot as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let truth = TrueRobot::draw(nominal, &mut rng);
     let mut source = AnalyticRobot::new(truth, *nominal, opts.noise, seed ^ 0xDA7A);
@@ -92,11 +92,23 @@ pub fn run_robot_with_source(
 ) -> Result<StudyRow> {
     let data_r = collect(source, &opts.rpba_thetas, opts.dwell)?;
     let data_i = collect(source, &opts.implicit_thetas, opts.dwell)?;
-    let target0 = Vec6::from(NOMINAL_TARGET_IN_EFFECTOR);
+    let target0 = Vec6::from(opts.target_nominal);
     let sensor_guess = perturb_external(&truth.sensor_in_base, rng);
-    let solver = CalibrationOptions { target_guess: target0.into(), ..opts.solver };
+    let solver = CalibrationOptions {
+        target_guess: target0.into(),
+        ..opts.solver
+    };
     let res_i = implicit(&data_i, nominal, &sensor_guess, &solver)?;
     let res_r = rpba(&data_r, nominal, &solver)?;
+    let res_if = implicit(
+        &data_i,
+        nominal,
+        &sensor_guess,
+        &CalibrationOptions {
+            fix_sensor_pose: true,
+            ..solver
+        },
+    )?;
 
     let param_errors = |method: Method,
                         sensor0: Option<&Vec6>,
@@ -123,10 +135,21 @@ pub fn run_robot_with_source(
         res_i.sensor_in_base.as_ref(),
         &res_i.target_in_effector,
     );
-    let (rpba_param_error, rpba_param_error_si) =
-        param_errors(Method::Rpba, None, &res_r.params, None, &res_r.target_in_effector);
+    let (rpba_param_error, rpba_param_error_si) = param_errors(
+        Method::Rpba,
+        None,
+        &res_r.params,
+        None,
+        &res_r.target_in_effector,
+    );
     let implicit_residual = (
-        residual_norm_sum(Method::Implicit, &data_i, nominal, Some(&sensor_guess), &target0)?,
+        residual_norm_sum(
+            Method::Implicit,
+            &data_i,
+            nominal,
+            Some(&sensor_guess),
+            &target0,
+        )?,
         residual_norm_sum(
             Method::Implicit,
             &data_i,
@@ -144,8 +167,20 @@ pub fn run_robot_with_source(
     );
     let rpba_residual = (
         residual_norm_sum(Method::Rpba, &data_r, nominal, None, &target0)?,
-        residual_norm_sum(Method::Rpba, &data_r, &res_r.params, None, &res_r.target_in_effector)?,
-        residual_norm_sum(Method::Rpba, &data_r, &truth.kp, None, &truth.target_in_effector)?,
+        residual_norm_sum(
+            Method::Rpba,
+            &data_r,
+            &res_r.params,
+            None,
+            &res_r.target_in_effector,
+        )?,
+        residual_norm_sum(
+            Method::Rpba,
+            &data_r,
+            &truth.kp,
+            None,
+            &truth.target_in_effector,
+        )?,
     );
     let rel = |kp: &KinematicParams, target: &Vec6| {
         relative_pose_errors(
@@ -170,14 +205,35 @@ pub fn run_robot_with_source(
         rms_uncalibrated: rel(nominal, &target0)?,
         rms_implicit: rel(&res_i.params, &res_i.target_in_effector)?,
         rms_rpba: rel(&res_r.params, &res_r.target_in_effector)?,
+        rms_implicit_fixed_sensor: rel(&res_if.params, &res_if.target_in_effector)?,
         iterations: (res_i.iterations, res_r.iterations),
         ranks: (res_i.rank, res_r.rank),
     })
 }
 
+/// [`run_robot`] on the rapier plant: the truth is drawn the same way (Table 4.2 around `nominal`,
+/// external poses around the simulator's defaults) and the data come from the plant's PID, potentiometers
+/// and stereo CMM through [`crate::Stepped`]. Set `opts.target_nominal` to [`crate::plant_nominal_target`].
+pub fn run_plant_robot(
+    nominal: &KinematicParams,
+    opts: &StudyOptions,
+    robot: usize,
+) -> Result<StudyRow> {
+    let seed = opts
+        .seed
+        .wrapping_add(robot as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut source, truth) = crate::plant::random_plant(nominal, &mut rng, seed ^ 0xDA7A)?;
+    run_robot_with_source(nominal, opts, robot, &truth, &mut source, &mut rng)
+}
+
 /// Runs [`run_robot`] for robots 0..`opts.robots` in parallel.
 pub fn run_study(nominal: &KinematicParams, opts: &StudyOptions) -> Vec<Result<StudyRow>> {
-    (0..opts.robots).into_par_iter().map(|r| run_robot(nominal, opts, r)).collect()
+    (0..opts.robots)
+        .into_par_iter()
+        .map(|r| run_robot(nominal, opts, r))
+        .collect()
 }
 
 /// Mean and 95th percentile (nearest rank) of `values`.

@@ -3,8 +3,8 @@
 //! 1. n random test relative configurations M_n^l (target frame relative to the initial
 //!    configuration) are drawn: random joint vectors inside the stroke, mapped through the nominal
 //!    model (eq. 4.17).
-//! 2.–3. For a model (kinematic parameters and ᴱχ_t), the commanded readings are
-//!    κ^l = IK_model(ᴼM_E⁰·ᴱM_t·M_n^l·ᴱM_t⁻¹), with ᴼM_E⁰ = FK_model(κ⁰).
+//! 2. For a model (kinematic parameters and ᴱχ_t) and the initial readings κ⁰, ᴼM_E⁰ = FK_model(κ⁰).
+//! 3. The commanded readings are κ^l = IK_model(ᴼM_E⁰·ᴱM_t·M_n^l·ᴱM_t⁻¹).
 //! 4. The true robot executes κ^l; its realised relative pose M^l (eq. 4.17 with the true parameters)
 //!    is compared with M_n^l: error = L(M^l) − L(M_n^l).
 
@@ -30,7 +30,29 @@ pub struct RelativePoseErrors {
 /// Random test configurations: joint vectors uniform in `stroke` (rad, nominal convention).
 pub fn test_configurations(n: usize, seed: u64, stroke: (f64, f64)) -> Vec<Vec6> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..n).map(|_| Vec6::from_fn(|_, _| rng.random_range(stroke.0..stroke.1))).collect()
+    (0..n)
+        .map(|_| Vec6::from_fn(|_, _| rng.random_range(stroke.0..stroke.1)))
+        .collect()
+}
+
+/// [`relative_pose_errors`] of a calibration result on `truth`, with its starting parameters as the
+/// nominal model and the test configurations drawn inside [`crate::stroke`] of them.
+pub fn result_relative_pose_errors(
+    result: &crate::CalibrationResult,
+    truth: &TrueRobot,
+    n: usize,
+    seed: u64,
+) -> Result<RelativePoseErrors> {
+    let stroke = crate::stroke(&result.reference)?;
+    relative_pose_errors(
+        &result.params,
+        &result.target_in_effector,
+        truth,
+        &result.reference,
+        n,
+        seed,
+        stroke,
+    )
 }
 
 /// RMS relative pose errors (Table 4.5) of the model (`params`, `target_in_effector`) on the true
@@ -45,7 +67,7 @@ pub fn relative_pose_errors(
     seed: u64,
     stroke: (f64, f64),
 ) -> Result<RelativePoseErrors> {
-    if n == 0 || !(stroke.0 < stroke.1) {
+    if n == 0 || stroke.0.is_nan() || stroke.1.is_nan() || stroke.0 >= stroke.1 {
         return Err(IdentError::InvalidInput(format!(
             "need n > 0 and a non-empty stroke (n {n}, stroke {stroke:?})"
         )));
@@ -81,7 +103,10 @@ pub fn relative_pose_errors(
             continue;
         };
         let m = (iso(&e0_true) * mt_true).inverse() * iso(&el_true) * mt_true;
-        errors.push(pose_difference(&isometry_to_pose(&m), &isometry_to_pose(&m_n)));
+        errors.push(pose_difference(
+            &isometry_to_pose(&m),
+            &isometry_to_pose(&m_n),
+        ));
     }
     if errors.len() * 2 < n {
         return Err(IdentError::InvalidInput(format!(
@@ -93,5 +118,9 @@ pub fn relative_pose_errors(
     for (k, r) in rms.iter_mut().enumerate() {
         *r = (errors.iter().map(|e| e[k] * e[k]).sum::<f64>() / errors.len() as f64).sqrt();
     }
-    Ok(RelativePoseErrors { rms, errors, skipped })
+    Ok(RelativePoseErrors {
+        rms,
+        errors,
+        skipped,
+    })
 }

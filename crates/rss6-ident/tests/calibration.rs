@@ -1,4 +1,10 @@
 //! Integration tests of the calibration methods on the analytic generator.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -19,7 +25,10 @@ fn configurations(n: usize, seed: u64) -> Vec<Vec6> {
 fn robot(seed: u64, noise: NoiseModel) -> (TrueRobot, AnalyticRobot) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let truth = TrueRobot::draw(&nominal(), &mut rng);
-    (truth, AnalyticRobot::new(truth, nominal(), noise, seed + 1000))
+    (
+        truth,
+        AnalyticRobot::new(truth, nominal(), noise, seed + 1000),
+    )
 }
 
 fn truth_vector(method: Method, truth: &TrueRobot) -> nalgebra::DVector<f64> {
@@ -91,8 +100,16 @@ fn jacobian_null_space_is_exactly_the_ten_gauge_directions() {
         let mut sv: Vec<f64> = js.singular_values().iter().copied().collect();
         sv.sort_by(|a, b| b.total_cmp(a));
         let n = j.ncols();
-        assert!(sv[n - N_GAUGE - 1] / sv[0] > 1e-5, "{method}: weakest identifiable {:.2e}", sv[n - 11] / sv[0]);
-        assert!(sv[n - N_GAUGE] / sv[0] < 1e-12, "{method}: gauge σ {:.2e}", sv[n - 10] / sv[0]);
+        assert!(
+            sv[n - N_GAUGE - 1] / sv[0] > 1e-5,
+            "{method}: weakest identifiable {:.2e}",
+            sv[n - 11] / sv[0]
+        );
+        assert!(
+            sv[n - N_GAUGE] / sv[0] < 1e-12,
+            "{method}: gauge σ {:.2e}",
+            sv[n - 10] / sv[0]
+        );
     }
 }
 
@@ -105,12 +122,38 @@ fn noise_free_data_recover_the_true_robot_up_to_gauge() {
     let r = rpba(&data, &nominal(), &opts).unwrap();
     assert_eq!(r.rank, 56);
     assert!(r.dropped.is_empty());
-    let x = parameter_vector(Method::Rpba, &nominal(), &r.params, None, &r.target_in_effector);
-    let (err, _) = gauge_aligned_error(Method::Rpba, &nominal(), &x, &truth_vector(Method::Rpba, &truth));
+    let x = parameter_vector(
+        Method::Rpba,
+        &nominal(),
+        &r.params,
+        None,
+        &r.target_in_effector,
+    );
+    let (err, _) = gauge_aligned_error(
+        Method::Rpba,
+        &nominal(),
+        &x,
+        &truth_vector(Method::Rpba, &truth),
+    );
     assert!(err < 1e-6, "RPBA gauge-aligned error {err:.3e} σ");
-    let e = relative_pose_errors(&r.params, &r.target_in_effector, &truth, &nominal(), 50, 1, (-0.45, 0.45))
-        .unwrap();
+    let e = relative_pose_errors(
+        &r.params,
+        &r.target_in_effector,
+        &truth,
+        &nominal(),
+        50,
+        1,
+        (-0.45, 0.45),
+    )
+    .unwrap();
     assert!(e.rms.iter().all(|&v| v < 1e-9), "{:?}", e.rms);
+    assert_eq!(r.reference, nominal());
+    let e = result_relative_pose_errors(&r, &truth, 20, 3).unwrap();
+    assert!(
+        e.rms.iter().all(|&v| v < 1e-9) && e.errors.len() + e.skipped == 20,
+        "{:?}",
+        e.rms
+    );
 
     let mut rng = ChaCha8Rng::seed_from_u64(77);
     let guess = perturb_external(&truth.sensor_in_base, &mut rng);
@@ -123,8 +166,12 @@ fn noise_free_data_recover_the_true_robot_up_to_gauge() {
         ri.sensor_in_base.as_ref(),
         &ri.target_in_effector,
     );
-    let (err, _) =
-        gauge_aligned_error(Method::Implicit, &nominal(), &x, &truth_vector(Method::Implicit, &truth));
+    let (err, _) = gauge_aligned_error(
+        Method::Implicit,
+        &nominal(),
+        &x,
+        &truth_vector(Method::Implicit, &truth),
+    );
     assert!(err < 1e-6, "implicit gauge-aligned error {err:.3e} σ");
     // the cost history is monotone and ends near zero
     assert!(ri.cost_history.windows(2).all(|w| w[1] <= w[0]));
@@ -143,17 +190,32 @@ fn light_study_meets_table_4_5_for_rpba_and_improves_both_methods() {
         test_configurations: 40,
         stroke: (-0.45, 0.45),
         solver: CalibrationOptions::default(),
+        target_nominal: NOMINAL_TARGET_IN_EFFECTOR,
     };
     let thesis = [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5];
     for row in run_study(&nominal(), &opts) {
         let row = row.unwrap();
         for k in 0..6 {
-            assert!(row.rms_rpba[k] <= thesis[k], "robot {} axis {k}: {:?}", row.robot, row.rms_rpba);
+            assert!(
+                row.rms_rpba[k] <= thesis[k],
+                "robot {} axis {k}: {:?}",
+                row.robot,
+                row.rms_rpba
+            );
             assert!(row.rms_rpba[k] * 50.0 < row.rms_uncalibrated[k], "{row:?}");
-            assert!(row.rms_implicit[k] * 50.0 < row.rms_uncalibrated[k], "{row:?}");
+            assert!(
+                row.rms_implicit[k] * 50.0 < row.rms_uncalibrated[k],
+                "{row:?}"
+            );
         }
-        assert!(row.rpba_param_error.1 < 0.2 * row.rpba_param_error.0, "{row:?}");
-        assert!(row.implicit_param_error.1 < 0.5 * row.implicit_param_error.0, "{row:?}");
+        assert!(
+            row.rpba_param_error.1 < 0.2 * row.rpba_param_error.0,
+            "{row:?}"
+        );
+        assert!(
+            row.implicit_param_error.1 < 0.5 * row.implicit_param_error.0,
+            "{row:?}"
+        );
         assert_eq!(row.ranks, (62, 56));
     }
 }
@@ -172,9 +234,24 @@ fn too_few_configurations_names_the_count_needed() {
         e => panic!("unexpected {e}"),
     }
     assert!(err.to_string().contains("need at least 11"), "{err}");
-    let err = implicit(&data, &nominal(), &NOMINAL_SENSOR_IN_BASE.into(), &CalibrationOptions::default())
-        .unwrap_err();
-    assert!(matches!(err, IdentError::TooFewConfigurations { got: 10, needed: 11, .. }), "{err}");
+    let err = implicit(
+        &data,
+        &nominal(),
+        &NOMINAL_SENSOR_IN_BASE.into(),
+        &CalibrationOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            IdentError::TooFewConfigurations {
+                got: 10,
+                needed: 11,
+                ..
+            }
+        ),
+        "{err}"
+    );
 }
 
 #[test]
@@ -191,8 +268,16 @@ fn nan_and_missing_frames_are_dropped_and_reported() {
     assert_eq!(idx, vec![3, 7, 9]);
     assert!(r.dropped[1].reason.contains("no camera frame"));
     assert!(!r.used.contains(&3) && r.used.len() == 14);
-    let e = relative_pose_errors(&r.params, &r.target_in_effector, &truth, &nominal(), 30, 2, (-0.45, 0.45))
-        .unwrap();
+    let e = relative_pose_errors(
+        &r.params,
+        &r.target_in_effector,
+        &truth,
+        &nominal(),
+        30,
+        2,
+        (-0.45, 0.45),
+    )
+    .unwrap();
     assert!(e.rms[0] < 0.053e-3, "{:?}", e.rms);
 
     // a bad reference configuration is an error, not a silent drop
@@ -208,12 +293,22 @@ fn configuration_where_fk_fails_is_dropped_and_reported() {
     // readings of an unassemblable configuration
     let th = Vec6::new(-1.0, 1.0, 1.0, 1.0, -1.0, 1.0);
     let bad = nominal().reading_from_theta(&th);
-    assert!(rss6_core::fk(&nominal(), &th, &rss6_core::home_pose(), &Default::default()).is_err());
+    assert!(rss6_core::fk(
+        &nominal(),
+        &th,
+        &rss6_core::home_pose(),
+        &Default::default()
+    )
+    .is_err());
     data.configurations[5].kappa = bad.into();
     let r = rpba(&data, &nominal(), &CalibrationOptions::default()).unwrap();
     assert_eq!(r.dropped.len(), 1);
     assert_eq!(r.dropped[0].index, 5);
-    assert!(r.dropped[0].reason.contains("forward kinematics"), "{}", r.dropped[0].reason);
+    assert!(
+        r.dropped[0].reason.contains("forward kinematics"),
+        "{}",
+        r.dropped[0].reason
+    );
 }
 
 #[test]
@@ -227,10 +322,17 @@ fn rank_deficient_data_name_the_unseen_parameters() {
     let data = collect(&mut src, &thetas, 0.0).unwrap();
     let err = rpba(&data, &nominal(), &CalibrationOptions::default()).unwrap_err();
     match &err {
-        IdentError::RankDeficient { rank, expected, unseen } => {
+        IdentError::RankDeficient {
+            rank,
+            expected,
+            unseen,
+        } => {
             assert_eq!(*expected, 56);
             assert!(*rank < 56);
-            assert!(unseen.iter().any(|u| u == "deta3" || u == "dtheta3"), "{unseen:?}");
+            assert!(
+                unseen.iter().any(|u| u == "deta3" || u == "dtheta3"),
+                "{unseen:?}"
+            );
         }
         e => panic!("unexpected {e}"),
     }
@@ -246,6 +348,9 @@ fn calibration_data_round_trips_through_serde() {
     let back: CalibrationData = serde_json::from_str(&s).unwrap();
     assert_eq!(back, data);
 }
+
+/// α close to π so that the ±1e-4 samples straddle the ±π wrap.
+const ALPHA: f64 = std::f64::consts::PI - 4e-5;
 
 /// A stepped robot with deterministic alternating noise, camera every 34 ticks.
 struct Mock {
@@ -266,7 +371,7 @@ impl SteppedRobot for Mock {
     fn camera(&mut self) -> Option<Vec6> {
         if self.tick % 34 == 0 {
             let s = if (self.tick / 34) % 2 == 0 { 1.0 } else { -1.0 };
-            Some(Vec6::new(0.1, 0.2, 0.3, 3.14159, 0.0, 0.0) + Vec6::repeat(1e-4 * s))
+            Some(Vec6::new(0.1, 0.2, 0.3, ALPHA, 0.0, 0.0) + Vec6::repeat(1e-4 * s))
         } else {
             None
         }
@@ -280,16 +385,27 @@ impl SteppedRobot for Mock {
 #[test]
 fn stepped_adapter_averages_over_the_dwell() {
     let kp = nominal();
-    let mut src = Stepped::new(Mock { tick: 0, cmd: Vec6::zeros(), kp }, Vec6::zeros());
+    let mut src = Stepped::new(
+        Mock {
+            tick: 0,
+            cmd: Vec6::zeros(),
+            kp,
+        },
+        Vec6::zeros(),
+    );
     let th = Vec6::new(0.1, -0.2, 0.3, 0.0, 0.05, -0.1);
     let c = src.measure(&th, 2.0).unwrap();
     assert_eq!(c.kappa_samples, 1000);
-    assert!((c.camera_frames as i64 - 59).abs() <= 1, "{}", c.camera_frames);
+    assert!(
+        (c.camera_frames as i64 - 59).abs() <= 1,
+        "{}",
+        c.camera_frames
+    );
     let expect = kp.reading_from_theta(&th);
     assert!((c.kappa_vec() - expect).amax() < 1e-9);
     let p = c.sensor_pose_vec().unwrap();
     // α near π averaged without a wrap-around jump
-    assert!((p[3].abs() - 3.14159).abs() < 2e-4, "{p}");
+    assert!((p[3].abs() - ALPHA).abs() < 2e-4, "{p}");
     assert!((p[0] - 0.1).abs() < 2e-4);
     assert!(src.measure(&th, 0.0).is_err());
 }
@@ -298,16 +414,26 @@ fn stepped_adapter_averages_over_the_dwell() {
 fn selection_returns_the_initial_configuration_first_and_raises_o1() {
     let kp = nominal();
     let s = (-0.5, 0.5);
-    let opts = SelectionOptions { start: 13, candidates: 150, stroke: Some(s) };
+    let opts = SelectionOptions {
+        start: 13,
+        candidates: 150,
+        stroke: Some(s),
+    };
     for method in [Method::Rpba, Method::Implicit] {
         let rep = select_configurations_with(&kp, method, 3, &opts).unwrap();
         assert_eq!(rep.thetas[0], Vec6::zeros());
-        assert!(rep.thetas.iter().all(|t| t.iter().all(|v| *v >= s.0 && *v <= s.1)));
+        assert!(rep
+            .thetas
+            .iter()
+            .all(|t| t.iter().all(|v| *v >= s.0 && *v <= s.1)));
         let o1 = observability_index(&kp, method, &rep.thetas).unwrap();
         assert!((o1 - rep.index).abs() < 1e-9 * o1, "{o1} vs {}", rep.index);
         let random = configurations(rep.thetas.len() - 1, 123);
         let o1_random = observability_index(&kp, method, &random).unwrap();
-        assert!(o1 > o1_random, "{method}: selected {o1} vs random {o1_random}");
+        assert!(
+            o1 > o1_random,
+            "{method}: selected {o1} vs random {o1_random}"
+        );
         for t in &rep.thetas {
             assert!(rss6_core::fk(&kp, t, &rss6_core::home_pose(), &Default::default()).is_ok());
         }
@@ -317,19 +443,32 @@ fn selection_returns_the_initial_configuration_first_and_raises_o1() {
 #[test]
 fn stroke_box_is_feasible_and_tight() {
     let kp = nominal();
-    let opts = StrokeOptions { bisection_steps: 7, random_points: 16, path_steps: 8, ..Default::default() };
+    let opts = StrokeOptions {
+        bisection_steps: 7,
+        random_points: 16,
+        path_steps: 8,
+        ..Default::default()
+    };
     let (lo, hi) = stroke_with(&kp, &opts).unwrap();
-    assert!(lo < -0.3 && hi > 0.3 && lo > -1.2 && hi < 1.2, "({lo}, {hi})");
+    assert!(
+        lo < -0.3 && hi > 0.3 && lo > -1.2 && hi < 1.2,
+        "({lo}, {hi})"
+    );
     let sign = [1.0, -1.0, 1.0, -1.0, 1.0, -1.0];
     let vertex_ok = |s: f64, v: u32| {
         let th = Vec6::from_fn(|i, _| if v & (1 << i) != 0 { s * hi } else { s * lo });
         let Ok(sol) = rss6_core::fk(&kp, &th, &rss6_core::home_pose(), &Default::default()) else {
             return false;
         };
-        let Ok(back) = ik(&kp, &sol.pose) else { return false };
+        let Ok(back) = ik(&kp, &sol.pose) else {
+            return false;
+        };
         let a1 = rss6_core::jacobian_a1(&kp, &sol.pose).unwrap();
         (back - th).amax() < 1e-7 && (0..6).all(|i| a1[i] * sign[i] > 0.0)
     };
     assert!((0..64).all(|v| vertex_ok(1.0, v)));
-    assert!(!(0..64).all(|v| vertex_ok(1.3, v)), "a 30 % larger box should leave the feasible region");
+    assert!(
+        !(0..64).all(|v| vertex_ok(1.3, v)),
+        "a 30 % larger box should leave the feasible region"
+    );
 }
