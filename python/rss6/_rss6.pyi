@@ -420,4 +420,5 @@ def calibration_study(
     dwell: float = 2.0,
     test_configurations: int = 100,
     stroke: tuple[float, float] | None = None,
+    plant: bool = False,
 ) -> list[dict[str, Any]]: ...

@@ -352,6 +352,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     c.add_argument("--quick", action="store_true", help="fewer candidates and robots")
+    c.add_argument(
+        "--plant",
+        action="store_true",
+        help="collect the data on the rapier plant (slow) instead of rss6-ident's analytic generator",
+    )
     c.set_defaults(func=cmd_calibrate)
 
     t = sub.add_parser(

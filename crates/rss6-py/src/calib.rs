@@ -484,11 +484,12 @@ pub(crate) fn relative_pose_errors_raw<'py>(
     Ok(d)
 }
 
-/// The simulation study of §4.4.3 over `robots` random true robots (analytic generator with Table 4.1
-/// noise, parallel): list of dicts, one per robot, with the Table 4.3–4.5 entries. `rpba_thetas` and
-/// `implicit_thetas` are the configuration sets (row 0 = initial). Releases the GIL.
+/// The simulation study of §4.4.3 over `robots` random true robots: list of dicts, one per robot,
+/// with the Table 4.3–4.5 entries. Data from rss6-ident's analytic generator with Table 4.1 noise
+/// (parallel), or with `plant=True` from the rapier plant, its PID and its stereo CMM (parallel).
+/// `rpba_thetas` and `implicit_thetas` are the configuration sets (row 0 = initial). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (rpba_thetas, implicit_thetas, *, robots=20, seed=0, dwell=2.0, test_configurations=100, stroke=None))]
+#[pyo3(signature = (rpba_thetas, implicit_thetas, *, robots=20, seed=0, dwell=2.0, test_configurations=100, stroke=None, plant=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibration_study<'py>(
     py: Python<'py>,
@@ -499,6 +500,7 @@ pub(crate) fn calibration_study<'py>(
     dwell: f64,
     test_configurations: usize,
     stroke: Option<(f64, f64)>,
+    plant: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let opts = StudyOptions {
         robots,
@@ -510,9 +512,24 @@ pub(crate) fn calibration_study<'py>(
         test_configurations,
         stroke: stroke.unwrap_or((-57.1f64.to_radians(), 57.1f64.to_radians())),
         solver: CalibrationOptions::default(),
+        target_nominal: if plant {
+            rss6_ident::plant_nominal_target().into()
+        } else {
+            rss6_ident::NOMINAL_TARGET_IN_EFFECTOR
+        },
     };
     let nominal = KinematicParams::nominal();
-    let rows = py.detach(|| rss6_ident::run_study(&nominal, &opts));
+    let rows = py.detach(|| {
+        if plant {
+            use rayon::prelude::*;
+            (0..opts.robots)
+                .into_par_iter()
+                .map(|r| rss6_ident::run_plant_robot(&nominal, &opts, r))
+                .collect::<Vec<_>>()
+        } else {
+            rss6_ident::run_study(&nominal, &opts)
+        }
+    });
     let out = PyList::empty(py);
     for r in rows {
         let r = r.map_err(ident_err)?;
@@ -527,6 +544,10 @@ pub(crate) fn calibration_study<'py>(
         d.set_item("rms_uncalibrated", out1(py, &r.rms_uncalibrated))?;
         d.set_item("rms_implicit", out1(py, &r.rms_implicit))?;
         d.set_item("rms_rpba", out1(py, &r.rms_rpba))?;
+        d.set_item(
+            "rms_implicit_fixed_sensor",
+            out1(py, &r.rms_implicit_fixed_sensor),
+        )?;
         d.set_item("iterations", r.iterations)?;
         d.set_item("ranks", r.ranks)?;
         out.append(d)?;
