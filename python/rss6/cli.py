@@ -174,13 +174,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
             if results[exp][n].fault is not None:
                 faults.append(f"{exp} {n}: {results[exp][n].fault}")
     report = "\n\n".join(tables)
-    n = len(verdicts)
+    n_axes = len(verdicts)
     dk = [f"{e} {a}" for e, a, d, _ in verdicts if not d]
     kj = [f"{e} {a}" for e, a, _, k in verdicts if not k]
     summary = (
-        f"RMSE ordering (thesis: DSMC < KCSC < KJSC on every axis): DSMC < KCSC on {n - len(dk)}/{n} axes"
+        f"RMSE ordering (thesis: DSMC < KCSC < KJSC on every axis): DSMC < KCSC on {n_axes - len(dk)}/{n_axes} axes"
         + (f" (not on {', '.join(dk)})" if dk else "")
-        + f"; KCSC < KJSC on {n - len(kj)}/{n} axes"
+        + f"; KCSC < KJSC on {n_axes - len(kj)}/{n_axes} axes"
         + (f" (not on {', '.join(kj)})" if kj else "")
         + "."
     )
@@ -227,11 +227,20 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         f"§4.4.2 configurations: RPBA {len(th_r) - 1} + initial, implicit {len(th_i) - 1} + initial   "
         f"[thesis 22 and 34]"
     )
-    print(
-        f"§4.4.3 study over {robots} random robots (analytic generator, Table 4.1 noise, dwell {args.dwell} s)"
+    source = (
+        "the rapier plant and its stereo CMM"
+        if args.plant
+        else "analytic generator, Table 4.1 noise"
     )
+    print(f"§4.4.3 study over {robots} random robots ({source}, dwell {args.dwell} s)")
     rows = _rss6.calibration_study(
-        th_r, th_i, robots=robots, seed=args.seed, dwell=args.dwell, stroke=(lo, hi)
+        th_r,
+        th_i,
+        robots=robots,
+        seed=args.seed,
+        dwell=args.dwell,
+        stroke=(lo, hi),
+        plant=args.plant,
     )
 
     def mp(vals: Sequence[float]) -> str:
