@@ -1,8 +1,60 @@
-//! Python bindings (issue 7). Work in progress.
+//! Python bindings of rss6 (module `rss6._rss6`, issue 7). The pure-Python package `rss6` re-exports
+//! everything here; exceptions live in `rss6.errors` (mapped in `errors.rs`). Arrays cross as numpy float64;
+//! every input is shape- and finiteness-checked before it reaches Rust, and long calls release the GIL.
+
 use pyo3::prelude::*;
+
+mod calib;
+mod convert;
+mod ctrl;
+mod dynamics;
+mod errors;
+mod kinematics;
+mod params;
+mod plant;
+mod servo;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
-fn _rss6(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<params::PyKinematicParams>()?;
+    m.add_class::<params::PyDynamicParams>()?;
+    m.add_function(wrap_pyfunction!(kinematics::home_pose, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::ik, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::ik_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::fk, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::fk_batch, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::jacobian_theta, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::jacobian_ad, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::mass_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::coriolis, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::gravity, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::friction, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::inverse_dynamics, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::forward_dynamics, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::regressor, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::dynamics_terms, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::rk4_step, m)?)?;
+    m.add_class::<ctrl::PyTrajectory>()?;
+    m.add_class::<ctrl::PyKalmanFilter>()?;
+    m.add_class::<ctrl::PyDsmc>()?;
+    m.add_class::<ctrl::PyKcsc>()?;
+    m.add_class::<ctrl::PyKjsc>()?;
+    m.add_class::<ctrl::PyTorqueToPosition>()?;
+    m.add_class::<plant::PyModelSim>()?;
+    m.add_class::<plant::PyPlant>()?;
+    m.add_function(wrap_pyfunction!(plant::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(servo::run_servo, m)?)?;
+    m.add_function(wrap_pyfunction!(servo::compose_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(servo::invert_pose, m)?)?;
+    m.add_class::<calib::PyCalibrationData>()?;
+    m.add_class::<calib::PyCalibrationResult>()?;
+    m.add_function(wrap_pyfunction!(calib::stroke, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::select_configurations, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::collect, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::rpba, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
     Ok(())
 }

@@ -390,8 +390,10 @@ impl<P: Physics> RobotSim for Robot<P> {
         if theta_cmd.iter().any(|x| !x.is_finite()) {
             return Err(SimError::InvalidConfig("non-finite joint command".into()));
         }
-        let drive = self.drive_theta();
-        let kappa = self.pots.tick(self.tick, &drive);
+        // The drive uses the reading sampled at the end of the previous tick (or at reset): the same
+        // value `potentiometers()` shows the host between ticks, so a host-side converter can mirror
+        // the drive's PID exactly (rss6-ctrl's TorqueToPosition).
+        let kappa = self.pots.reading();
         let nom = &self.cfg.nominal;
         let theta_meas = Vec6::from_fn(|i, _| nom.eta[i] * kappa[i] + nom.dtheta[i]);
         let tau = self.pid.step(theta_cmd, &theta_meas);
@@ -426,6 +428,8 @@ impl<P: Physics> RobotSim for Robot<P> {
         };
         self.physics.advance(&wrench_tau)?;
         self.tick += 1;
+        let drive = self.drive_theta();
+        self.pots.tick(self.tick, &drive);
         let p = self.physics.pose();
         if p.iter().any(|x| !x.is_finite()) {
             return Err(SimError::Diverged {

@@ -1,0 +1,556 @@
+//! Calibration bindings (rss6-ident, thesis ch. 4): configuration selection, stroke, data collection on
+//! a simulated robot, RPBA, implicit calibration, relative pose errors and the §4.4.3 study.
+
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use rss6_core::{KinematicParams, Vec6};
+use rss6_ident::{
+    CalibrationData, CalibrationOptions, CalibrationResult, ConfigurationData, IdentError, Method,
+    SelectionOptions, Stepped, SteppedRobot, StudyOptions, TrueRobot,
+};
+
+use crate::convert::{array, out1, out6, out_rows, out_rows6, rows6, vec6};
+use crate::errors::{core, invalid, make, shape, Attr};
+use crate::params::PyKinematicParams;
+use crate::plant::{with_robot, SimRobot};
+
+/// Maps an [`IdentError`] onto its exception class.
+pub(crate) fn ident_err(e: IdentError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        IdentError::TooFewConfigurations { got, needed, .. } => make(
+            "CalibrationError",
+            msg,
+            vec![
+                ("got", Attr::I(got as i64)),
+                ("needed", Attr::I(needed as i64)),
+            ],
+        ),
+        IdentError::RankDeficient {
+            rank,
+            expected,
+            unseen,
+        } => make(
+            "CalibrationError",
+            msg,
+            vec![
+                ("rank", Attr::I(rank as i64)),
+                ("expected", Attr::I(expected as i64)),
+                ("unseen", Attr::S(unseen.join(", "))),
+            ],
+        ),
+        IdentError::Fk { config, source } => {
+            let err = crate::errors::core_at(source, Some(format!("configuration {config}")));
+            Python::attach(|py| {
+                let _ = err.value(py).setattr("config", config);
+            });
+            err
+        }
+        IdentError::InvalidInput(_) => invalid(msg),
+        IdentError::Core(c) => core(c),
+        _ => make("CalibrationError", msg, vec![]),
+    }
+}
+
+fn method(name: &str) -> PyResult<Method> {
+    match name.to_ascii_lowercase().as_str() {
+        "rpba" => Ok(Method::Rpba),
+        "implicit" => Ok(Method::Implicit),
+        other => Err(invalid(format!(
+            "method must be 'rpba' or 'implicit', got '{other}'"
+        ))),
+    }
+}
+
+/// Calls a Python progress callback `cb(done, total)` from Rust (re-attaching to the interpreter).
+fn call_progress(cb: &Option<Py<PyAny>>, done: usize, total: usize) {
+    if let Some(cb) = cb {
+        Python::attach(|py| {
+            let _ = cb.call1(py, (done, total));
+        });
+    }
+}
+
+/// Means over one dwell per configuration (configuration 0 = the initial configuration).
+#[pyclass(name = "CalibrationData", module = "rss6._rss6")]
+#[derive(Debug, Clone)]
+pub(crate) struct PyCalibrationData {
+    pub(crate) inner: CalibrationData,
+}
+
+#[pymethods]
+impl PyCalibrationData {
+    /// Data from arrays: kappa (m, 6) mean readings (bits), sensor_pose (m, 6) mean ᶜχ_t (a NaN row
+    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional).
+    #[staticmethod]
+    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None))]
+    fn from_arrays(
+        kappa: &Bound<'_, PyAny>,
+        sensor_pose: &Bound<'_, PyAny>,
+        theta_cmd: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let kappa = rows6(kappa, "kappa")?;
+        let (dims, data) = array(sensor_pose, "sensor_pose")?;
+        if dims.len() != 2 || dims[1] != 6 || dims[0] != kappa.len() {
+            return Err(shape(format!(
+                "sensor_pose must have shape ({}, 6), got {dims:?}",
+                kappa.len()
+            )));
+        }
+        let theta = match theta_cmd {
+            Some(t) => rows6(t, "theta_cmd")?,
+            None => vec![Vec6::repeat(f64::NAN); kappa.len()],
+        };
+        if theta.len() != kappa.len() {
+            return Err(shape("theta_cmd must have as many rows as kappa"));
+        }
+        let configurations = kappa
+            .iter()
+            .zip(data.chunks_exact(6))
+            .zip(theta.iter())
+            .map(|((k, s), th)| ConfigurationData {
+                theta_cmd: (*th).into(),
+                kappa: (*k).into(),
+                sensor_pose: if s.iter().any(|x| x.is_nan()) {
+                    None
+                } else {
+                    let mut p = [0.0; 6];
+                    p.copy_from_slice(s);
+                    Some(p)
+                },
+                kappa_samples: 1,
+                camera_frames: u32::from(!s.iter().any(|x| x.is_nan())),
+            })
+            .collect();
+        Ok(PyCalibrationData {
+            inner: CalibrationData { configurations },
+        })
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// Mean potentiometer readings κ (m, 6) bits.
+    #[getter]
+    fn kappa<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let r: Vec<[f64; 6]> = self.inner.configurations.iter().map(|c| c.kappa).collect();
+        out_rows::<6>(py, &r)
+    }
+
+    /// Mean sensor poses ᶜχ_t (m, 6); NaN rows where no frame arrived.
+    #[getter]
+    fn sensor_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let r: Vec<[f64; 6]> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| c.sensor_pose.unwrap_or([f64::NAN; 6]))
+            .collect();
+        out_rows::<6>(py, &r)
+    }
+
+    /// Commanded joint angles (m, 6) rad (nominal convention).
+    #[getter]
+    fn theta_cmd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let r: Vec<[f64; 6]> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| c.theta_cmd)
+            .collect();
+        out_rows::<6>(py, &r)
+    }
+
+    /// Camera frames averaged per configuration (m,).
+    #[getter]
+    fn camera_frames<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let r: Vec<f64> = self
+            .inner
+            .configurations
+            .iter()
+            .map(|c| f64::from(c.camera_frames))
+            .collect();
+        out1(py, &r)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("CalibrationData({} configurations)", self.inner.len())
+    }
+}
+
+/// Outcome of RPBA or implicit calibration.
+#[pyclass(name = "CalibrationResult", module = "rss6._rss6", frozen)]
+#[derive(Debug, Clone)]
+pub(crate) struct PyCalibrationResult {
+    pub(crate) inner: CalibrationResult,
+}
+
+#[pymethods]
+impl PyCalibrationResult {
+    /// "rpba" or "implicit".
+    #[getter]
+    fn method(&self) -> &'static str {
+        match self.inner.method {
+            Method::Rpba => "rpba",
+            Method::Implicit => "implicit",
+        }
+    }
+
+    /// Calibrated kinematic parameters.
+    #[getter]
+    fn params(&self) -> PyKinematicParams {
+        PyKinematicParams::wrap(self.inner.params)
+    }
+
+    /// Calibrated error vector b (60,) relative to the starting parameters.
+    #[getter]
+    fn errors<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        out1(py, &self.inner.errors)
+    }
+
+    /// Calibrated ᴱχ_t (6,).
+    #[getter]
+    fn target_in_effector<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        out6(py, &self.inner.target_in_effector)
+    }
+
+    /// Calibrated ᴼχ_C (6,) (implicit only; None for RPBA).
+    #[getter]
+    fn sensor_in_base<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner.sensor_in_base.map(|s| out6(py, &s))
+    }
+
+    /// Cost Σ‖W r‖² at the start and after each accepted step.
+    #[getter]
+    fn cost_history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        out1(py, &self.inner.cost_history)
+    }
+
+    /// Numerical rank of the scaled Jacobian at the solution.
+    #[getter]
+    fn rank(&self) -> usize {
+        self.inner.rank
+    }
+
+    /// Number of parameters (66 RPBA, 72 implicit).
+    #[getter]
+    fn parameter_count(&self) -> usize {
+        self.inner.parameter_count
+    }
+
+    /// Parameters not individually identifiable (gauge directions), by name.
+    #[getter]
+    fn unidentifiable(&self) -> Vec<String> {
+        self.inner.unidentifiable.clone()
+    }
+
+    /// The gauge directions removed from the problem, described.
+    #[getter]
+    fn gauge_directions(&self) -> Vec<String> {
+        self.inner.gauge_directions.clone()
+    }
+
+    /// Singular values of the scaled Jacobian, descending.
+    #[getter]
+    fn singular_values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        out1(py, &self.inner.singular_values)
+    }
+
+    /// Accepted LM steps.
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+
+    /// Dropped configurations as (index, reason).
+    #[getter]
+    fn dropped(&self) -> Vec<(usize, String)> {
+        self.inner
+            .dropped
+            .iter()
+            .map(|d| (d.index, d.reason.clone()))
+            .collect()
+    }
+
+    /// Indices of the configurations used.
+    #[getter]
+    fn used(&self) -> Vec<usize> {
+        self.inner.used.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "CalibrationResult({}, {} iterations, rank {}/{}, {} dropped)",
+            self.method(),
+            self.inner.iterations,
+            self.inner.rank,
+            self.inner.parameter_count,
+            self.inner.dropped.len()
+        )
+    }
+}
+
+/// Actuator stroke (lo, hi) rad of §4.4.1 (eq. 4.24 with the type-I, type-II and homeomorphism
+/// constraints). Releases the GIL.
+#[pyfunction]
+pub(crate) fn stroke(py: Python<'_>, kp: &PyKinematicParams) -> PyResult<(f64, f64)> {
+    let k = kp.inner;
+    py.detach(move || rss6_ident::stroke(&k)).map_err(ident_err)
+}
+
+/// Optimal calibration configurations (§4.4.2): (m, 6) rad, row 0 = the initial configuration.
+/// Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (kp, method="rpba", seed=0, *, start=13, candidates=5000, stroke=None))]
+pub(crate) fn select_configurations<'py>(
+    py: Python<'py>,
+    kp: &PyKinematicParams,
+    method: &str,
+    seed: u64,
+    start: usize,
+    candidates: usize,
+    stroke: Option<(f64, f64)>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = self::method(method)?;
+    let k = kp.inner;
+    let opts = SelectionOptions {
+        start,
+        candidates,
+        stroke,
+    };
+    let rep = py
+        .detach(move || rss6_ident::select_configurations_with(&k, m, seed, &opts))
+        .map_err(ident_err)?;
+    Ok(out_rows6(py, &rep.thetas))
+}
+
+/// A [`SimRobot`] seen by rss6-ident.
+struct Stepper<'a>(&'a mut dyn SimRobot);
+
+impl SteppedRobot for Stepper<'_> {
+    fn dt(&self) -> f64 {
+        self.0.dt()
+    }
+    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> rss6_ident::Result<()> {
+        self.0.step(theta_cmd).map_err(IdentError::Source)
+    }
+    fn camera(&mut self) -> Option<Vec6> {
+        self.0.camera()
+    }
+    fn potentiometers(&mut self) -> Vec6 {
+        self.0.potentiometers()
+    }
+}
+
+/// Visits every configuration of `thetas` (m, 6) on `plant` (rss6.Plant or rss6.ModelSim), waits,
+/// and averages κ and ᶜχ_t over `dwell` s. The plant should be at rest at thetas[0]'s command (e.g.
+/// just reset). `progress(done, total)` is called after each configuration. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (plant, thetas, dwell=2.0, *, move_time=1.0, settle_time=0.5, progress=None))]
+pub(crate) fn collect(
+    py: Python<'_>,
+    plant: &Bound<'_, PyAny>,
+    thetas: &Bound<'_, PyAny>,
+    dwell: f64,
+    move_time: f64,
+    settle_time: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyCalibrationData> {
+    let thetas = rows6(thetas, "thetas")?;
+    if thetas.is_empty() {
+        return Err(invalid("thetas must contain at least one configuration"));
+    }
+    if !(move_time.is_finite() && move_time > 0.0 && settle_time.is_finite() && settle_time >= 0.0)
+    {
+        return Err(invalid("move_time must be > 0 and settle_time >= 0"));
+    }
+    let data = with_robot(plant, |robot| {
+        // The robot is at rest at its current readings: start the first move from there.
+        let start = KinematicParams::nominal().theta_from_reading(&robot.potentiometers());
+        py.detach(|| {
+            let mut src = Stepped::new(Stepper(robot), start);
+            src.move_time = move_time;
+            src.settle_time = settle_time;
+            rss6_ident::collect_with_progress(&mut src, &thetas, dwell, &mut |d, t| {
+                call_progress(&progress, d, t)
+            })
+        })
+    })?
+    .map_err(ident_err)?;
+    Ok(PyCalibrationData { inner: data })
+}
+
+fn options(
+    max_iterations: usize,
+    target_guess: Option<&Bound<'_, PyAny>>,
+) -> PyResult<CalibrationOptions> {
+    let mut o = CalibrationOptions {
+        max_iterations,
+        ..CalibrationOptions::default()
+    };
+    if let Some(t) = target_guess {
+        o.target_guess = vec6(t, "target_guess")?.into();
+    }
+    Ok(o)
+}
+
+/// RPBA (eq. 4.16–4.21) from `data` starting at `kp`: 60 kinematic + 6 external (ᴱχ_t) parameters,
+/// Levenberg–Marquardt with analytic Jacobians. `progress(iteration, cost)` per iteration.
+#[pyfunction]
+#[pyo3(signature = (data, kp, *, max_iterations=60, target_guess=None, progress=None))]
+pub(crate) fn rpba(
+    py: Python<'_>,
+    data: &PyCalibrationData,
+    kp: &PyKinematicParams,
+    max_iterations: usize,
+    target_guess: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyCalibrationResult> {
+    let opts = options(max_iterations, target_guess)?;
+    let (d, k) = (&data.inner, kp.inner);
+    let r = py
+        .detach(|| {
+            rss6_ident::rpba_with_progress(d, &k, &opts, &mut |p| {
+                if let Some(cb) = &progress {
+                    Python::attach(|py| {
+                        let _ = cb.call1(py, (p.iteration, p.cost));
+                    });
+                }
+            })
+        })
+        .map_err(ident_err)?;
+    Ok(PyCalibrationResult { inner: r })
+}
+
+/// Implicit calibration (eq. 4.10–4.15) from `data` starting at `kp` and the rough sensor pose
+/// `sensor_pose_guess` (ᴼχ_C): 60 kinematic + 12 external parameters.
+#[pyfunction]
+#[pyo3(signature = (data, kp, sensor_pose_guess, *, max_iterations=60, target_guess=None))]
+pub(crate) fn implicit(
+    py: Python<'_>,
+    data: &PyCalibrationData,
+    kp: &PyKinematicParams,
+    sensor_pose_guess: &Bound<'_, PyAny>,
+    max_iterations: usize,
+    target_guess: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyCalibrationResult> {
+    let opts = options(max_iterations, target_guess)?;
+    let s = vec6(sensor_pose_guess, "sensor_pose_guess")?;
+    let (d, k) = (&data.inner, kp.inner);
+    let r = py
+        .detach(|| rss6_ident::implicit(d, &k, &s, &opts))
+        .map_err(ident_err)?;
+    Ok(PyCalibrationResult { inner: r })
+}
+
+/// RMS relative pose errors (Table 4.5 procedure) of the model (`params`, `target_in_effector`) on the
+/// true robot (`true_kp`, `true_sensor_in_base`, `true_target_in_effector`) over `n` random test
+/// configurations in `stroke`. Returns dict rms (6,), errors (n', 6), skipped.
+#[pyfunction]
+#[pyo3(signature = (params, target_in_effector, true_kp, true_sensor_in_base, true_target_in_effector, *, n=100, seed=0, stroke=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn relative_pose_errors_raw<'py>(
+    py: Python<'py>,
+    params: &PyKinematicParams,
+    target_in_effector: &Bound<'py, PyAny>,
+    true_kp: &PyKinematicParams,
+    true_sensor_in_base: &Bound<'py, PyAny>,
+    true_target_in_effector: &Bound<'py, PyAny>,
+    n: usize,
+    seed: u64,
+    stroke: Option<(f64, f64)>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let truth = TrueRobot {
+        kp: true_kp.inner,
+        sensor_in_base: vec6(true_sensor_in_base, "true_sensor_in_base")?,
+        target_in_effector: vec6(true_target_in_effector, "true_target_in_effector")?,
+    };
+    let target = vec6(target_in_effector, "target_in_effector")?;
+    let nominal = KinematicParams::nominal();
+    let stroke = match stroke {
+        Some(s) => s,
+        None => (-57.1f64.to_radians(), 57.1f64.to_radians()),
+    };
+    let p = params.inner;
+    let r = py
+        .detach(|| rss6_ident::relative_pose_errors(&p, &target, &truth, &nominal, n, seed, stroke))
+        .map_err(ident_err)?;
+    let d = PyDict::new(py);
+    d.set_item("rms", out1(py, &r.rms))?;
+    d.set_item("errors", out_rows6(py, &r.errors))?;
+    d.set_item("skipped", r.skipped)?;
+    Ok(d)
+}
+
+/// The simulation study of §4.4.3 over `robots` random true robots: list of dicts, one per robot,
+/// with the Table 4.3–4.5 entries. Data from rss6-ident's analytic generator with Table 4.1 noise
+/// (parallel), or with `plant=True` from the rapier plant, its PID and its stereo CMM (parallel).
+/// `rpba_thetas` and `implicit_thetas` are the configuration sets (row 0 = initial). Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (rpba_thetas, implicit_thetas, *, robots=20, seed=0, dwell=2.0, test_configurations=100, stroke=None, plant=false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn calibration_study<'py>(
+    py: Python<'py>,
+    rpba_thetas: &Bound<'py, PyAny>,
+    implicit_thetas: &Bound<'py, PyAny>,
+    robots: usize,
+    seed: u64,
+    dwell: f64,
+    test_configurations: usize,
+    stroke: Option<(f64, f64)>,
+    plant: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let opts = StudyOptions {
+        robots,
+        seed,
+        rpba_thetas: rows6(rpba_thetas, "rpba_thetas")?,
+        implicit_thetas: rows6(implicit_thetas, "implicit_thetas")?,
+        dwell,
+        noise: rss6_ident::NoiseModel::default(),
+        test_configurations,
+        stroke: stroke.unwrap_or((-57.1f64.to_radians(), 57.1f64.to_radians())),
+        solver: CalibrationOptions::default(),
+        target_nominal: if plant {
+            rss6_ident::plant_nominal_target().into()
+        } else {
+            rss6_ident::NOMINAL_TARGET_IN_EFFECTOR
+        },
+    };
+    let nominal = KinematicParams::nominal();
+    let rows = py.detach(|| {
+        if plant {
+            use rayon::prelude::*;
+            (0..opts.robots)
+                .into_par_iter()
+                .map(|r| rss6_ident::run_plant_robot(&nominal, &opts, r))
+                .collect::<Vec<_>>()
+        } else {
+            rss6_ident::run_study(&nominal, &opts)
+        }
+    });
+    let out = PyList::empty(py);
+    for r in rows {
+        let r = r.map_err(ident_err)?;
+        let d = PyDict::new(py);
+        d.set_item("robot", r.robot)?;
+        d.set_item("implicit_param_error", r.implicit_param_error)?;
+        d.set_item("implicit_param_error_si", r.implicit_param_error_si)?;
+        d.set_item("implicit_residual", r.implicit_residual)?;
+        d.set_item("rpba_param_error", r.rpba_param_error)?;
+        d.set_item("rpba_param_error_si", r.rpba_param_error_si)?;
+        d.set_item("rpba_residual", r.rpba_residual)?;
+        d.set_item("rms_uncalibrated", out1(py, &r.rms_uncalibrated))?;
+        d.set_item("rms_implicit", out1(py, &r.rms_implicit))?;
+        d.set_item("rms_rpba", out1(py, &r.rms_rpba))?;
+        d.set_item(
+            "rms_implicit_fixed_sensor",
+            out1(py, &r.rms_implicit_fixed_sensor),
+        )?;
+        d.set_item("iterations", r.iterations)?;
+        d.set_item("ranks", r.ranks)?;
+        out.append(d)?;
+    }
+    Ok(out)
+}

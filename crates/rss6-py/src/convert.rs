@@ -1,0 +1,158 @@
+//! numpy ⇄ nalgebra conversions with shape and finiteness checks that raise clear `rss6` errors.
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rss6_core::{Mat6, Vec6};
+
+use crate::errors::{invalid, non_finite, shape};
+
+/// Reads any array-like as a C-contiguous float64 array: (shape, data).
+pub(crate) fn array(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    let py = obj.py();
+    let np = py.import("numpy")?;
+    let kw = PyDict::new(py);
+    kw.set_item("dtype", "float64")?;
+    let arr = np
+        .call_method("ascontiguousarray", (obj,), Some(&kw))
+        .map_err(|e| invalid(format!("{name}: cannot be read as a float64 array ({e})")))?;
+    let arr = arr
+        .cast_into::<PyArrayDyn<f64>>()
+        .map_err(|e| invalid(format!("{name}: cannot be read as a float64 array ({e})")))?;
+    let ro = arr.readonly();
+    let dims = ro.shape().to_vec();
+    let data = ro
+        .as_slice()
+        .map_err(|e| invalid(format!("{name}: {e}")))?
+        .to_vec();
+    Ok((dims, data))
+}
+
+fn fmt_shape(s: &[usize]) -> String {
+    match s.len() {
+        1 => format!("({},)", s[0]),
+        _ => format!(
+            "({})",
+            s.iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// Raises `NonFiniteError` naming the first bad element.
+pub(crate) fn check_finite(data: &[f64], dims: &[usize], name: &str) -> PyResult<()> {
+    if let Some(k) = data.iter().position(|x| !x.is_finite()) {
+        let idx = if dims.len() == 2 && dims[1] > 0 {
+            format!("[{}, {}]", k / dims[1], k % dims[1])
+        } else {
+            format!("[{k}]")
+        };
+        return Err(non_finite(format!(
+            "{name} contains NaN or infinity at index {idx}"
+        )));
+    }
+    Ok(())
+}
+
+/// A float64 array of exactly `want` shape, finite.
+pub(crate) fn exact(obj: &Bound<'_, PyAny>, name: &str, want: &[usize]) -> PyResult<Vec<f64>> {
+    let (dims, data) = array(obj, name)?;
+    if dims != want {
+        return Err(shape(format!(
+            "{name} must have shape {}, got {}",
+            fmt_shape(want),
+            fmt_shape(&dims)
+        )));
+    }
+    check_finite(&data, &dims, name)?;
+    Ok(data)
+}
+
+/// A fixed-length finite vector.
+pub(crate) fn vecn<const N: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; N]> {
+    let d = exact(obj, name, &[N])?;
+    let mut out = [0.0; N];
+    out.copy_from_slice(&d);
+    Ok(out)
+}
+
+/// A pose χ or joint vector θ of shape (6,).
+pub(crate) fn vec6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec6> {
+    Ok(Vec6::from(vecn::<6>(obj, name)?))
+}
+
+/// An (n, C) finite array as rows.
+pub(crate) fn rows<const C: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<[f64; C]>> {
+    let (dims, data) = array(obj, name)?;
+    if dims.len() != 2 || dims[1] != C {
+        return Err(shape(format!(
+            "{name} must have shape (N, {C}), got {}",
+            fmt_shape(&dims)
+        )));
+    }
+    check_finite(&data, &dims, name)?;
+    Ok(data
+        .chunks_exact(C)
+        .map(|c| {
+            let mut r = [0.0; C];
+            r.copy_from_slice(c);
+            r
+        })
+        .collect())
+}
+
+/// An (N, 6) array as poses/joint vectors.
+pub(crate) fn rows6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec6>> {
+    Ok(rows::<6>(obj, name)?.into_iter().map(Vec6::from).collect())
+}
+
+/// A (6,) float64 numpy array.
+pub(crate) fn out6<'py>(py: Python<'py>, v: &Vec6) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, v.as_slice())
+}
+
+/// A 1-D float64 numpy array.
+pub(crate) fn out1<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, v)
+}
+
+/// A (rows.len(), C) float64 numpy array.
+pub(crate) fn out_rows<'py, const C: usize>(
+    py: Python<'py>,
+    rows: &[[f64; C]],
+) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = rows.iter().flat_map(|r| r.iter().copied()).collect();
+    // The shape matches the data length by construction.
+    Array2::from_shape_vec((rows.len(), C), flat)
+        .map(|a| a.into_pyarray(py))
+        .unwrap_or_else(|_| PyArray2::zeros(py, (0, C), false))
+}
+
+/// An (N, 6) array from poses/joint vectors.
+pub(crate) fn out_rows6<'py>(py: Python<'py>, v: &[Vec6]) -> Bound<'py, PyArray2<f64>> {
+    let r: Vec<[f64; 6]> = v
+        .iter()
+        .map(|x| [x[0], x[1], x[2], x[3], x[4], x[5]])
+        .collect();
+    out_rows::<6>(py, &r)
+}
+
+/// A (6, 6) matrix, row-major.
+pub(crate) fn out_mat6<'py>(py: Python<'py>, m: &Mat6) -> Bound<'py, PyArray2<f64>> {
+    let r: Vec<[f64; 6]> = (0..6)
+        .map(|i| {
+            [
+                m[(i, 0)],
+                m[(i, 1)],
+                m[(i, 2)],
+                m[(i, 3)],
+                m[(i, 4)],
+                m[(i, 5)],
+            ]
+        })
+        .collect();
+    out_rows::<6>(py, &r)
+}

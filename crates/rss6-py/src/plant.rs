@@ -1,0 +1,428 @@
+//! Simulated robots as Python classes: `rss6.Plant` (rss6-sim's rapier plant, the "real robot") and
+//! `rss6.ModelSim` (its analytic-model twin: rss6-core forward dynamics + the drive's joint PID + the
+//! same sensors). Both implement [`SimRobot`], which is what the servo and calibration runners drive.
+
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rss6_core::{DynamicParams, KinematicParams, Vec6};
+use rss6_ctrl::PidGains;
+use rss6_sim::{EffectSpec, RobotSim, SimConfig, SimError};
+
+use crate::convert::{out6, vec6};
+use crate::errors::{core, invalid, make};
+use crate::params::{PyDynamicParams, PyKinematicParams};
+
+/// The plant's hidden truth.
+#[derive(Debug, Clone)]
+pub(crate) struct Truth {
+    pub(crate) kp: KinematicParams,
+    pub(crate) dp: DynamicParams,
+    pub(crate) pid: PidGains,
+    pub(crate) sensor_in_base: Vec6,
+    pub(crate) target_in_effector: Vec6,
+    pub(crate) effects: Vec<EffectSpec>,
+}
+
+/// A robot driven tick by tick (joint commands in the nominal joint convention).
+pub(crate) trait SimRobot: Send {
+    /// Tick length (s).
+    fn dt(&self) -> f64;
+    /// Plant time (s).
+    fn time(&self) -> f64;
+    /// Places the robot at rest at `pose` (physical IK of the truth), drive PID at rest.
+    fn reset(&mut self, pose: &Vec6) -> Result<(), String>;
+    /// One tick with the joint command θ_cmd (rad, nominal convention).
+    fn step(&mut self, theta_cmd: &Vec6) -> Result<(), String>;
+    /// ᶜχ_t if a frame became available on the last tick.
+    fn camera(&mut self) -> Option<Vec6>;
+    /// Latest potentiometer readings κ (bits).
+    fn potentiometers(&self) -> Vec6;
+    /// True end-effector pose χ_E (m, rad).
+    fn true_pose(&self) -> Vec6;
+    /// True physical joint angles (rad).
+    fn true_theta(&self) -> Vec6;
+    /// Last drive torques (N·m).
+    fn torque(&self) -> Vec6;
+    /// The hidden truth.
+    fn truth(&self) -> Truth;
+}
+
+/// Any rss6-sim robot (rapier plant or model twin) as a [`SimRobot`].
+struct SimWrap<R> {
+    robot: R,
+    dt: f64,
+}
+
+impl<R: RobotSim + Send> SimRobot for SimWrap<R> {
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+    fn time(&self) -> f64 {
+        self.robot.time()
+    }
+    fn reset(&mut self, pose: &Vec6) -> Result<(), String> {
+        self.robot.reset(pose).map_err(|e| e.to_string())
+    }
+    fn step(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
+        self.robot
+            .step_joint_command(theta_cmd)
+            .map_err(|e| e.to_string())
+    }
+    fn camera(&mut self) -> Option<Vec6> {
+        self.robot.camera()
+    }
+    fn potentiometers(&self) -> Vec6 {
+        self.robot.potentiometers()
+    }
+    fn true_pose(&self) -> Vec6 {
+        self.robot.true_pose()
+    }
+    fn true_theta(&self) -> Vec6 {
+        self.robot.true_theta()
+    }
+    fn torque(&self) -> Vec6 {
+        self.robot.torques()
+    }
+    fn truth(&self) -> Truth {
+        let t = self.robot.truth();
+        Truth {
+            kp: t.kinematics,
+            dp: t.dynamics,
+            pid: t.pid,
+            sensor_in_base: t.sensor_in_base,
+            target_in_effector: t.target_in_effector,
+            effects: t.effects,
+        }
+    }
+}
+
+/// Maps a [`SimError`] onto its exception class.
+pub(crate) fn sim_error(e: SimError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        SimError::Core(c) => core(c),
+        SimError::InvalidConfig(_)
+        | SimError::UnknownEffect { .. }
+        | SimError::EffectParameter { .. } => make("InvalidParameterError", msg, vec![]),
+        SimError::Io { .. } => make("LogError", msg, vec![]),
+        _ => make("SimulationError", msg, vec![]),
+    }
+}
+
+/// `rss6.SimulationError` with `msg`.
+pub(crate) fn sim_err(msg: impl Into<String>) -> PyErr {
+    make("SimulationError", msg, vec![])
+}
+
+fn pid_gains(pid: (f64, f64, f64)) -> PyResult<PidGains> {
+    let g = PidGains {
+        lp: pid.0,
+        li: pid.1,
+        ld: pid.2,
+    };
+    if ![g.lp, g.li, g.ld]
+        .iter()
+        .all(|x| x.is_finite() && *x >= 0.0)
+    {
+        return Err(invalid(format!(
+            "pid gains must be finite and >= 0, got {pid:?}"
+        )));
+    }
+    Ok(g)
+}
+
+/// Builds the `truth()` dict.
+pub(crate) fn truth_dict<'py>(py: Python<'py>, t: &Truth) -> PyResult<Bound<'py, PyDict>> {
+    let effects = PyDict::new(py);
+    for e in &t.effects {
+        let p = PyDict::new(py);
+        for (k, v) in &e.params {
+            p.set_item(k, v)?;
+        }
+        effects.set_item(&e.name, p)?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("kinematics", PyKinematicParams::wrap(t.kp))?;
+    d.set_item("dynamics", PyDynamicParams { inner: t.dp })?;
+    d.set_item("pid", (t.pid.lp, t.pid.li, t.pid.ld))?;
+    d.set_item("sensor_in_base", out6(py, &t.sensor_in_base))?;
+    d.set_item("target_in_effector", out6(py, &t.target_in_effector))?;
+    d.set_item("effects", effects)?;
+    Ok(d)
+}
+
+/// Reads `effects`: None, a dict {name: {param: value}} or a list of (name, {param: value}).
+fn effect_specs(effects: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<EffectSpec>> {
+    let Some(e) = effects else {
+        return Ok(Vec::new());
+    };
+    if e.is_none() {
+        return Ok(Vec::new());
+    }
+    let pairs: Vec<(String, BTreeMap<String, f64>)> = if let Ok(d) = e.cast::<PyDict>() {
+        d.iter()
+            .map(|(k, v)| {
+                Ok((
+                    k.extract::<String>()?,
+                    v.extract::<BTreeMap<String, f64>>()?,
+                ))
+            })
+            .collect::<PyResult<_>>()
+            .map_err(|err| {
+                invalid(format!(
+                    "effects must map names to {{parameter: value}} dicts ({err})"
+                ))
+            })?
+    } else {
+        e.extract().map_err(|err| {
+            invalid(format!(
+                "effects must be a dict or a list of (name, params) ({err})"
+            ))
+        })?
+    };
+    Ok(pairs
+        .into_iter()
+        .map(|(name, params)| EffectSpec { name, params })
+        .collect())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sim_config(
+    kp: &PyKinematicParams,
+    dp: &PyDynamicParams,
+    pid: (f64, f64, f64),
+    effects: Option<&Bound<'_, PyAny>>,
+    seed: u64,
+    dt: f64,
+    sensor_in_base: Option<&Bound<'_, PyAny>>,
+    target_in_effector: Option<&Bound<'_, PyAny>>,
+    torque_limit: f64,
+    camera_latency: f64,
+    solver_iterations: Option<usize>,
+    potentiometer_noise: Option<f64>,
+    pixel_noise: Option<f64>,
+) -> PyResult<SimConfig> {
+    let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
+    cfg.seed = seed;
+    cfg.dt = dt;
+    cfg.torque_limit = torque_limit;
+    cfg.cmm.latency = camera_latency;
+    if let Some(s) = sensor_in_base {
+        cfg.sensor_in_base = vec6(s, "sensor_in_base")?;
+    }
+    if let Some(t) = target_in_effector {
+        cfg.target_in_effector = vec6(t, "target_in_effector")?;
+    }
+    if let Some(n) = solver_iterations {
+        cfg.solver.iterations = n;
+    }
+    if let Some(n) = potentiometer_noise {
+        cfg.pot_noise = n;
+    }
+    if let Some(n) = pixel_noise {
+        cfg.cmm.pixel_noise = n;
+    }
+    cfg.effects = effect_specs(effects)?;
+    cfg.validate().map_err(sim_error)?;
+    Ok(cfg)
+}
+
+macro_rules! sim_class {
+    ($name:ident, $pyname:literal, $doc:literal, $ctor:expr) => {
+        #[doc = $doc]
+        #[pyclass(name = $pyname, module = "rss6._rss6")]
+        pub(crate) struct $name {
+            pub(crate) robot: Mutex<Box<dyn SimRobot>>,
+        }
+
+        impl $name {
+            fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Box<dyn SimRobot>>> {
+                self.robot.lock().map_err(|_| sim_err("the simulation panicked earlier and is unusable"))
+            }
+        }
+
+        #[pymethods]
+        impl $name {
+            /// `kp`, `dp`: the true robot. `pid` = (l_p, l_i, l_d) of the drive (N·m/rad,
+            /// N·m/(rad·s), N·m·s/rad). `effects`: hidden effects {name: {param: value}} (names:
+            /// joint_friction, backlash, camera_latency, payload, base_tilt). `sensor_in_base` (ᴼχ_C)
+            /// and `target_in_effector` (ᴱχ_t) default to rss6-sim's placement; `camera_latency` (s),
+            /// `potentiometer_noise` (bit, default Table 4.1's 0.2233) and `pixel_noise` (px) tune the
+            /// sensors. Starts at home.
+            #[new]
+            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None))]
+            #[allow(clippy::too_many_arguments)]
+            fn py_new(
+                py: Python<'_>,
+                kp: &PyKinematicParams,
+                dp: &PyDynamicParams,
+                pid: (f64, f64, f64),
+                effects: Option<&Bound<'_, PyAny>>,
+                seed: u64,
+                dt: f64,
+                sensor_in_base: Option<&Bound<'_, PyAny>>,
+                target_in_effector: Option<&Bound<'_, PyAny>>,
+                torque_limit: f64,
+                camera_latency: f64,
+                solver_iterations: Option<usize>,
+                potentiometer_noise: Option<f64>,
+                pixel_noise: Option<f64>,
+            ) -> PyResult<Self> {
+                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise)?;
+                let dt = cfg.dt;
+                let robot = py.detach(move || $ctor(cfg)).map_err(sim_error)?;
+                Ok($name { robot: Mutex::new(Box::new(SimWrap { robot, dt })) })
+            }
+
+            /// Places the true robot at rest at `pose` (6,), drive PID at rest, time 0.
+            fn reset(&self, pose: &Bound<'_, PyAny>) -> PyResult<()> {
+                let p = vec6(pose, "pose")?;
+                self.lock()?.reset(&p).map_err(sim_err)
+            }
+
+            /// One joint-loop tick with θ_cmd (6,) rad in the nominal joint convention.
+            fn step_joint_command(&self, theta_cmd: &Bound<'_, PyAny>) -> PyResult<()> {
+                let c = vec6(theta_cmd, "theta_cmd")?;
+                self.lock()?.step(&c).map_err(sim_err)
+            }
+
+            /// True pose χ_E (6,).
+            fn true_pose<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                Ok(out6(py, &self.lock()?.true_pose()))
+            }
+
+            /// True physical joint angles θ (6,).
+            fn true_theta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                Ok(out6(py, &self.lock()?.true_theta()))
+            }
+
+            /// Plant time (s).
+            #[getter]
+            fn time(&self) -> PyResult<f64> {
+                Ok(self.lock()?.time())
+            }
+
+            /// Joint-loop tick length (s).
+            #[getter]
+            fn dt(&self) -> PyResult<f64> {
+                Ok(self.lock()?.dt())
+            }
+
+            /// ᶜχ_t (6,) if a camera frame became available on the last tick, else None.
+            fn camera<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
+                Ok(self.lock()?.camera().map(|z| out6(py, &z)))
+            }
+
+            /// Latest potentiometer readings κ (6,) bits.
+            fn potentiometers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                Ok(out6(py, &self.lock()?.potentiometers()))
+            }
+
+            /// Drive torques of the last tick (6,) N·m.
+            fn torque<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                Ok(out6(py, &self.lock()?.torque()))
+            }
+
+            /// The hidden truth: kinematics, dynamics, pid, sensor_in_base (ᴼχ_C), target_in_effector
+            /// (ᴱχ_t), effects.
+            fn truth<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+                let t = self.lock()?.truth();
+                truth_dict(py, &t)
+            }
+
+            fn __repr__(&self) -> PyResult<String> {
+                Ok(format!("{}(t = {:.3} s)", $pyname, self.lock()?.time()))
+            }
+        }
+    };
+}
+
+sim_class!(
+    PyPlant,
+    "Plant",
+    "The rapier plant (rss6-sim): the simulated \"real robot\" with its drive PID, potentiometers and optical CMM.",
+    rss6_sim::Plant::new
+);
+sim_class!(
+    PyModelSim,
+    "ModelSim",
+    "The analytic-model twin of the plant (thesis Fig. 5.1's simulated model): same call shape, rss6-core dynamics.",
+    rss6_sim::ModelSim::new
+);
+
+/// Runs `f` on the robot behind a `rss6.Plant` or `rss6.ModelSim` object.
+pub(crate) fn with_robot<R>(
+    obj: &Bound<'_, PyAny>,
+    f: impl FnOnce(&mut dyn SimRobot) -> R,
+) -> PyResult<R> {
+    if let Ok(m) = obj.cast::<PyModelSim>() {
+        let m = m.borrow();
+        let mut g = m.lock()?;
+        return Ok(f(g.as_mut()));
+    }
+    if let Ok(m) = obj.cast::<PyPlant>() {
+        let m = m.borrow();
+        let mut g = m.lock()?;
+        return Ok(f(g.as_mut()));
+    }
+    Err(invalid(format!(
+        "plant must be an rss6.Plant or rss6.ModelSim, got {}",
+        obj.get_type().name()?
+    )))
+}
+
+/// Drives `plant` (rss6.Plant or rss6.ModelSim) with one joint command per tick, `commands` (N, 6)
+/// rad in the nominal joint convention, from its current state; releases the GIL. Returns a dict:
+/// time (N,) s after each tick, true_pose (N, 6), true_theta (N, 6), kappa (N, 6) bits, torque (N, 6)
+/// N·m, camera_time (M,), camera (M, 6) ᶜχ_t frames.
+#[pyfunction]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    plant: &Bound<'py, PyAny>,
+    commands: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cmds = crate::convert::rows6(commands, "commands")?;
+    #[derive(Default)]
+    struct Rec {
+        t: Vec<f64>,
+        pose: Vec<Vec6>,
+        theta: Vec<Vec6>,
+        kappa: Vec<Vec6>,
+        tau: Vec<Vec6>,
+        cam_t: Vec<f64>,
+        cam: Vec<Vec6>,
+    }
+    let rec = with_robot(plant, |robot| {
+        py.detach(|| {
+            let mut r = Rec::default();
+            for c in &cmds {
+                robot.step(c)?;
+                let t = robot.time();
+                r.t.push(t);
+                r.pose.push(robot.true_pose());
+                r.theta.push(robot.true_theta());
+                r.kappa.push(robot.potentiometers());
+                r.tau.push(robot.torque());
+                if let Some(z) = robot.camera() {
+                    r.cam_t.push(t);
+                    r.cam.push(z);
+                }
+            }
+            Ok::<_, String>(r)
+        })
+    })?
+    .map_err(sim_err)?;
+    let d = PyDict::new(py);
+    d.set_item("time", crate::convert::out1(py, &rec.t))?;
+    d.set_item("true_pose", crate::convert::out_rows6(py, &rec.pose))?;
+    d.set_item("true_theta", crate::convert::out_rows6(py, &rec.theta))?;
+    d.set_item("kappa", crate::convert::out_rows6(py, &rec.kappa))?;
+    d.set_item("torque", crate::convert::out_rows6(py, &rec.tau))?;
+    d.set_item("camera_time", crate::convert::out1(py, &rec.cam_t))?;
+    d.set_item("camera", crate::convert::out_rows6(py, &rec.cam))?;
+    Ok(d)
+}

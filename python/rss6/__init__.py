@@ -1,0 +1,127 @@
+"""rss6: calibration, identification, simulation and control of 6-RSS parallel robots (Li 2020).
+
+Arrays are numpy float64 in SI units (m, rad, kg, s, N·m); a pose is χ = [x, y, z, α, β, γ] with
+R = Rx(α)·Ry(β)·Rz(γ). Every error derives from :class:`rss6.Rss6Error` (see :mod:`rss6.errors`).
+
+>>> import rss6
+>>> kp = rss6.KinematicParams.nominal()
+>>> theta = rss6.ik(kp, rss6.home_pose())
+>>> bool(abs(theta).max() < 1e-12)
+True
+
+Submodules: :mod:`rss6.servo` (tracking experiments), :mod:`rss6.calibrate` (RPBA, implicit),
+:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.cli` (the ``rss6`` command).
+"""
+
+from __future__ import annotations
+
+from rss6 import errors
+from rss6._rss6 import (
+    CalibrationData,
+    CalibrationResult,
+    Dsmc,
+    DynamicParams,
+    KalmanFilter,
+    Kcsc,
+    KinematicParams,
+    Kjsc,
+    ModelSim,
+    TorqueToPosition,
+    Trajectory,
+    compose_poses,
+    coriolis,
+    dynamics_terms,
+    fk,
+    fk_batch,
+    forward_dynamics,
+    friction,
+    gravity,
+    home_pose,
+    ik,
+    ik_batch,
+    inverse_dynamics,
+    invert_pose,
+    jacobian_ad,
+    jacobian_theta,
+    mass_matrix,
+    regressor,
+    rk4_step,
+    simulate,
+)
+from rss6.errors import (
+    CalibrationError,
+    ControllerFaultError,
+    InvalidInputError,
+    InvalidParameterError,
+    LogError,
+    NonFiniteError,
+    NotConvergedError,
+    OutOfBranchError,
+    ParamsFileError,
+    Rss6Error,
+    ShapeError,
+    SimulationError,
+    SingularError,
+    UnreachableError,
+)
+
+try:  # the rapier plant (rss6-sim) is optional in builds without it
+    from rss6._rss6 import Plant  # type: ignore[attr-defined]
+except ImportError:  # pragma: no cover - depends on the build
+    Plant = None  # type: ignore[assignment,misc]
+
+from rss6 import calibrate, logs, servo
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CalibrationData",
+    "CalibrationError",
+    "CalibrationResult",
+    "ControllerFaultError",
+    "Dsmc",
+    "DynamicParams",
+    "InvalidInputError",
+    "InvalidParameterError",
+    "KalmanFilter",
+    "Kcsc",
+    "KinematicParams",
+    "Kjsc",
+    "LogError",
+    "ModelSim",
+    "NonFiniteError",
+    "NotConvergedError",
+    "OutOfBranchError",
+    "ParamsFileError",
+    "Plant",
+    "Rss6Error",
+    "ShapeError",
+    "SimulationError",
+    "SingularError",
+    "TorqueToPosition",
+    "Trajectory",
+    "UnreachableError",
+    "calibrate",
+    "compose_poses",
+    "coriolis",
+    "dynamics_terms",
+    "errors",
+    "fk",
+    "fk_batch",
+    "forward_dynamics",
+    "friction",
+    "gravity",
+    "home_pose",
+    "ik",
+    "ik_batch",
+    "inverse_dynamics",
+    "invert_pose",
+    "jacobian_ad",
+    "jacobian_theta",
+    "logs",
+    "mass_matrix",
+    "regressor",
+    "rk4_step",
+    "servo",
+    "simulate",
+]

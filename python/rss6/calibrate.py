@@ -1,0 +1,212 @@
+"""Kinematic calibration from the optical CMM (thesis ch. 4): RPBA and the implicit method.
+
+>>> import rss6, numpy as np
+>>> from rss6 import calibrate
+>>> truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=3))
+>>> plant = rss6.ModelSim(truth, rss6.DynamicParams.nominal(), seed=3)
+>>> nominal = rss6.KinematicParams.nominal()
+>>> thetas = calibrate.select_configurations(nominal, "rpba", seed=0, candidates=300)
+>>> data = calibrate.collect(plant, thetas, dwell=0.5)
+>>> result = calibrate.rpba(data, nominal)
+>>> errs = calibrate.relative_pose_errors(result, plant, n=50)
+>>> bool(errs["rms"][:3].max() < 5e-5)   # below 0.05 mm in x, y, z
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rss6 import _rss6
+from rss6._rss6 import (
+    CalibrationData,
+    CalibrationResult,
+    KinematicParams,
+    select_configurations,
+    stroke,
+)
+from rss6.errors import InvalidInputError
+
+__all__ = [
+    "TABLE_4_2",
+    "THESIS_TABLES_4_3_4_4",
+    "THESIS_TABLE_4_5",
+    "CalibrationData",
+    "CalibrationResult",
+    "collect",
+    "default_placement",
+    "draw_errors",
+    "draw_external",
+    "implicit",
+    "relative_pose_errors",
+    "rpba",
+    "select_configurations",
+    "sensor_in_base_from_reference",
+    "stroke",
+]
+
+F64 = NDArray[np.float64]
+
+#: Table 4.2 error standard deviations: lengths/positions (m), η (rad/bit), Δθ (rad), external
+#: position (m) and angle (rad).
+TABLE_4_2 = {
+    "length": 1e-3,
+    "eta": 5e-5,
+    "dtheta": 0.05,
+    "ext_position": 0.5e-3,
+    "ext_angle": 0.017,
+}
+
+#: Table 4.5 (thesis, simulation): RMS relative pose errors [x, y, z, α, β, γ] (m, rad).
+THESIS_TABLE_4_5 = {
+    "uncalibrated": [3.4e-3, 3.8e-3, 4.5e-3, 0.0037, 0.0060, 0.0033],
+    "implicit": [3.1e-3, 4.9e-3, 4.2e-3, 9.6e-4, 7.9e-4, 0.0012],
+    "RPBA": [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5],
+}
+#: Tables 4.3 (implicit) and 4.4 (RPBA): (before, after) of ‖b^c − b^n‖₂ and Σ‖Φ^c − Φ^n‖₂.
+THESIS_TABLES_4_3_4_4 = {
+    "implicit": {"param_error": (3.273, 0.8197), "residual": (0.00109929, 2.94235e-05)},
+    "RPBA": {"param_error": (3.1630, 0.6616), "residual": (0.00542206, 2.38881e-05)},
+}
+
+
+def default_placement() -> tuple[F64, F64]:
+    """The design placement (ᴼχ_C, ᴱχ_t) of the simulated optical CMM and its target (rss6-sim's
+    defaults): what a user knows nominally before calibration."""
+    t = _rss6.ModelSim(KinematicParams.nominal(), _rss6.DynamicParams.nominal()).truth()
+    return np.asarray(t["sensor_in_base"]), np.asarray(t["target_in_effector"])
+
+
+def draw_errors(seed: int = 0) -> F64:
+    """A 60-vector b of kinematic errors drawn with Table 4.2's sizes (DESIGN.md order)."""
+    rng = np.random.default_rng(seed)
+    sd = np.r_[
+        np.full(48, TABLE_4_2["length"]),
+        np.full(6, TABLE_4_2["eta"]),
+        np.full(6, TABLE_4_2["dtheta"]),
+    ]
+    return np.asarray(rng.normal(0.0, sd), dtype=np.float64)
+
+
+def draw_external(pose: Any, seed: int = 0) -> F64:
+    """An external pose (ᴼχ_C or ᴱχ_t) perturbed with Table 4.2's sizes (0.5 mm, 0.017 rad)."""
+    rng = np.random.default_rng(seed)
+    p = np.asarray(pose, dtype=np.float64)
+    sd = np.r_[np.full(3, TABLE_4_2["ext_position"]), np.full(3, TABLE_4_2["ext_angle"])]
+    return np.asarray(p + rng.normal(0.0, sd), dtype=np.float64)
+
+
+def collect(
+    plant: Any,
+    thetas: Any,
+    dwell: float = 2.0,
+    *,
+    move_time: float = 1.0,
+    settle_time: float = 0.5,
+    progress: Callable[[int, int], Any] | None = None,
+) -> CalibrationData:
+    """Visits every configuration (row 0 = the initial configuration) on ``plant`` and averages the
+    potentiometers (500 Hz) and the camera (ᶜχ_t) over ``dwell`` s at rest (thesis §4.5: 2 s). The
+    plant should be at rest (e.g. just reset); the first move starts from its current readings.
+    ``progress(done, total)`` is called after each configuration."""
+    return _rss6.collect(
+        plant, thetas, dwell, move_time=move_time, settle_time=settle_time, progress=progress
+    )
+
+
+def _truth_of(plant_or_truth: Any) -> dict[str, Any]:
+    if isinstance(plant_or_truth, dict):
+        t = plant_or_truth
+    elif hasattr(plant_or_truth, "truth"):
+        t = plant_or_truth.truth()
+    else:
+        raise InvalidInputError("plant_or_truth must be a plant (with .truth()) or a truth dict")
+    for k in ("kinematics", "sensor_in_base", "target_in_effector"):
+        if k not in t:
+            raise InvalidInputError(f"truth dict is missing '{k}'")
+    return t
+
+
+def relative_pose_errors(
+    result: CalibrationResult | KinematicParams | None,
+    plant_or_truth: Any,
+    n: int = 100,
+    seed: int = 0,
+    *,
+    target_in_effector: Any = None,
+    stroke: tuple[float, float] | None = None,
+) -> dict[str, Any]:
+    """RMS relative pose errors of Table 4.5 (procedure steps 1–4) over ``n`` random test
+    configurations: ``result`` is a :class:`CalibrationResult`, or kinematic parameters (with
+    ``target_in_effector``, default the design target of :func:`default_placement`) — ``None`` means
+    the uncalibrated nominal model.
+    Returns ``{"rms": (6,), "errors": (n', 6), "skipped": int}`` (m, rad)."""
+    t = _truth_of(plant_or_truth)
+    if isinstance(result, CalibrationResult):
+        params, target = result.params, result.target_in_effector
+    else:
+        params = result if result is not None else KinematicParams.nominal()
+        target = default_placement()[1] if target_in_effector is None else target_in_effector
+    return _rss6.relative_pose_errors_raw(
+        params,
+        target,
+        t["kinematics"],
+        t["sensor_in_base"],
+        t["target_in_effector"],
+        n=n,
+        seed=seed,
+        stroke=stroke,
+    )
+
+
+def sensor_in_base_from_reference(data: CalibrationData, result: CalibrationResult) -> F64:
+    """ᴼχ_C estimated from configuration 0 with the calibrated model (RPBA does not estimate it):
+    ᴼχ_C = χ_E⁰ ∘ ᴱχ_t ∘ (ᶜχ_t⁰)⁻¹ with χ_E⁰ the calibrated FK of the mean readings κ⁰."""
+    if result.sensor_in_base is not None:
+        return np.asarray(result.sensor_in_base)
+    kp = result.params
+    z0 = data.sensor_pose[0]
+    if not np.all(np.isfinite(z0)):
+        raise InvalidInputError("configuration 0 has no camera frames")
+    pose0 = _rss6.fk(kp, kp.theta_from_reading(data.kappa[0]), _rss6.home_pose())
+    return _rss6.compose_poses(
+        _rss6.compose_poses(pose0, result.target_in_effector), _rss6.invert_pose(z0)
+    )
+
+
+def rpba(
+    data: CalibrationData,
+    kp: KinematicParams,
+    *,
+    target_guess: Any = None,
+    max_iterations: int = 60,
+    progress: Callable[[int, float], Any] | None = None,
+) -> CalibrationResult:
+    """RPBA (eq. 4.16–4.21): 60 kinematic + 6 external (ᴱχ_t) parameters from ``data``, starting at
+    ``kp`` and ``target_guess`` (default: the design target of :func:`default_placement`).
+    Levenberg–Marquardt with analytic Jacobians; ``progress(iteration, cost)`` per iteration."""
+    guess = default_placement()[1] if target_guess is None else target_guess
+    return _rss6.rpba(
+        data, kp, max_iterations=max_iterations, target_guess=guess, progress=progress
+    )
+
+
+def implicit(
+    data: CalibrationData,
+    kp: KinematicParams,
+    sensor_pose_guess: Any,
+    *,
+    target_guess: Any = None,
+    max_iterations: int = 60,
+) -> CalibrationResult:
+    """Implicit calibration (eq. 4.10–4.15): 60 kinematic + 12 external parameters (ᴼχ_C, ᴱχ_t) from
+    ``data``, starting at ``kp``, the rough sensor pose ``sensor_pose_guess`` and ``target_guess``
+    (default: the design target of :func:`default_placement`)."""
+    guess = default_placement()[1] if target_guess is None else target_guess
+    return _rss6.implicit(
+        data, kp, sensor_pose_guess, max_iterations=max_iterations, target_guess=guess
+    )

@@ -1,0 +1,103 @@
+"""The rss6 exception hierarchy.
+
+Every error raised by rss6 derives from :class:`Rss6Error`. Errors caused by bad input are also
+``ValueError`` so generic code can catch them the usual way. The compiled module maps each Rust error
+enum (``rss6_core::CoreError``, the controller, plant, calibration and log errors) onto these classes
+and sets the fields of the Rust variant as attributes (e.g. ``NotConvergedError.iterations``).
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CalibrationError",
+    "ControllerFaultError",
+    "InvalidInputError",
+    "InvalidParameterError",
+    "LogError",
+    "NonFiniteError",
+    "NotConvergedError",
+    "OutOfBranchError",
+    "ParamsFileError",
+    "Rss6Error",
+    "ShapeError",
+    "SimulationError",
+    "SingularError",
+    "UnreachableError",
+]
+
+
+class Rss6Error(Exception):
+    """Base class of every error raised by rss6."""
+
+
+class InvalidInputError(Rss6Error, ValueError):
+    """An argument has the wrong shape, type or value."""
+
+
+class ShapeError(InvalidInputError):
+    """An array argument has the wrong shape (the message names the expected and given shapes)."""
+
+
+class NonFiniteError(InvalidInputError):
+    """An input contains NaN or infinity (``CoreError::NonFinite``)."""
+
+
+class InvalidParameterError(InvalidInputError):
+    """A parameter is outside its physical range (``CoreError::InvalidParameter``)."""
+
+
+class UnreachableError(Rss6Error, ValueError):
+    """The pose cannot be reached (``CoreError::Unreachable``).
+
+    Attributes: ``leg`` (1-based leg number), ``excess`` (how far the circle-intersection cosine lies
+    beyond 1).
+    """
+
+    leg: int
+    excess: float
+
+
+class OutOfBranchError(UnreachableError):
+    """The pose is reachable only outside the working branch θ ∈ (−π/2, π/2]
+    (``CoreError::OutOfBranch``). Attributes: ``leg`` (1-based), ``theta`` (rad)."""
+
+    theta: float
+
+
+class NotConvergedError(Rss6Error):
+    """An iterative solver hit its iteration bound (``CoreError::NotConverged``).
+
+    Attributes: ``iterations``, ``residual`` (solver units, m for FK).
+    """
+
+    iterations: int
+    residual: float
+
+
+class SingularError(Rss6Error):
+    """A Jacobian or matrix needed by the computation is singular (``CoreError::Singular``).
+
+    Attribute ``kind``: ``"TypeI"``, ``"TypeII"``, ``"StewartJacobian"``, ``"Euler"`` or ``"Matrix"``.
+    """
+
+    kind: str
+
+
+class ControllerFaultError(Rss6Error):
+    """A controller refused its input or entered its fault state (``rss6_ctrl::CtrlError``)."""
+
+
+class SimulationError(Rss6Error):
+    """The plant or the model twin failed (``rss6_sim`` errors)."""
+
+
+class CalibrationError(Rss6Error):
+    """Calibration could not produce a trustworthy answer (``rss6_ident`` errors)."""
+
+
+class LogError(Rss6Error):
+    """An MCAP log could not be written or read."""
+
+
+class ParamsFileError(Rss6Error):
+    """A TOML parameter file could not be written, read or understood."""

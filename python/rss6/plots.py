@@ -1,0 +1,134 @@
+"""Figures like the thesis's (matplotlib, Agg backend; PNG files).
+
+* :func:`relative_pose_errors` — Fig. 4.8: relative pose errors per test configuration, uncalibrated
+  vs calibrated.
+* :func:`tracking` — Figs. 6.4/6.7: desired pose and the measured pose of each controller.
+* :func:`tracking_errors` — Figs. 6.5/6.8: tracking errors of each controller.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from typing import Any
+
+import numpy as np
+
+__all__ = ["relative_pose_errors", "tracking", "tracking_errors"]
+
+_LABELS = ("x (mm)", "y (mm)", "z (mm)", "α (mrad)", "β (mrad)", "γ (mrad)")
+_TITLES = (
+    "(a) along X",
+    "(b) along Y",
+    "(c) along Z",
+    "(d) around α",
+    "(e) around β",
+    "(f) around γ",
+)
+# Thesis line styles: KJSC purple dashed, KCSC black dotted, DSMC red dash-dotted.
+_STYLE = {"KJSC": ("tab:purple", "--"), "KCSC": ("black", ":"), "DSMC": ("tab:red", "-.")}
+
+
+def _figure() -> tuple[Any, Any]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 2, figsize=(11, 9), sharex=True)
+    return fig, axes.T.ravel()
+
+
+def _save(fig: Any, path: str | PathLike[str]) -> None:
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def relative_pose_errors(
+    uncalibrated: Any, calibrated: Any, path: str | PathLike[str], title: str = ""
+) -> None:
+    """Fig. 4.8: errors (n, 6) (m, rad) of the uncalibrated and the calibrated model per test
+    configuration, in mm and mrad."""
+    u = np.asarray(uncalibrated) * 1e3
+    c = np.asarray(calibrated) * 1e3
+    fig, axes = _figure()
+    for k, ax in enumerate(axes):
+        ax.plot(np.arange(1, len(u) + 1), u[:, k], "b.-", lw=0.8, ms=3, label="uncalibrated")
+        ax.plot(np.arange(1, len(c) + 1), c[:, k], "r.-", lw=0.8, ms=3, label="calibrated")
+        ax.set_ylabel(_LABELS[k])
+        ax.set_title(_TITLES[k], fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[2].set_xlabel("test configuration")
+    axes[5].set_xlabel("test configuration")
+    axes[0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    _save(fig, path)
+
+
+def tracking(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
+    """Figs. 6.4/6.7: the desired trajectory (blue solid) and the measured pose of each run
+    (:class:`rss6.servo.TrackingResult`) in the thesis's line styles."""
+    fig, axes = _figure()
+    first = results[0]
+    for k, ax in enumerate(axes):
+        ax.plot(first.time, first.desired[:, k] * 1e3, "tab:blue", lw=1.2, label="desired")
+        for r in results:
+            color, ls = _STYLE.get(r.controller, ("gray", "-"))
+            ax.plot(
+                r.frame_time, r.measured[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
+            )
+        ax.set_ylabel(_LABELS[k])
+        ax.set_title(_TITLES[k], fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[2].set_xlabel("time (s)")
+    axes[5].set_xlabel("time (s)")
+    axes[0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    _save(fig, path)
+
+
+def tracking_errors(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
+    """Figs. 6.5/6.8: tracking errors χ_d − χ_measured of each run."""
+    fig, axes = _figure()
+    for k, ax in enumerate(axes):
+        for r in results:
+            color, ls = _STYLE.get(r.controller, ("gray", "-"))
+            ax.plot(
+                r.frame_time, r.errors[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
+            )
+        ax.set_ylabel(_LABELS[k])
+        ax.set_title(_TITLES[k], fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[2].set_xlabel("time (s)")
+    axes[5].set_xlabel("time (s)")
+    axes[0].legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    _save(fig, path)
+
+
+def table_text(
+    measured: Mapping[str, Any], thesis: Mapping[str, Mapping[str, Sequence[float]]], title: str
+) -> str:
+    """A text table of RMSE/MAE per axis: ours beside the thesis's (mm and 1e-3 rad)."""
+    names = ["KJSC", "KCSC", "DSMC"]
+    axes = ["x (mm)", "y (mm)", "z (mm)", "α (1e-3 rad)", "β (1e-3 rad)", "γ (1e-3 rad)"]
+    lines = [title, ""]
+    head = f"{'axis':14s} {'stat':5s} " + " ".join(
+        f"{n + ' rss6':>10s} {n + ' thesis':>11s}" for n in names
+    )
+    lines.append(head)
+    lines.append("-" * len(head))
+    for k, ax in enumerate(axes):
+        for stat in ("rmse", "mae"):
+            cells = []
+            for n in names:
+                ours = measured[n].table()[stat][k] if n in measured else float("nan")
+                cells.append(f"{ours:10.3f} {thesis[stat][n][k]:11.3g}")
+            lines.append(f"{ax:14s} {stat.upper():5s} " + " ".join(cells))
+    return "\n".join(lines)

@@ -1,0 +1,118 @@
+"""rss6.calibrate: selection, collection on a simulated robot, RPBA, implicit, bad input."""
+
+import numpy as np
+import pytest
+import rss6
+from rss6 import calibrate
+
+NOMINAL = rss6.KinematicParams.nominal()
+DP = rss6.DynamicParams.nominal()
+
+
+def camera_sigma(sim):
+    """Per-frame standard deviation (6,) of the simulated CMM's ᶜχ_t at rest (m, rad)."""
+    frames = []
+    for _ in range(3000):
+        sim.step_joint_command(np.zeros(6))
+        z = sim.camera()
+        if z is not None:
+            frames.append(z)
+    return np.array(frames[10:]).std(0)
+
+
+@pytest.fixture(scope="module")
+def setup():
+    truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=7))
+    plant = rss6.ModelSim(truth, DP, seed=7)
+    lo, hi = calibrate.stroke(NOMINAL)
+    thetas = calibrate.select_configurations(
+        NOMINAL, "rpba", seed=0, candidates=300, stroke=(lo, hi)
+    )
+    data = calibrate.collect(plant, thetas, dwell=0.4, move_time=0.4, settle_time=0.3)
+    return plant, thetas, data, (lo, hi)
+
+
+def test_stroke_and_selection(setup):
+    _, thetas, _, (lo, hi) = setup
+    assert lo < 0 < hi
+    assert thetas.ndim == 2 and thetas.shape[1] == 6 and thetas.dtype == np.float64
+    np.testing.assert_allclose(thetas[0], np.zeros(6))  # configuration 0 = initial
+    assert np.all(thetas >= lo - 1e-12) and np.all(thetas <= hi + 1e-12)
+
+
+def test_collect_averages_every_configuration(setup):
+    _, thetas, data, _ = setup
+    assert len(data) == len(thetas)
+    assert data.kappa.shape == (len(thetas), 6) and data.sensor_pose.shape == (len(thetas), 6)
+    assert np.all(data.camera_frames >= 10)
+    np.testing.assert_allclose(data.theta_cmd, thetas)
+
+
+def test_rpba_recovers_the_robot(setup):
+    plant, _, data, s = setup
+    res = calibrate.rpba(data, NOMINAL)
+    assert res.method == "rpba" and res.parameter_count == 66
+    assert res.cost_history[-1] < 1e-3 * res.cost_history[0]
+    assert res.target_in_effector.shape == (6,) and res.sensor_in_base is None
+    assert isinstance(res.unidentifiable, list) and res.rank < 66  # gauge directions exist
+    before = calibrate.relative_pose_errors(None, plant, n=60, stroke=s)["rms"]
+    after = calibrate.relative_pose_errors(res, plant, n=60, stroke=s)["rms"]
+    assert np.all(after < before / 10), (before, after)
+    # ᴼχ_C from configuration 0 (in the calibrated model's frame, which may differ from the true base
+    # frame by a gauge transform): camera poses converted with it agree with the calibrated FK at
+    # every configuration.
+    est = calibrate.sensor_in_base_from_reference(data, res)
+    inv_t = rss6.invert_pose(res.target_in_effector)
+    kp = res.params
+    res_ = np.array(
+        [
+            rss6.compose_poses(rss6.compose_poses(est, z), inv_t)
+            - rss6.fk(kp, kp.theta_from_reading(kappa))
+            for kappa, z in zip(data.kappa, data.sensor_pose)
+        ]
+    )
+    rms = np.sqrt((res_**2).mean(0))
+    # within the noise of a dwell mean: the simulated CMM's per-frame σ (measured at rest) / √frames
+    bound = (
+        2.5 * camera_sigma(rss6.ModelSim(NOMINAL, DP, seed=8)) / np.sqrt(data.camera_frames.min())
+    )
+    # (norms over the three axes: the sensor-frame noise is anisotropic and rotates into the base frame)
+    assert np.linalg.norm(rms[:3]) < np.linalg.norm(bound[:3]), (rms, bound)
+    assert np.linalg.norm(rms[3:]) < np.linalg.norm(bound[3:]), (rms, bound)
+
+
+def test_implicit_runs_from_a_rough_sensor_pose(setup):
+    plant, _, data, _ = setup
+    guess = calibrate.draw_external(plant.truth()["sensor_in_base"], seed=1)
+    res = calibrate.implicit(data, NOMINAL, guess)
+    assert res.method == "implicit" and res.parameter_count == 72
+    assert res.sensor_in_base is not None and res.sensor_in_base.shape == (6,)
+    assert res.cost_history[-1] < res.cost_history[0]
+
+
+def test_too_few_configurations_names_the_count(setup):
+    _, _, data, _ = setup
+    few = rss6.CalibrationData.from_arrays(data.kappa[:4], data.sensor_pose[:4])
+    with pytest.raises(rss6.CalibrationError, match="too few usable configurations") as info:
+        calibrate.rpba(few, NOMINAL)
+    assert info.value.needed > 4
+
+
+def test_missing_frames_are_dropped_and_reported(setup):
+    _, _, data, _ = setup
+    sp = data.sensor_pose.copy()
+    sp[5] = np.nan
+    d2 = rss6.CalibrationData.from_arrays(data.kappa, sp)
+    res = calibrate.rpba(d2, NOMINAL)
+    assert [i for i, _ in res.dropped] == [5]
+    assert "frame" in res.dropped[0][1]
+    assert 5 not in res.used
+
+
+def test_calibration_data_bad_input():
+    with pytest.raises(rss6.ShapeError):
+        rss6.CalibrationData.from_arrays(np.zeros((3, 6)), np.zeros((2, 6)))
+    with pytest.raises(rss6.NonFiniteError):
+        rss6.CalibrationData.from_arrays(np.full((3, 6), np.nan), np.zeros((3, 6)))
+    with pytest.raises(rss6.InvalidInputError, match="method"):
+        calibrate.select_configurations(NOMINAL, "magic")

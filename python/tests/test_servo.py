@@ -1,0 +1,75 @@
+"""rss6.servo.track: the closed loop in Rust, statistics, MCAP logging."""
+
+import numpy as np
+import pytest
+import rss6
+from rss6 import servo
+
+KP = rss6.KinematicParams.nominal()
+DP = rss6.DynamicParams.nominal()
+B = np.random.default_rng(42).normal(
+    0, np.r_[np.full(48, 1e-3), np.full(6, 5e-5), np.full(6, 0.05)]
+)
+
+
+def test_track_shapes_and_statistics():
+    plant = rss6.ModelSim(KP, DP, seed=1)
+    r = servo.track(plant, "dsmc", "exp1", duration=1.5)
+    n, m = len(r.time), len(r.frame_time)
+    assert n == 1500 and 40 <= m <= 50
+    for name in ("desired", "true", "theta_cmd", "torque"):
+        arr = getattr(r, name)
+        assert arr.shape == (n, 6) and arr.dtype == np.float64, name
+    for name in ("frame_desired", "measured", "frame_true", "estimate", "estimate_dot", "sliding"):
+        assert getattr(r, name).shape == (m, 6), name
+    e = r.frame_desired - r.measured
+    np.testing.assert_allclose(r.rmse, np.sqrt((e**2).mean(0)))
+    np.testing.assert_allclose(r.mae, np.abs(e).mean(0))
+    assert r.controller == "DSMC" and r.trajectory == "exp1" and r.fault is None
+    # camera poses converted with the true external parameters equal the true pose up to zero-mean noise
+    d = r.measured - r.frame_true
+    assert np.all(np.abs(d.mean(0)) < 4 * d.std(0) / np.sqrt(len(d))), (d.mean(0), d.std(0))
+
+
+def test_dsmc_beats_kjsc_on_a_miscalibrated_robot():
+    plant = rss6.ModelSim(rss6.KinematicParams.perturbed(B), DP, seed=3)
+    res = {c: servo.track(plant, c, "exp1", duration=8.0) for c in ("kjsc", "kcsc", "dsmc")}
+    pos = {c: np.linalg.norm(r.rmse[:3]) for c, r in res.items()}
+    assert pos["dsmc"] < pos["kcsc"] < pos["kjsc"], pos
+
+
+def test_callable_trajectory_is_tabulated():
+    traj = rss6.Trajectory.experiment2()
+    plant = rss6.ModelSim(KP, DP, seed=4)
+    r = servo.track(plant, "kcsc", traj.sample, duration=1.0)
+    np.testing.assert_allclose(r.desired[500], traj.sample(0.5)[0], atol=1e-12)
+    with pytest.raises(rss6.ShapeError, match="pose at t = 0.000 s"):
+        servo.track(plant, "kcsc", lambda t: (np.zeros(5), np.zeros(6), np.zeros(6)), duration=0.1)
+    with pytest.raises(rss6.InvalidInputError, match="controller must be"):
+        servo.track(plant, "pid", "exp1", duration=0.1)
+    with pytest.raises(rss6.InvalidInputError, match="trajectory must be"):
+        servo.track(plant, "dsmc", "exp3", duration=0.1)
+
+
+def test_track_writes_and_reads_back_an_mcap_log(tmp_path):
+    plant = rss6.ModelSim(KP, DP, seed=5)
+    path = tmp_path / "run.mcap"
+    r = servo.track(plant, "kcsc", "exp2", duration=0.5, mcap=path)
+    assert r.log_path == str(path) and path.stat().st_size > 0
+    back = rss6.logs.read_run(path)
+    t, poses = back["true_pose"]
+    np.testing.assert_allclose(t, r.time, atol=1e-9)
+    np.testing.assert_allclose(poses, r.true, atol=1e-12)
+    _tc, cam = back["camera_pose"]
+    np.testing.assert_allclose(cam, r.measured, atol=1e-12)
+    np.testing.assert_allclose(back["theta_cmd"][1], r.theta_cmd)
+    assert back["metadata"] == {"controller": "KCSC", "trajectory": "exp2"}
+
+
+def test_thesis_tables_are_complete():
+    for exp in ("exp1", "exp2"):
+        for stat in ("rmse", "mae"):
+            for c in ("KJSC", "KCSC", "DSMC"):
+                assert len(servo.THESIS_TABLES[exp][stat][c]) == 6
+    # Table 6.1's DSMC x RMSE
+    assert servo.THESIS_TABLES["exp1"]["rmse"]["DSMC"][0] == 0.44

@@ -1,0 +1,102 @@
+"""Simulated robots: rss6.Plant (rapier) and rss6.ModelSim (analytic twin) share one call shape."""
+
+import numpy as np
+import pytest
+import rss6
+
+KP = rss6.KinematicParams.nominal()
+DP = rss6.DynamicParams.nominal()
+SIMS = [rss6.ModelSim, rss6.Plant]
+
+
+@pytest.mark.parametrize("cls", SIMS)
+def test_call_shape_and_rates(cls):
+    sim = cls(KP, DP, seed=1)
+    sim.reset(rss6.home_pose())
+    assert sim.time == 0.0 and sim.dt == pytest.approx(1e-3)
+    frames = 0
+    for _ in range(500):
+        sim.step_joint_command(np.zeros(6))
+        z = sim.camera()
+        if z is not None:
+            assert z.shape == (6,) and z.dtype == np.float64
+            frames += 1
+    assert sim.time == pytest.approx(0.5)
+    assert 13 <= frames <= 17  # ~29-30 Hz camera
+    assert sim.potentiometers().shape == (6,)
+    assert sim.torque().shape == (6,)
+    # the PID holds the robot near home
+    assert np.abs(sim.true_pose() - rss6.home_pose())[:3].max() < 1e-3
+    # the rapier plant closes its loops to ~10 µm (rss6-sim's accuracy): ~1e-4 rad in θ
+    atol = 1e-9 if cls is rss6.ModelSim else 2e-4
+    np.testing.assert_allclose(sim.true_theta(), rss6.ik(KP, sim.true_pose()), atol=atol)
+
+
+@pytest.mark.parametrize("cls", SIMS)
+def test_truth_and_camera_geometry(cls):
+    sim = cls(KP, DP, seed=2)
+    t = sim.truth()
+    assert set(t) == {
+        "kinematics",
+        "dynamics",
+        "pid",
+        "sensor_in_base",
+        "target_in_effector",
+        "effects",
+    }
+    assert t["kinematics"] == KP and t["dynamics"] == DP and t["effects"] == {}
+    # ᶜχ_t = (ᴼχ_C)⁻¹ ∘ χ_E ∘ ᴱχ_t, within the CMM noise
+    errors = []
+    for _ in range(2500):
+        before = sim.true_pose()
+        sim.step_joint_command(np.zeros(6))
+        z = sim.camera()
+        if z is not None:
+            pose = 0.5 * (before + sim.true_pose())  # exposed within this tick
+            expected = rss6.compose_poses(
+                rss6.compose_poses(rss6.invert_pose(t["sensor_in_base"]), pose),
+                t["target_in_effector"],
+            )
+            errors.append(z - expected)
+    e = np.array(errors)
+    assert len(e) >= 60
+    # unbiased: the mean error is within 4 standard errors of zero on every axis
+    assert np.all(np.abs(e.mean(0)) < 4 * e.std(0) / np.sqrt(len(e))), (e.mean(0), e.std(0))
+
+
+def test_effects_are_hidden_but_in_the_truth():
+    p = rss6.Plant(KP, DP, effects={"payload": {"mass": 2.0, "x": 0.0, "y": 0.0, "z": 0.02}})
+    assert "payload" in p.truth()["effects"]
+    with pytest.raises(rss6.InvalidParameterError, match="unknown effect"):
+        rss6.Plant(KP, DP, effects={"gremlins": {}})
+
+
+def test_sim_bad_input():
+    sim = rss6.ModelSim(KP, DP)
+    with pytest.raises(rss6.ShapeError):
+        sim.step_joint_command(np.zeros(5))
+    with pytest.raises(rss6.NonFiniteError):
+        sim.step_joint_command([np.nan] * 6)
+    with pytest.raises(rss6.Rss6Error):
+        sim.reset([0, 0, 0.5, 0, 0, 0])
+    with pytest.raises(rss6.InvalidParameterError):
+        rss6.ModelSim(KP, DP, dt=0.5)
+
+
+@pytest.mark.parametrize("cls", SIMS)
+def test_simulate_runs_a_command_sequence(cls):
+    sim = cls(KP, DP, seed=3)
+    n = 400
+    cmds = np.zeros((n, 6))
+    cmds[:, 0] = np.linspace(0, 0.05, n)
+    out = rss6.simulate(sim, cmds)
+    assert out["time"].shape == (n,) and out["time"][-1] == pytest.approx(0.4)
+    for k in ("true_pose", "true_theta", "kappa", "torque"):
+        assert out[k].shape == (n, 6) and out[k].dtype == np.float64
+    assert 10 <= len(out["camera_time"]) <= 14 and out["camera"].shape == (
+        len(out["camera_time"]),
+        6,
+    )
+    assert out["true_theta"][-1, 0] > 0.02  # joint 1 followed its ramp
+    with pytest.raises(rss6.NonFiniteError):
+        rss6.simulate(sim, np.full((2, 6), np.nan))
