@@ -15,6 +15,7 @@ True
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -149,7 +150,12 @@ def collect(
         raise InvalidInputError("move_time must be > 0 and settle_time >= 0")
     if settle_time < 0:
         raise InvalidInputError("move_time must be > 0 and settle_time >= 0")
-    streams, windows = _step_dwells(plant, th, dwell, move_time, settle_time, progress)
+    raw: dict[str, tuple[list[float], list[F64]]] = {
+        "kappa": ([], []),
+        "camera_pose": ([], []),
+        "theta_cmd": ([], []),
+    }
+    windows: list[list[float]] = []
     metadata = {
         "kind": MCAP_KIND,
         "configurations": str(len(th)),
@@ -157,10 +163,24 @@ def collect(
         "move_time": repr(float(move_time)),
         "settle_time": repr(float(settle_time)),
         "kappa_rate": repr(KAPPA_RATE),
-        "windows": json.dumps(windows),
     }
-    logs.write_run(mcap, streams, metadata)
+    try:
+        _step_dwells(plant, th, dwell, move_time, settle_time, progress, raw, windows)
+    except BaseException:
+        # Keep the finished dwells (the reader ignores samples outside the windows), then re-raise.
+        with contextlib.suppress(Exception):
+            logs.write_run(mcap, _series(raw), {**metadata, "windows": json.dumps(windows)})
+        raise
+    streams = _series(raw)
+    logs.write_run(mcap, streams, {**metadata, "windows": json.dumps(windows)})
     return _average_dwells(streams, windows, complete=True, drop=False, kappa_rate=KAPPA_RATE).data
+
+
+def _series(raw: Mapping[str, tuple[list[float], list[F64]]]) -> dict[str, tuple[F64, F64]]:
+    return {
+        name: (np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64).reshape(-1, 6))
+        for name, (t, v) in raw.items()
+    }
 
 
 def _rows6(x: Any, name: str) -> F64:
@@ -177,10 +197,12 @@ def _step_dwells(
     move_time: float,
     settle_time: float,
     progress: Callable[[int, int], Any] | None,
-) -> tuple[dict[str, tuple[F64, F64]], list[list[float]]]:
-    """Steps ``plant`` through the configurations as rss6-ident's ``Stepped`` source does and
-    returns the raw dwell streams (kappa, camera_pose, theta_cmd) and the dwell windows [t0, t1] (s,
-    the plant times of the first and last dwell tick of each configuration)."""
+    raw: dict[str, tuple[list[float], list[F64]]],
+    windows: list[list[float]],
+) -> None:
+    """Steps ``plant`` through the configurations as rss6-ident's ``Stepped`` source does, appending
+    the raw dwell samples to ``raw`` (kappa, camera_pose, theta_cmd: times, values) and, once a dwell
+    is finished, its window [t0, t1] to ``windows`` (s, plant times of its first and last tick)."""
     dt = float(plant.dt)
 
     def ticks(t: float) -> int:
@@ -188,13 +210,9 @@ def _step_dwells(
 
     every = max(round(1.0 / (KAPPA_RATE * dt)), 1)
     last = np.asarray(KinematicParams.nominal().theta_from_reading(plant.potentiometers()))
-    kt: list[float] = []
-    kv: list[F64] = []
-    ct: list[float] = []
-    cv: list[F64] = []
-    tt: list[float] = []
-    tv: list[F64] = []
-    windows: list[list[float]] = []
+    kt, kv = raw["kappa"]
+    ct, cv = raw["camera_pose"]
+    tt, tv = raw["theta_cmd"]
     n_move = max(ticks(move_time), 1)
     for l, cmd in enumerate(thetas):
         for k in range(1, n_move + 1):
@@ -220,16 +238,6 @@ def _step_dwells(
         windows.append([float(start if start is not None else plant.time), float(plant.time)])
         if progress is not None:
             progress(l + 1, len(thetas))
-
-    def series(t: list[float], v: list[F64]) -> tuple[F64, F64]:
-        return np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64).reshape(-1, 6)
-
-    streams = {
-        "kappa": series(kt, kv),
-        "camera_pose": series(ct, cv),
-        "theta_cmd": series(tt, tv),
-    }
-    return streams, windows
 
 
 def mean_pose(poses: Any) -> F64:
@@ -284,6 +292,7 @@ def _average_dwells(
     complete: bool,
     drop: bool,
     kappa_rate: float | None = None,
+    configurations: int | None = None,
     metadata: dict[str, str] | None = None,
 ) -> McapCalibration:
     """Averages κ and ᶜχ_t over each dwell window (metadata windows, or segments of θ_cmd). With
@@ -333,6 +342,8 @@ def _average_dwells(
             if drop:
                 continue
         rows.append((l, kappa, pose, theta, len(ks), len(finite)))
+    for l in range(len(windows), configurations or 0):
+        dropped.append((l, "not finished: the collection stopped before the end of its dwell"))
     if (
         drop
         and not complete
@@ -398,17 +409,27 @@ def read_mcap(path: Path) -> McapCalibration:
     md = run.get("metadata")
     windows = None
     rate = None
+    count = None
     if md is not None:
         if md.get("kind") != MCAP_KIND:
             raise LogError(f"{path}: metadata kind is {md.get('kind')!r}, expected {MCAP_KIND!r}")
         try:
             windows = [[float(a), float(b)] for a, b in json.loads(md["windows"])]
             rate = float(md["kappa_rate"])
+            count = int(md["configurations"])
         except (KeyError, TypeError, ValueError) as e:
             raise LogError(f"{path}: bad calibration metadata: {e}") from e
     if "kappa" not in run and "theta_cmd" not in run:
         raise LogError(f"{path}: no calibration data (empty, corrupt or not written by collect())")
-    return _average_dwells(run, windows, complete=complete, drop=True, kappa_rate=rate, metadata=md)
+    return _average_dwells(
+        run,
+        windows,
+        complete=complete,
+        drop=True,
+        kappa_rate=rate,
+        configurations=count,
+        metadata=md,
+    )
 
 
 def load_mcap(path: Path) -> CalibrationData:

@@ -232,6 +232,44 @@ def test_collect_with_mcap_rejects_bad_input(tmp_path):
     assert not (tmp_path / "x.mcap").exists()
 
 
+class FailingPlant:
+    """A plant whose simulation fails after ``fail_after`` ticks."""
+
+    def __init__(self, sim, fail_after):
+        self.sim, self.left = sim, fail_after
+        self.dt = sim.dt
+
+    @property
+    def time(self):
+        return self.sim.time
+
+    def step_joint_command(self, cmd):
+        self.left -= 1
+        if self.left < 0:
+            raise rss6.SimulationError("simulated fault")
+        self.sim.step_joint_command(cmd)
+
+    def potentiometers(self):
+        return self.sim.potentiometers()
+
+    def camera(self):
+        return self.sim.camera()
+
+
+def test_failed_collection_keeps_the_finished_dwells(logged, tmp_path):
+    thetas, _, returned, _, _ = logged
+    truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=7))
+    plant = FailingPlant(rss6.ModelSim(truth, DP, seed=7), fail_after=3 * 1100 + 900)
+    path = tmp_path / "failed.mcap"
+    with pytest.raises(rss6.SimulationError):
+        calibrate.collect(plant, thetas[:6], mcap=path, **KW)
+    r = calibrate.read_mcap(path)
+    assert r.complete and r.used == [0, 1, 2]
+    assert [i for i, _ in r.dropped] == [3, 4, 5]
+    assert all("stopped" in why for _, why in r.dropped)
+    np.testing.assert_array_equal(r.data.kappa, returned.kappa[:3])
+
+
 def quat(pose):
     q = logs.euler_to_quaternion(pose)[0]
     return q if q[3] >= 0 else -q
