@@ -8,31 +8,14 @@
 
 #[path = "support/poses.rs"]
 mod poses;
+#[path = "support/rounds.rs"]
+mod rounds;
+use rounds::measure;
 
 use rss6_core::{
     fk, fk_theta_newton, home_pose, ik, jacobian_theta, FkOptions, KinematicParams, Vec6,
 };
 use std::hint::black_box;
-use std::time::Instant;
-
-/// Runs `rounds` rounds of `n` calls; prints the median and the fastest round's time per call.
-fn measure(name: &str, rounds: usize, n: usize, mut op: impl FnMut(usize)) {
-    let mut per_call: Vec<f64> = (0..rounds)
-        .map(|_| {
-            let t0 = Instant::now();
-            for k in 0..n {
-                op(k);
-            }
-            t0.elapsed().as_secs_f64() * 1e9 / n as f64
-        })
-        .collect();
-    per_call.sort_by(f64::total_cmp);
-    println!(
-        "| {name} | {:.0} | {:.0} |",
-        per_call[rounds / 2],
-        per_call[0]
-    );
-}
 
 fn main() {
     let reps: usize = std::env::args().nth(1).map_or(400, |s| s.parse().unwrap());
