@@ -3,127 +3,16 @@
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
-use rss6_core::{Body, DynamicParams, KinematicParams, Vec3, LEGS, N_DYN, N_KIN_ERRORS};
+use rss6_core::{DynamicParams, KinematicParams, LEGS, N_DYN, N_KIN_ERRORS};
 use std::path::PathBuf;
 
 use crate::convert::{exact, out1, out_rows, vec6, vecn};
 use crate::errors::{core, invalid, make};
 
-/// Kinematic parameters as plain arrays: the `to_dict` keys of DESIGN.md, SI units.
-#[derive(Debug, Clone)]
-struct KinFile {
-    base_joints: [[f64; 3]; LEGS],
-    platform_joints: [[f64; 3]; LEGS],
-    wrench_lengths: [f64; LEGS],
-    link_lengths: [f64; LEGS],
-    theta0: [f64; LEGS],
-    eta: [f64; LEGS],
-    dtheta: [f64; LEGS],
-}
-
-impl From<&KinematicParams> for KinFile {
-    fn from(k: &KinematicParams) -> Self {
-        let v3 = |v: &[Vec3; LEGS]| v.map(|x| [x[0], x[1], x[2]]);
-        KinFile {
-            base_joints: v3(&k.base_joints),
-            platform_joints: v3(&k.platform_joints),
-            wrench_lengths: k.wrench_lengths,
-            link_lengths: k.link_lengths,
-            theta0: k.theta0,
-            eta: k.eta,
-            dtheta: k.dtheta,
-        }
-    }
-}
-
-impl From<&KinFile> for KinematicParams {
-    fn from(f: &KinFile) -> Self {
-        KinematicParams {
-            base_joints: f.base_joints.map(Vec3::from),
-            platform_joints: f.platform_joints.map(Vec3::from),
-            wrench_lengths: f.wrench_lengths,
-            link_lengths: f.link_lengths,
-            theta0: f.theta0,
-            eta: f.eta,
-            dtheta: f.dtheta,
-        }
-    }
-}
-
-/// One group of bodies in a dynamic parameter file.
-#[derive(Debug, Clone)]
-struct BodiesFile {
-    mass: [f64; LEGS],
-    inertia: [[f64; 3]; LEGS],
-}
-
-/// The platform in a dynamic parameter file.
-#[derive(Debug, Clone)]
-struct BodyFile {
-    mass: f64,
-    inertia: [f64; 3],
-}
-
-/// Dynamic parameters as plain arrays (Table 5.1 layout), SI units; the layout of rss6-sim's TOML files.
-#[derive(Debug, Clone)]
-struct DynFile {
-    platform: BodyFile,
-    wrenches: BodiesFile,
-    links: BodiesFile,
-    coulomb: [f64; LEGS],
-    viscous: [f64; LEGS],
-}
-
-fn bodies_file(b: &[Body; LEGS]) -> BodiesFile {
-    BodiesFile {
-        mass: b.map(|x| x.mass),
-        inertia: b.map(|x| [x.inertia[0], x.inertia[1], x.inertia[2]]),
-    }
-}
-
-fn bodies_from(f: &BodiesFile) -> [Body; LEGS] {
-    let mut out = [Body::new(0.0, 0.0, 0.0, 0.0); LEGS];
-    for (i, b) in out.iter_mut().enumerate() {
-        *b = Body::new(f.mass[i], f.inertia[i][0], f.inertia[i][1], f.inertia[i][2]);
-    }
-    out
-}
-
-impl From<&DynamicParams> for DynFile {
-    fn from(d: &DynamicParams) -> Self {
-        DynFile {
-            platform: BodyFile {
-                mass: d.platform.mass,
-                inertia: [
-                    d.platform.inertia[0],
-                    d.platform.inertia[1],
-                    d.platform.inertia[2],
-                ],
-            },
-            wrenches: bodies_file(&d.wrenches),
-            links: bodies_file(&d.links),
-            coulomb: d.coulomb,
-            viscous: d.viscous,
-        }
-    }
-}
-
-impl From<&DynFile> for DynamicParams {
-    fn from(f: &DynFile) -> Self {
-        DynamicParams {
-            platform: Body::new(
-                f.platform.mass,
-                f.platform.inertia[0],
-                f.platform.inertia[1],
-                f.platform.inertia[2],
-            ),
-            wrenches: bodies_from(&f.wrenches),
-            links: bodies_from(&f.links),
-            coulomb: f.coulomb,
-            viscous: f.viscous,
-        }
-    }
-}
+// The TOML layout and its conversions are rss6-sim's (one format for Rust and Python).
+use rss6_sim::{
+    BodiesFile, BodyFile, DynamicParamsFile as DynFile, KinematicParamsFile as KinFile,
+};
 
 /// Maps a parameter-file error of rss6-sim onto `rss6.ParamsFileError` (or the core error inside).
 fn file_err(e: rss6_sim::SimError) -> PyErr {

@@ -24,8 +24,8 @@ pub use crate::log::{
 };
 pub use crate::params_file::{
     load_dynamic_params, load_kinematic_params, load_pid_gains, load_truth, save_dynamic_params,
-    save_kinematic_params, save_pid_gains, save_truth, DynamicParamsFile, KinematicParamsFile,
-    PidGainsFile, TruthFile,
+    save_kinematic_params, save_pid_gains, save_truth, BodiesFile, BodyFile, DynamicParamsFile,
+    KinematicParamsFile, PidGainsFile, TruthFile,
 };
 pub use crate::plant::{Plant, RapierPhysics};
 pub use crate::sensors::{
