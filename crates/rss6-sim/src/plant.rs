@@ -42,6 +42,9 @@ fn mat_from(q: DQuat) -> Mat3 {
     Mat3::from_column_slice(&m)
 }
 
+/// Jacobian of the six loop equations with respect to (φ_1..φ_6, δp, δr).
+type LoopJacobian = ::nalgebra::SMatrix<f64, LEGS, 12>;
+
 #[derive(Debug, Clone, Copy)]
 struct Leg {
     wrench: RigidBodyHandle,
@@ -65,6 +68,15 @@ pub struct RapierPhysics {
     viscous: [f64; LEGS],
     t_joint: TJoint,
     multibody: bool,
+    projection: bool,
+    /// Loop gap left by the rapier step before the projection (m).
+    solver_gap: f64,
+    /// Projection metric: inverse inertia of each wrench about its axis (1/(kg·m²)), inverse
+    /// platform mass (1/kg) and platform inertia in ΣE (kg·m²), each with half of every link lumped
+    /// at its ends.
+    inv_wrench_inertia: [f64; LEGS],
+    inv_platform_mass: f64,
+    platform_inertia: DMat3,
     world: PhysicsWorld,
     legs: Vec<Leg>,
     platform: RigidBodyHandle,
@@ -96,6 +108,11 @@ impl RapierPhysics {
             viscous,
             t_joint: cfg.solver.t_joint,
             multibody: cfg.solver.multibody_legs,
+            projection: cfg.solver.projection && !cfg.solver.multibody_legs,
+            solver_gap: 0.0,
+            inv_wrench_inertia: [0.0; LEGS],
+            inv_platform_mass: 0.0,
+            platform_inertia: DMat3::IDENTITY,
             world,
             legs: Vec::new(),
             platform: RigidBodyHandle::invalid(),
@@ -125,6 +142,29 @@ impl RapierPhysics {
                 .additional_mass_properties(mprops)
                 .can_sleep(false),
         );
+
+        // Projection metric (see `project`): half of each link's mass lumped at T_i and A_i.
+        let mut m_total = pb.mass;
+        let mut i_plat = DMat3::from_diagonal(dv(&pb.inertia));
+        let point = |m: f64, c: DVec3| {
+            m * (DMat3::from_diagonal(DVec3::splat(c.length_squared()))
+                - DMat3::from_cols(c * c.x, c * c.y, c * c.z))
+        };
+        if let Some(pl) = self.setup.payload {
+            m_total += pl.mass;
+            i_plat += DMat3::from_diagonal(DVec3::splat(pl.inertia)) + point(pl.mass, dv(&pl.com));
+        }
+        for i in 0..LEGS {
+            let half = 0.5 * self.dp.links[i].mass;
+            m_total += half;
+            i_plat += point(half, dv(&kp.platform_joints[i]));
+            let wb = &self.dp.wrenches[i];
+            let lw = kp.wrench_lengths[i];
+            let i_axis = wb.inertia[2] + wb.mass * 0.25 * lw * lw + half * lw * lw;
+            self.inv_wrench_inertia[i] = if i_axis > 0.0 { 1.0 / i_axis } else { 0.0 };
+        }
+        self.inv_platform_mass = if m_total > 0.0 { 1.0 / m_total } else { 0.0 };
+        self.platform_inertia = i_plat;
 
         let tips = wrench_tips(kp, theta);
         let mut legs = Vec::with_capacity(LEGS);
@@ -239,6 +279,127 @@ impl RapierPhysics {
         self.legs.get(i).map(|l| l.half_link)
     }
 
+    /// The six loop-closure equations g_i = |A_i − T_i| − ℓ_i and their Jacobian with respect to
+    /// (φ_1..φ_6, δp, δr): wrench angles about their axes, platform translation and small rotation
+    /// (world frame), for wrench angles `phi` and platform pose (`p`, `q`).
+    fn loop_equations(&self, phi: &[f64; LEGS], p: DVec3, q: DQuat) -> ([f64; LEGS], LoopJacobian) {
+        let mut g = [0.0; LEGS];
+        let mut jac = LoopJacobian::zeros();
+        for (i, leg) in self.legs.iter().enumerate() {
+            let b = dv(&self.kp.base_joints[i]);
+            let lw = self.kp.wrench_lengths[i];
+            let arm = lw * DVec3::new(phi[i].cos(), phi[i].sin(), 0.0);
+            let r_a = q * leg.a_in_platform;
+            let d = p + r_a - (b + arm);
+            let len = d.length();
+            let u = if len > 0.0 { d / len } else { DVec3::Z };
+            g[i] = len - 2.0 * leg.half_link;
+            jac[(i, i)] = -u.dot(DVec3::Z.cross(arm));
+            let ru = r_a.cross(u);
+            for k in 0..3 {
+                jac[(i, LEGS + k)] = u[k];
+                jac[(i, LEGS + 3 + k)] = ru[k];
+            }
+        }
+        (g, jac)
+    }
+
+    /// The mass-weighted minimum-norm correction δ = −W⁻¹Jᵀ(JW⁻¹Jᵀ)⁻¹r that zeroes J·δ + r.
+    fn weighted_correction(
+        &self,
+        jac: &LoopJacobian,
+        r: &[f64; LEGS],
+        w_rot: &DMat3,
+    ) -> Option<[f64; 12]> {
+        let mut wjt = jac.transpose(); // 12 × 6, becomes W⁻¹Jᵀ
+        for c in 0..LEGS {
+            for i in 0..LEGS {
+                wjt[(i, c)] *= self.inv_wrench_inertia[i];
+            }
+            for k in 0..3 {
+                wjt[(LEGS + k, c)] *= self.inv_platform_mass;
+            }
+            let w = DVec3::new(wjt[(9, c)], wjt[(10, c)], wjt[(11, c)]);
+            let w = *w_rot * w;
+            for k in 0..3 {
+                wjt[(9 + k, c)] = w[k];
+            }
+        }
+        let a = jac * wjt;
+        let chol = a.cholesky()?;
+        let lambda = chol.solve(&Vec6::from_column_slice(r));
+        let delta = -(wjt * lambda);
+        let mut out = [0.0; 12];
+        out.copy_from_slice(delta.as_slice());
+        Some(out)
+    }
+
+    /// Post-step projection of the positions onto the loop constraints (post-stabilisation, as in
+    /// Cline & Pai 2003). The wrenches are put back on their revolute axes; the wrench angles and
+    /// the platform pose move by the smallest mass-weighted step that makes every |A_i − T_i| equal
+    /// its link length (Newton, at most 4 iterations, to 1e-13 m); each link is then set exactly
+    /// between its two joints and its angular velocity turned with it (its spin about its own axis kept). Velocities are left as the solver
+    /// made them (projecting them too with this lumped metric made the plant–twin agreement worse).
+    /// Uses only the bodies' joint anchors, not the analytic model.
+    fn project(&mut self) {
+        if self.legs.len() != LEGS {
+            return;
+        }
+        let mut phi = [0.0; LEGS];
+        for (i, leg) in self.legs.iter().enumerate() {
+            let x = self.world.bodies[leg.wrench].rotation() * DVec3::X;
+            phi[i] = x.y.atan2(x.x);
+        }
+        let pb = &self.world.bodies[self.platform];
+        let mut p = pb.translation();
+        let mut q = *pb.rotation();
+        for _ in 0..4 {
+            let (g, jac) = self.loop_equations(&phi, p, q);
+            if g.iter().all(|e| e.abs() < 1e-13) {
+                break;
+            }
+            let r = DMat3::from_quat(q);
+            let inv_inertia = (r * self.platform_inertia * r.transpose()).inverse();
+            let Some(d) = self.weighted_correction(&jac, &g, &inv_inertia) else {
+                return;
+            };
+            for (f, di) in phi.iter_mut().zip(d) {
+                *f += di;
+            }
+            p += DVec3::new(d[6], d[7], d[8]);
+            q = (DQuat::from_scaled_axis(DVec3::new(d[9], d[10], d[11])) * q).normalize();
+        }
+
+        let bodies = &mut self.world.bodies;
+        bodies[self.platform].set_position(Pose::from_parts(p, q), false);
+        for (i, leg) in self.legs.iter().enumerate() {
+            let b = dv(&self.kp.base_joints[i]);
+            let lw = self.kp.wrench_lengths[i];
+            let dir = DVec3::new(phi[i].cos(), phi[i].sin(), 0.0);
+            let t = b + lw * dir;
+            bodies[leg.wrench].set_position(
+                Pose::from_parts(b + 0.5 * lw * dir, DQuat::from_rotation_z(phi[i])),
+                false,
+            );
+            let a = p + q * leg.a_in_platform;
+            let d = a - t;
+            if d.length() <= 0.0 {
+                continue;
+            }
+            let link = &mut bodies[leg.link];
+            let q_old = *link.rotation();
+            let turn = DQuat::from_rotation_arc(q_old * DVec3::Z, d.normalize());
+            link.set_position(
+                Pose::from_parts(0.5 * (t + a), (turn * q_old).normalize()),
+                false,
+            );
+            // Turn the angular velocity with the body, so the spin about the link axis is kept
+            // (otherwise each step moves a little of the swing rate into the spin).
+            let w = turn * link.angvel();
+            link.set_angvel(w, false);
+        }
+    }
+
     fn platform_body(&self) -> &RigidBody {
         &self.world.bodies[self.platform]
     }
@@ -259,6 +420,10 @@ impl Physics for RapierPhysics {
             body.add_torque(DVec3::new(0.0, 0.0, t), true);
         }
         self.world.step();
+        self.solver_gap = self.loop_closure_error();
+        if self.projection {
+            self.project();
+        }
         Ok(())
     }
 
@@ -284,6 +449,10 @@ impl Physics for RapierPhysics {
             v[i] = self.world.bodies[leg.wrench].angvel().z;
         }
         v
+    }
+
+    fn solver_gap(&self) -> f64 {
+        self.solver_gap
     }
 
     fn loop_closure_error(&self) -> f64 {

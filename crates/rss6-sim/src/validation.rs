@@ -58,6 +58,8 @@ pub struct DiffSample {
     pub angle: f64,
     /// Plant loop-closure gap (m).
     pub loop_closure: f64,
+    /// Largest gap the constraint solvers left before the post-step projection (m).
+    pub solver_gap: f64,
     /// Distance of robot `a`'s platform from the home position (m): shows the motion is real.
     pub excursion: f64,
 }
@@ -96,6 +98,7 @@ pub fn compare<P: Physics, Q: Physics>(
                 position,
                 angle,
                 loop_closure: a.loop_closure_error().max(b.loop_closure_error()),
+                solver_gap: a.solver_gap().max(b.solver_gap()),
                 excursion: pose_distance(&a.true_pose(), &home_pose()).0,
             });
         }
