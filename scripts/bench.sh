@@ -25,6 +25,7 @@ kinematics/ik 300
 kinematics/fk_warm 1000
 kinematics/fk_cold 3000
 dynamics/inverse_dynamics 2000
+plant_tick_4_iterations 50000
 '
 
 mkdir -p "$CRITERION_DIR"

@@ -1,9 +1,10 @@
-//! Speed of the rapier plant: one 1 kHz tick (PID + rapier step + sensors) with the default solver
-#![allow(missing_docs, clippy::unwrap_used, clippy::expect_used)]
-//! settings (the ones that meet the ≤ 10 µm loop-closure target), and of the model twin.
+//! Speed of the rapier plant: one 1 kHz tick (PID + rapier step + post-step projection + sensors)
+//! with 4 (the default), 8 and 16 solver iterations, 16 without the projection (the old accurate
+//! setting), and of the model twin.
 //! Real-time factor = 1 ms / time per tick.
 //!
 //! `cargo bench -p rss6-benches --bench plant -- --warm-up-time 1 --measurement-time 2`
+#![allow(missing_docs, clippy::unwrap_used, clippy::expect_used)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rss6_core::KinematicParams;
@@ -20,12 +21,18 @@ fn commands() -> Vec<rss6_core::Vec6> {
 
 fn bench_plant(c: &mut Criterion) {
     let cmds = commands();
-    for it in [4usize, 8, 16] {
+    for (it, projection) in [(4usize, true), (8, true), (16, true), (16, false)] {
         let mut cfg = SimConfig::nominal();
         cfg.solver.iterations = it;
+        cfg.solver.projection = projection;
         let mut plant = Plant::new(cfg).expect("plant");
         let mut k = 0;
-        c.bench_function(&format!("plant_tick_{it}_iterations"), |b| {
+        let name = if projection {
+            format!("plant_tick_{it}_iterations")
+        } else {
+            format!("plant_tick_{it}_iterations_no_projection")
+        };
+        c.bench_function(&name, |b| {
             b.iter(|| {
                 if k == cmds.len() {
                     plant.reset(&rss6_core::home_pose()).expect("reset");

@@ -1,11 +1,13 @@
-//! Accuracy/speed table of the rapier plant: loop-closure gap and cost per 1 kHz step for 4, 8 and 16
-//! solver iterations, on the default exciting trajectory (plant alone, nominal robot, 3 s).
+//! Accuracy/speed table of the rapier plant for 2, 4, 8 and 16 solver iterations, with and without
+//! the post-step projection (`SolverConfig::projection`): the gap the solver leaves, the loop gap
+//! after the tick, the plant–twin difference (Fig. 5.5–5.6 bounds), the cost per 1 kHz tick and the
+//! link spin (Assumption 2). Nominal robot, 10 s of the default exciting trajectory.
 //!
 //! `cargo run --release -p rss6-sim --example plant_table`
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::KinematicParams;
-use rss6_sim::{ExcitingTrajectory, Plant, RobotSim, SimConfig, TJoint};
+use rss6_sim::{pose_distance, ExcitingTrajectory, ModelSim, Plant, RobotSim, SimConfig, TJoint};
 use std::time::Instant;
 
 /// Process CPU time (s) from /proc/self/stat (utime + stime, in 1/100 s clock ticks), so the
@@ -18,66 +20,92 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-fn run(iterations: usize, pgs: usize, t_joint: TJoint, secs: f64) -> (f64, f64, f64, f64, f64) {
+#[derive(Default)]
+struct Row {
+    solver_gap: f64,
+    gap: f64,
+    twin_worst: (f64, f64),
+    twin_late: (f64, f64),
+    wall: f64,
+    cpu: f64,
+    spin: f64,
+}
+
+fn run(iterations: usize, projection: bool, t_joint: TJoint, secs: f64, twin: bool) -> Row {
     let mut cfg = SimConfig::nominal();
     cfg.solver.iterations = iterations;
-    cfg.solver.pgs_iterations = pgs;
+    cfg.solver.projection = projection;
     cfg.solver.t_joint = t_joint;
-    cfg.solver.multibody_legs = std::env::var("MB").is_ok();
-    if let Ok(v) = std::env::var("STAB") {
-        cfg.solver.stabilization_iterations = v.parse().expect("STAB");
-    }
     let nominal = KinematicParams::nominal();
-    let mut plant = Plant::new(cfg).expect("plant");
+    let mut plant = Plant::new(cfg.clone()).expect("plant");
     let traj = ExcitingTrajectory::default();
     let n = (secs / 1e-3) as usize;
     let cmds: Vec<_> = (0..n)
         .map(|k| traj.joint_command(&nominal, k as f64 * 1e-3).expect("ik"))
         .collect();
-    let (mut worst, mut worst_late, mut spin) = (0.0f64, 0.0f64, 0.0f64);
+    let mut row = Row::default();
+    // Timing pass: the plant alone.
     let start = Instant::now();
     let cpu0 = cpu_seconds();
-    for (k, c) in cmds.iter().enumerate() {
+    for c in &cmds {
         plant.step_joint_command(c).expect("step");
-        let e = plant.loop_closure_error();
-        worst = worst.max(e);
-        if k as f64 * 1e-3 > 1.0 {
-            worst_late = worst_late.max(e);
-        }
-        spin = plant
-            .link_spin_rates()
-            .iter()
-            .fold(spin, |m, s| m.max(s.abs()));
     }
-    let per_step = start.elapsed().as_secs_f64() / n as f64;
-    let cpu = match (cpu0, cpu_seconds()) {
+    row.wall = start.elapsed().as_secs_f64() / n as f64;
+    row.cpu = match (cpu0, cpu_seconds()) {
         (Some(a), Some(b)) => (b - a) / n as f64,
         _ => f64::NAN,
     };
-    (worst, worst_late, per_step, cpu, spin)
+    // Accuracy pass, a fresh plant against the twin.
+    let mut plant = Plant::new(cfg.clone()).expect("plant");
+    let mut model = ModelSim::new(cfg).expect("twin");
+    for (k, c) in cmds.iter().enumerate() {
+        plant.step_joint_command(c).expect("step");
+        row.solver_gap = row.solver_gap.max(plant.solver_gap());
+        row.gap = row.gap.max(plant.loop_closure_error());
+        row.spin = plant
+            .link_spin_rates()
+            .iter()
+            .fold(row.spin, |m, s| m.max(s.abs()));
+        if twin {
+            model.step_joint_command(c).expect("twin step");
+            let (dp, da) = pose_distance(&plant.true_pose(), &model.true_pose());
+            row.twin_worst = (row.twin_worst.0.max(dp), row.twin_worst.1.max(da));
+            if k >= 1000 {
+                row.twin_late = (row.twin_late.0.max(dp), row.twin_late.1.max(da));
+            }
+        }
+    }
+    row
 }
 
 fn main() {
-    println!("| solver iterations | PGS per iteration | worst loop gap (µm) | after 1 s (µm) | wall µs/step | CPU µs/step | real-time factor (CPU) |");
-    println!("|---|---|---|---|---|---|---|");
-    for pgs in [1, 2, 3] {
-        for it in [4, 8, 16] {
-            let (w, wl, s, cpu, _) = run(it, pgs, TJoint::Spherical, 5.0);
+    println!("| solver iterations | projection | solver gap (µm) | loop gap after tick (µm) | plant − twin worst (mm / mrad) | after 1 s (mm / mrad) | link spin (rad/s) | wall µs/tick | CPU µs/tick | real-time factor (CPU) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for projection in [true, false] {
+        for it in [2, 4, 8, 16] {
+            let r = run(it, projection, TJoint::Spherical, 10.0, true);
             println!(
-                "| {it} | {pgs} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1}x |",
-                w * 1e6,
-                wl * 1e6,
-                s * 1e6,
-                cpu * 1e6,
-                1e-3 / cpu
+                "| {it} | {} | {:.1} | {:.3} | {:.4} / {:.4} | {:.4} / {:.4} | {:.1e} | {:.1} | {:.1} | {:.1}x |",
+                if projection { "on" } else { "off" },
+                r.solver_gap * 1e6,
+                r.gap * 1e6,
+                r.twin_worst.0 * 1e3,
+                r.twin_worst.1 * 1e3,
+                r.twin_late.0 * 1e3,
+                r.twin_late.1 * 1e3,
+                r.spin,
+                r.wall * 1e6,
+                r.cpu * 1e6,
+                1e-3 / r.cpu
             );
         }
     }
     println!();
-    println!("| joint at T_i | max link spin rate (rad/s) |");
+    println!("| joint at T_i (default solver) | max link spin rate (rad/s) |");
     println!("|---|---|");
+    let d = SimConfig::nominal().solver;
     for tj in [TJoint::Spherical, TJoint::Universal] {
-        let (_, _, _, _, spin) = run(16, 2, tj, 3.0);
-        println!("| {tj:?} | {spin:.3e} |");
+        let r = run(d.iterations, d.projection, tj, 3.0, false);
+        println!("| {tj:?} | {:.3e} |", r.spin);
     }
 }
