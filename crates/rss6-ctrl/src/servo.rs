@@ -109,10 +109,14 @@ pub struct ServoConfig {
     /// Feed the DSMC's model-predicted acceleration ([`crate::DsmcOutput::accel_model`]) to the filter as a
     /// known input ([`PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
     pub kalman_model_input: bool,
-    /// DSMC only: between camera frames send τ_a + H (θ − θ_frame) instead of the held τ_a, with H the
-    /// model's joint-space hold stiffness at the start pose ([`Dsmc::hold_stiffness`]) and θ_frame the
-    /// potentiometer angles when τ_a was computed. Cancels the pose dependence of the held torque's effect
-    /// (docs/control.md, "Held torque between frames").
+    /// DSMC only: every joint tick send τ_a + H (θ − θ̂) instead of the held τ_a, with θ the latest
+    /// potentiometer angles, H the model's joint-space hold stiffness at the start pose
+    /// ([`Dsmc::hold_stiffness`]) and θ̂ the potentiometer angles the robot would read at the estimate χ_m
+    /// the DSMC was evaluated at (IK(χ_m) plus the average of θ − IK(raw frame) over
+    /// [`HOLD_OFFSET_TIME`]). On the 6-RSS a held τ_a does not hold the generalized force: under gravity
+    /// the platform tilts away at ≈ 14/s between frames, and the model evaluated at a noisy χ_m turns
+    /// camera noise into torque noise through the same stiffness. The compensation takes the pose
+    /// dependence from the potentiometers instead (docs/control.md, "Held torque between frames").
     pub hold_compensation: bool,
     /// Also feed the filter the pose rate the potentiometers measured over each camera frame: the
     /// least-squares slope of the joint angles since the previous frame, mapped by J_θ⁻¹ at the estimate
@@ -260,7 +264,11 @@ impl Servo {
             (Scheme::Dsmc(d), true) => d.hold_stiffness(initial_pose)?,
             _ => Mat6::zeros(),
         };
-        let pot_offset = theta0 - ik(&kp_nominal, initial_pose)?;
+        let pot_offset = if config.hold_compensation {
+            theta0 - ik(&kp_nominal, initial_pose)?
+        } else {
+            Vec6::zeros()
+        };
         Ok(Servo {
             hold_h,
             theta_frame: theta0,
@@ -313,8 +321,8 @@ impl Servo {
     }
 
     /// Feeds the filter the pose rate the potentiometers measured since the previous frame: the
-    /// least-squares slope of the joint angles, brought from the window's middle to `t` with the filter's
-    /// acceleration and mapped to χ̇ by J_θ⁻¹ at the (just updated) estimate. Variance per axis:
+    /// least-squares slope of the joint angles, brought from the window's middle to the exposure time with
+    /// the filter's acceleration and mapped to χ̇ by J_θ⁻¹ at the (just updated) estimate. Variance per axis:
     /// diag(J_θ⁻¹ J_θ⁻ᵀ) σ²/Σ(t − t̄)² + (scale_error · rate)².
     fn potentiometer_rate_update(
         &mut self,
@@ -331,8 +339,10 @@ impl Servo {
         let Some(j_inv) = j.try_inverse() else {
             return Err(FaultReason::NonFiniteCommand);
         };
-        let half = 0.5 * (t - self.last_frame_t);
-        let rate = j_inv * slope + est.pose_ddot * half;
+        // The slope is the mean rate over the window (middle at t − half); the filter's state is at the
+        // exposure time t − L.
+        let ahead = 0.5 * (t - self.last_frame_t) - self.config.camera_latency;
+        let rate = j_inv * slope + est.pose_ddot * ahead;
         let var_joint = sigma * sigma / sxx;
         let rel = self.config.potentiometer_rate_scale_error;
         let var = Vec6::from_fn(|i, _| {
@@ -362,7 +372,7 @@ impl Servo {
                 let out = d.step(reference, est, dt)?;
                 if self.config.hold_compensation {
                     // θ̂ = the potentiometer angles at the pose the model was evaluated at (χ_m): IK plus
-                    // a slowly averaged offset between the readings and the IK of the estimate.
+                    // the averaged offset between the readings and the IK of the raw frames.
                     let th_m = ik(&self.kp_nominal, &est.pose)?;
                     self.theta_frame = th_m + self.pot_offset;
                 } else {

@@ -231,16 +231,26 @@ fn experiment1_ordering_on_other_plants() {
             15.0,
             seed,
         );
-        let r: Vec<f64> = [Which::Kjsc, Which::Kcsc, Which::Dsmc]
+        let mut r: Vec<f64> = [Which::Kjsc, Which::Kcsc, Which::Dsmc]
             .into_iter()
             .map(|w| run_scheme(w, &traj, &setup).pos_rmse() * 1e3)
             .collect();
+        let mut low = setup;
+        low.config = ServoConfig::low_noise();
+        low.dsmc = DsmcGains::low_noise();
+        let l = run_scheme(Which::Dsmc, &traj, &low);
+        assert!(l.first_fault.is_none(), "seed {seed}: {:?}", l.first_fault);
+        r.push(l.pos_rmse() * 1e3);
         println!(
-            "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm",
-            r[0], r[1], r[2]
+            "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm, low-noise DSMC {:.3} mm / {:.3} mrad",
+            r[0],
+            r[1],
+            r[2],
+            r[3],
+            l.ang_rmse() * 1e3
         );
         assert!(
-            r[2] < r[1] && r[1] < r[0],
+            r[2] < r[1] && r[1] < r[0] && r[3] < r[1],
             "seed {seed}: ordering broken {r:?}"
         );
     }
@@ -331,7 +341,10 @@ fn model_aided_filter_in_the_dsmc_loop() {
 
 /// Per-axis (RMS estimate error / RMS camera error, RMS χ̇ error / RMS true χ̇) of the servo's filter over
 /// the whole run and after [`MONITOR_FROM`] s (the initial step has converged by then).
-fn kalman_ratios(s: &Stats) -> ([(f64, f64); 6], [(f64, f64); 6]) {
+/// Per axis: (noise ratio, velocity ratio).
+type Ratios = [(f64, f64); 6];
+
+fn kalman_ratios(s: &Stats) -> (Ratios, Ratios) {
     let (n, m) = (s.kf_n as f64, s.mon_n as f64);
     let whole = core::array::from_fn(|i| {
         (
