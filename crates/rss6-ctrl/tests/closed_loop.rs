@@ -238,8 +238,21 @@ fn experiment1_ordering_on_other_plants() {
         let mut low = setup;
         low.config = ServoConfig::low_noise();
         low.dsmc = DsmcGains::low_noise();
+        low.monitor = Some(KalmanConfig::thesis());
         let l = run_scheme(Which::Dsmc, &traj, &low);
         assert!(l.first_fault.is_none(), "seed {seed}: {:?}", l.first_fault);
+        let (whole, late) = kalman_ratios(&l);
+        let fmt = |r: &Ratios| {
+            r.iter()
+                .map(|(a, b)| format!("{a:.2}/{b:.2}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        println!(
+            "plant seed {seed}: low-noise filter noise/velocity ratios x..gamma, whole run {}; after {MONITOR_FROM} s {}",
+            fmt(&whole),
+            fmt(&late)
+        );
         r.push(l.pos_rmse() * 1e3);
         println!(
             "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm, low-noise DSMC {:.3} mm / {:.3} mrad",
