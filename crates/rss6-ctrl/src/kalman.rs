@@ -68,11 +68,11 @@ impl KalmanConfig {
     }
 
     /// Tuning of [`crate::ServoConfig::low_noise`] (model input, hold compensation and potentiometer rate):
-    /// q_jerk = 1e-4 m²/s⁵ for x, y, z (100× below [`Self::thesis`]) and 3e-2 rad²/s⁵ for α, β, γ (100×
+    /// q_jerk = 1e-4 m²/s⁵ for x, y, z (100× below [`Self::thesis`]) and 0.1 rad²/s⁵ for α, β, γ (30×
     /// below). Without those servo options this tuning lags too much for the DSMC loop.
     pub fn low_noise() -> Self {
         KalmanConfig {
-            q_jerk: Vec6::new(1e-4, 1e-4, 1e-4, 3e-2, 3e-2, 3e-2),
+            q_jerk: Vec6::new(1e-4, 1e-4, 1e-4, 0.1, 0.1, 0.1),
             ..Self::thesis()
         }
     }
@@ -185,10 +185,13 @@ impl Axis {
         self.p.column(0) / s
     }
 
-    /// Measurement update of the rate state (H = [0, 1, 0]) with variance `r_v`; Joseph form.
+    /// Measurement update of the rate and acceleration states (H = [0, 1, 0], pose gain 0) with variance
+    /// `r_v`; the Joseph form keeps P exact for this suboptimal gain.
     fn update_rate(&mut self, z: f64, r_v: f64) {
         let s = self.p[(1, 1)] + r_v;
-        let k: Vector3<f64> = self.p.column(1) / s;
+        let mut k: Vector3<f64> = self.p.column(1) / s;
+        // The pose is left to the camera (see `PoseKalman::update_rate`).
+        k[0] = 0.0;
         let innovation = z - self.s[1];
         self.s += k * innovation;
         let mut ikh = Matrix3::<f64>::identity();
@@ -358,8 +361,10 @@ impl PoseKalman {
 impl PoseKalman {
     /// A second, independent measurement of the pose *rate* χ̇ (m/s, rad/s) with per-axis variances
     /// `variance` ((m/s)², (rad/s)²), applied after [`PoseKalman::step`] at the same instant (scalar update
-    /// with H = [0, 1, 0] per axis). The servo uses it for the rate the potentiometers measured over the
-    /// last frame ([`crate::ServoConfig::potentiometer_rate`]).
+    /// with H = [0, 1, 0] per axis). It corrects χ̇ and χ̈ only: the pose state's gain is set to zero
+    /// (Joseph-form covariance, exact for that gain), because a rate with a scale error (an uncalibrated
+    /// potentiometer) would otherwise walk the pose away from the camera. The servo uses it for the rate
+    /// the potentiometers measured over the last frame ([`crate::ServoConfig::potentiometer_rate`]).
     ///
     /// Errors (state untouched): [`CtrlError::NonFinite`], [`CtrlError::InvalidParameter`] for a variance
     /// ≤ 0 or with `steady_state` (the update needs the propagated covariance).

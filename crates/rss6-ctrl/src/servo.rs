@@ -124,8 +124,9 @@ pub struct ServoConfig {
     /// noise of one potentiometer reading in rad (Table 4.1: 0.2233 bit × η ≈ 1.7e-4 rad). Needs
     /// `kalman.steady_state = false`.
     pub potentiometer_rate: Option<f64>,
-    /// Relative error of the potentiometer rate from an uncalibrated scale η (Table 4.2: 5e-5 of
-    /// π/4096 rad/bit ≈ 6.5 %), added to its variance as (scale_error · rate)².
+    /// Relative error of the potentiometer rate per axis, added to its variance as (scale_error · rate)²:
+    /// an uncalibrated scale η (Table 4.2: 5e-5 of π/4096 rad/bit ≈ 6.5 %) and geometry errors, plus a
+    /// margin (default 0.2).
     pub potentiometer_rate_scale_error: Vec6,
     /// Gains of the drive's built-in PID (what the converter inverts).
     pub pid: PidGains,
@@ -159,7 +160,7 @@ impl ServoConfig {
     /// [`KalmanConfig::low_noise`], the DSMC's model acceleration as the filter's known input
     /// (`kalman_model_input`), the joint-rate hold compensation (`hold_compensation`) and the
     /// potentiometer rate as a second filter measurement (`potentiometer_rate` = Table 4.1's 0.2233 bit ×
-    /// π/4096 rad/bit, scale error 0.2 per axis). Use with [`crate::DsmcGains::low_noise`]. KCSC and KJSC
+    /// π/4096 rad/bit, scale error 0.2 for x, y, z and 0.12 for α, β, γ). Use with [`crate::DsmcGains::low_noise`]. KCSC and KJSC
     /// ignore the DSMC-only options but would get the smoother filter: keep them on [`Self::nominal`].
     pub fn low_noise() -> Self {
         ServoConfig {
@@ -167,7 +168,7 @@ impl ServoConfig {
             kalman_model_input: true,
             hold_compensation: true,
             potentiometer_rate: Some(POTENTIOMETER_SIGMA_RAD),
-            potentiometer_rate_scale_error: Vec6::repeat(0.2),
+            potentiometer_rate_scale_error: Vec6::new(0.2, 0.2, 0.2, 0.12, 0.12, 0.12),
             ..Self::nominal()
         }
     }

@@ -376,8 +376,9 @@ fn kalman_ratios(s: &Stats) -> (Ratios, Ratios) {
 
 /// The Kalman must-show in the DSMC loop, all six axes: with [`ServoConfig::low_noise`] (model input,
 /// joint-rate hold compensation, potentiometer rate; [`DsmcGains::low_noise`]) the filter's pose error
-/// is below the camera's and its χ̇ error below 0.3 of the true RMS χ̇ on every axis once the initial
-/// step has converged, better than the default servo on every axis, and the DSMC still beats KCSC.
+/// is below the camera's (< 0.9 of it once the initial step has converged) and its χ̇ error below 0.3 of
+/// the true RMS χ̇ on every axis, over the whole run and after the step; both better than the default
+/// servo's on every axis, and the DSMC still beats KCSC.
 #[test]
 fn low_noise_servo_filter_tracks_all_six_rates() {
     let e1 = Sinusoid::experiment1();
@@ -440,13 +441,11 @@ fn low_noise_servo_filter_tracks_all_six_rates() {
                 "{name} {ax}: velocity ratio {} after the step",
                 ll[i].1
             );
-            if i < 3 {
-                assert!(
-                    lw[i].1 < 0.3,
-                    "{name} {ax}: velocity ratio {} over the run",
-                    lw[i].1
-                );
-            }
+            assert!(
+                lw[i].1 < 0.3,
+                "{name} {ax}: velocity ratio {} over the run",
+                lw[i].1
+            );
         }
         assert!(
             l.pos_rmse() < k.pos_rmse() && l.ang_rmse() < k.ang_rmse(),

@@ -310,6 +310,7 @@ fn rate_measurement_updates_the_velocity() {
     let before = kf;
     let v = Vec6::new(0.01, -0.02, 0.005, 0.03, -0.01, 0.02);
     let est = kf.update_rate(&v, &Vec6::repeat(1e-12)).unwrap();
+    assert_eq!(est.pose, before.estimate().pose, "the pose is the camera's");
     assert!(
         (est.pose_dot - v).amax() < 1e-3 * v.amax(),
         "{} vs {v}",
