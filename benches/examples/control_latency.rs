@@ -2,10 +2,10 @@
 //! only central estimates). Run: `cargo run --release -p rss6-benches --example control_latency`.
 #![allow(clippy::unwrap_used)]
 
-use rss6_core::{home_pose, DynamicParams, KinematicParams, Vec6};
+use rss6_core::{home_pose, ik, DynamicParams, KinematicParams, Vec6};
 use rss6_ctrl::{
-    CommandGuard, CommandLimits, Dsmc, DsmcGains, KalmanConfig, PidGains, PoseKalman, Sinusoid,
-    TorqueToPosition, Trajectory,
+    CommandGuard, CommandLimits, Dsmc, DsmcGains, KalmanConfig, PidGains, PoseKalman, Scheme,
+    Servo, ServoConfig, Sinusoid, TorqueToPosition, Trajectory,
 };
 use std::hint::black_box;
 use std::time::Instant;
@@ -17,7 +17,7 @@ fn report(name: &str, ns: &mut [u64]) {
     let q = |p: f64| ns[((ns.len() as f64 - 1.0) * p).round() as usize];
     let (med, p99) = (q(0.5), q(0.99));
     println!(
-        "{name:<24} median {:>7.3} µs   p99 {:>7.3} µs   p99/median {:.2}   max {:>8.3} µs   (n = {})",
+        "{name:<30} median {:>7.3} µs   p99 {:>7.3} µs   p99/median {:.2}   max {:>8.3} µs   (n = {})",
         med as f64 / 1e3,
         p99 as f64 / 1e3,
         p99 as f64 / med as f64,
@@ -56,4 +56,45 @@ fn main() {
         *slot = t0.elapsed().as_nanos() as u64;
     }
     report("converter tick", &mut ns);
+
+    // The whole DSMC servo (Servo::tick) on synthetic readings along the reference: the camera-frame tick
+    // (filter, DSMC, converter; with low_noise also the potentiometer rate and the hold compensation) and
+    // the joint ticks between frames, for the default and the low-noise configuration.
+    let frames = N / 33;
+    for (name, config, gains) in [
+        ("servo default", ServoConfig::nominal(), DsmcGains::tuned()),
+        (
+            "servo low-noise",
+            ServoConfig::low_noise(),
+            DsmcGains::low_noise(),
+        ),
+    ] {
+        let dsmc = Dsmc::new(kp, DynamicParams::nominal(), gains).unwrap();
+        let kappa0 = kp.reading_from_theta(&ik(&kp, &home_pose()).unwrap());
+        let mut servo =
+            Servo::new(kp, config, Scheme::Dsmc(dsmc), &home_pose(), &kappa0, 0.0).unwrap();
+        let mut frame_ns = vec![0u64; frames];
+        let mut joint_ns = Vec::with_capacity(frames * 32);
+        let mut tick = 0u64;
+        for slot in frame_ns.iter_mut() {
+            for j in 0..33 {
+                tick += 1;
+                let t = tick as f64 * 1e-3;
+                let r = traj.sample(t % 30.0);
+                let kappa = kp.reading_from_theta(&ik(&kp, &r.pose).unwrap());
+                let z = r.pose + Vec6::repeat(1e-5);
+                let camera = (j == 32).then_some(&z);
+                let t0 = Instant::now();
+                black_box(servo.tick(t, &r, camera, &kappa).unwrap());
+                let dt = t0.elapsed().as_nanos() as u64;
+                if j == 32 {
+                    *slot = dt;
+                } else {
+                    joint_ns.push(dt);
+                }
+            }
+        }
+        report(&format!("{name}: frame tick"), &mut frame_ns);
+        report(&format!("{name}: joint tick"), &mut joint_ns);
+    }
 }

@@ -17,7 +17,7 @@
 use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
-use rss6_core::{dynamics_terms, DynamicParams, KinematicParams, Vec6};
+use rss6_core::{dynamics_terms, DynamicParams, KinematicParams, Mat6, Vec6};
 
 /// DSMC gains, diagonal per pose axis (x, y, z in SI translational units, α, β, γ in rotational ones).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +46,20 @@ impl DsmcGains {
             kr: Vec6::new(2.0, 2.0, 2.0, 0.02, 0.02, 0.02),
             epsilon: Vec6::new(2e-2, 2e-2, 2e-2, 2e-2, 2e-2, 2e-2),
             integral_limit: Vec6::new(0.5, 0.5, 0.5, 5.0, 5.0, 5.0),
+        }
+    }
+
+    /// Gains of the low-noise servo ([`crate::ServoConfig::low_noise`]): [`Self::tuned`] with a stiffer
+    /// orientation loop, λ = 9 /s, K_p = 3 N·m·s/rad, K_i = 15 N·m/rad for α, β, γ (translation unchanged).
+    /// With the hold compensation the orientation loop no longer fights the held-torque instability, and
+    /// the stiffer loop halves the orientation RMSE (docs/control.md).
+    pub fn low_noise() -> Self {
+        let t = Self::tuned();
+        DsmcGains {
+            lambda: Vec6::new(6.0, 6.0, 6.0, 9.0, 9.0, 9.0),
+            kp: Vec6::new(150.0, 150.0, 150.0, 3.0, 3.0, 3.0),
+            ki: Vec6::new(750.0, 750.0, 750.0, 15.0, 15.0, 15.0),
+            ..t
         }
     }
 
@@ -161,6 +175,44 @@ impl Dsmc {
         self.fault.clear();
     }
 
+    /// Actuator torques that hold the model at rest at `pose` against gravity, τ_g = J_θ⁻ᵀ G̃0(χ) (N·m).
+    pub fn holding_torque(&self, pose: &Vec6) -> Result<Vec6> {
+        let t = dynamics_terms(&self.kp_model, &self.dp_model, pose, &Vec6::zeros())?;
+        match t.j_theta.transpose().lu().solve(&t.g) {
+            Some(x) if all_finite(x.as_slice()) => Ok(x),
+            _ => Err(CtrlError::NonFinite),
+        }
+    }
+
+    /// Joint-space hold stiffness H = ∂τ_g/∂θ = (∂τ_g/∂χ) J_θ⁻¹ at `pose` (N·m/rad), τ_g from
+    /// [`Dsmc::holding_torque`], by central differences (steps 1e-6 m, 1e-5 rad; 12 model evaluations).
+    ///
+    /// Why: between two camera frames the DSMC's τ_a is held while the platform moves, and on the 6-RSS a
+    /// constant actuator torque does not keep the generalized force constant: J_θ(χ)ᵀ τ_a − G̃0(χ) changes
+    /// with χ. At home the model's α̈, β̈ grow by ≈ +190 rad/s² per rad of α, β under held gravity torques
+    /// (an unstable mode at ≈ 14/s, plus ≈ 560 rad/s² per m of y → α). The servo can cancel this at the
+    /// joint rate with τ = τ_a + H (θ − θ_frame) ([`crate::ServoConfig::hold_compensation`]).
+    ///
+    /// Errors: model failures (IK, singular J_θ) as [`CtrlError::Core`], [`CtrlError::NonFinite`].
+    pub fn hold_stiffness(&self, pose: &Vec6) -> Result<Mat6> {
+        let mut d = Mat6::zeros();
+        for j in 0..6 {
+            let h = if j < 3 { 1e-6 } else { 1e-5 };
+            let mut p = *pose;
+            p[j] += h;
+            let a = self.holding_torque(&p)?;
+            p[j] -= 2.0 * h;
+            let b = self.holding_torque(&p)?;
+            d.set_column(j, &((a - b) / (2.0 * h)));
+        }
+        let t = dynamics_terms(&self.kp_model, &self.dp_model, pose, &Vec6::zeros())?;
+        // H J_θ = D  ⇔  J_θᵀ Hᵀ = Dᵀ.
+        match t.j_theta.transpose().lu().solve(&d.transpose()) {
+            Some(ht) if all_finite(ht.as_slice()) => Ok(ht.transpose()),
+            _ => Err(CtrlError::NonFinite),
+        }
+    }
+
     /// One step `dt` (s) after the previous one (the ∫F rectangle-rule step).
     pub fn step(
         &mut self,
@@ -205,11 +257,8 @@ impl Dsmc {
             Some(t) if all_finite(t.as_slice()) => t,
             _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
         };
-        let accel_model = match terms
-            .m
-            .lu()
-            .solve(&(u - terms.c * estimate.pose_dot - terms.g - terms.f))
-        {
+        let m_lu = terms.m.lu();
+        let accel_model = match m_lu.solve(&(u - terms.c * estimate.pose_dot - terms.g - terms.f)) {
             Some(a) if all_finite(a.as_slice()) => a,
             _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
         };

@@ -67,6 +67,16 @@ impl KalmanConfig {
         }
     }
 
+    /// Tuning of [`crate::ServoConfig::low_noise`] (model input, hold compensation and potentiometer rate):
+    /// q_jerk = 1e-4 m²/s⁵ for x, y, z (100× below [`Self::thesis`]) and 0.1 rad²/s⁵ for α, β, γ (30×
+    /// below). Without those servo options this tuning lags too much for the DSMC loop.
+    pub fn low_noise() -> Self {
+        KalmanConfig {
+            q_jerk: Vec6::new(1e-4, 1e-4, 1e-4, 0.1, 0.1, 0.1),
+            ..Self::thesis()
+        }
+    }
+
     /// Smoothing tuning for monitoring/logging, not for closing a loop: q_jerk 1e-5 × [`Self::thesis`]
     /// (1e-7 m²/s⁵, 3e-5 rad²/s⁵). On the Experiment 1 and 2 references with Table 4.1 noise it tracks χ̇
     /// on all six axes (tests/kalman.rs); inside the DSMC loop it destabilises the rotational loop.
@@ -173,6 +183,22 @@ impl Axis {
     fn gain(&self) -> Vector3<f64> {
         let s = self.p[(0, 0)] + self.r;
         self.p.column(0) / s
+    }
+
+    /// Measurement update of the rate and acceleration states (H = [0, 1, 0], pose gain 0) with variance
+    /// `r_v`; the Joseph form keeps P exact for this suboptimal gain.
+    fn update_rate(&mut self, z: f64, r_v: f64) {
+        let s = self.p[(1, 1)] + r_v;
+        let mut k: Vector3<f64> = self.p.column(1) / s;
+        // The pose is left to the camera (see `PoseKalman::update_rate`).
+        k[0] = 0.0;
+        let innovation = z - self.s[1];
+        self.s += k * innovation;
+        let mut ikh = Matrix3::<f64>::identity();
+        for i in 0..3 {
+            ikh[(i, 1)] -= k[i];
+        }
+        self.p = ikh * self.p * ikh.transpose() + k * k.transpose() * r_v;
     }
 
     /// Measurement update; Joseph form keeps P symmetric positive semidefinite.
@@ -327,6 +353,35 @@ impl PoseKalman {
             if let Some(z) = measurement {
                 ax.update(z[i], steady);
             }
+        }
+        Ok(self.estimate())
+    }
+}
+
+impl PoseKalman {
+    /// A second, independent measurement of the pose *rate* χ̇ (m/s, rad/s) with per-axis variances
+    /// `variance` ((m/s)², (rad/s)²), applied after [`PoseKalman::step`] at the same instant (scalar update
+    /// with H = [0, 1, 0] per axis). It corrects χ̇ and χ̈ only: the pose state's gain is set to zero
+    /// (Joseph-form covariance, exact for that gain), because a rate with a scale error (an uncalibrated
+    /// potentiometer) would otherwise walk the pose away from the camera. The servo uses it for the rate
+    /// the potentiometers measured over the last frame ([`crate::ServoConfig::potentiometer_rate`]).
+    ///
+    /// Errors (state untouched): [`CtrlError::NonFinite`], [`CtrlError::InvalidParameter`] for a variance
+    /// ≤ 0 or with `steady_state` (the update needs the propagated covariance).
+    pub fn update_rate(&mut self, rate: &Vec6, variance: &Vec6) -> Result<PoseEstimate> {
+        if self.config.steady_state {
+            return Err(CtrlError::InvalidParameter(
+                "rate measurements need the propagated covariance (steady_state = false)",
+            ));
+        }
+        if !(all_finite(rate.as_slice()) && all_finite(variance.as_slice())) {
+            return Err(CtrlError::NonFinite);
+        }
+        if variance.iter().any(|&v| v <= 0.0) {
+            return Err(CtrlError::InvalidParameter("rate variance must be > 0"));
+        }
+        for (i, ax) in self.axes.iter_mut().enumerate() {
+            ax.update_rate(rate[i], variance[i]);
         }
         Ok(self.estimate())
     }

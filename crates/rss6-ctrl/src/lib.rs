@@ -30,5 +30,7 @@ pub use crate::kcsc::{CartesianPidGains, JointCommand, Kcsc, VisualPid};
 pub use crate::kjsc::{JointSpaceGains, Kjsc};
 pub use crate::pid::{JointPid, PidGains};
 pub use crate::safety::{CommandGuard, CommandLimits, Guarded};
-pub use crate::servo::{Plant, Scheme, Servo, ServoConfig, ServoTick};
+pub use crate::servo::{
+    Plant, Scheme, Servo, ServoConfig, ServoTick, HOLD_OFFSET_TIME, POTENTIOMETER_SIGMA_RAD,
+};
 pub use crate::trajectory::{Fourier, Reference, Sinusoid, Trajectory};

@@ -20,7 +20,52 @@ use crate::kjsc::Kjsc;
 use crate::pid::PidGains;
 use crate::safety::{CommandGuard, CommandLimits};
 use crate::trajectory::{Reference, Trajectory};
-use rss6_core::{KinematicParams, Vec6};
+use rss6_core::{ik, jacobian_theta, KinematicParams, Mat6, Vec6};
+
+/// Running sums of a least-squares line θ(t) = a + b t per joint (t relative to the last frame).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct RateFit {
+    n: f64,
+    st: f64,
+    stt: f64,
+    sy: Vec6,
+    sty: Vec6,
+    last: Vec6,
+}
+
+impl RateFit {
+    /// Adds a sample if the reading changed (the potentiometers update every other joint tick).
+    fn add(&mut self, t: f64, theta: &Vec6) {
+        if self.n > 0.0 && *theta == self.last {
+            return;
+        }
+        self.last = *theta;
+        self.n += 1.0;
+        self.st += t;
+        self.stt += t * t;
+        self.sy += theta;
+        self.sty += theta * t;
+    }
+
+    /// Slope b per joint (rad/s) and Σ(t − t̄)² (s²), if at least 3 samples spread in time.
+    fn slope(&self) -> Option<(Vec6, f64)> {
+        let sxx = self.stt - self.st * self.st / self.n.max(1.0);
+        if self.n < 3.0 || sxx <= 0.0 {
+            return None;
+        }
+        let b = (self.sty - self.sy * (self.st / self.n)) / sxx;
+        Some((b, sxx))
+    }
+
+    fn clear(&mut self) {
+        let last = self.last;
+        *self = RateFit::default();
+        self.last = last;
+    }
+}
+
+/// Time constant (s) of the average of θ_pot − IK(χ_m) used by [`ServoConfig::hold_compensation`].
+pub const HOLD_OFFSET_TIME: f64 = 0.3;
 
 /// The camera-rate controller inside a [`Servo`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,6 +109,25 @@ pub struct ServoConfig {
     /// Feed the DSMC's model-predicted acceleration ([`crate::DsmcOutput::accel_model`]) to the filter as a
     /// known input ([`PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
     pub kalman_model_input: bool,
+    /// DSMC only: every joint tick send τ_a + H (θ − θ̂) instead of the held τ_a, with θ the latest
+    /// potentiometer angles, H the model's joint-space hold stiffness at the start pose
+    /// ([`Dsmc::hold_stiffness`]) and θ̂ the potentiometer angles the robot would read at the estimate χ_m
+    /// the DSMC was evaluated at (IK(χ_m) plus the average of θ − IK(raw frame) over
+    /// [`HOLD_OFFSET_TIME`]). On the 6-RSS a held τ_a does not hold the generalized force: under gravity
+    /// the platform tilts away at ≈ 14/s between frames, and the model evaluated at a noisy χ_m turns
+    /// camera noise into torque noise through the same stiffness. The compensation takes the pose
+    /// dependence from the potentiometers instead (docs/control.md, "Held torque between frames").
+    pub hold_compensation: bool,
+    /// Also feed the filter the pose rate the potentiometers measured over each camera frame: the
+    /// least-squares slope of the joint angles since the previous frame, mapped by J_θ⁻¹ at the estimate
+    /// ([`PoseKalman::update_rate`]). `None` = camera only (the thesis filter); `Some(σ)` with σ the 1σ
+    /// noise of one potentiometer reading in rad (Table 4.1: 0.2233 bit × η ≈ 1.7e-4 rad). Needs
+    /// `kalman.steady_state = false`.
+    pub potentiometer_rate: Option<f64>,
+    /// Relative error of the potentiometer rate per axis, added to its variance as (scale_error · rate)²:
+    /// an uncalibrated scale η (Table 4.2: 5e-5 of π/4096 rad/bit ≈ 6.5 %) and geometry errors, plus a
+    /// margin (default 0.2).
+    pub potentiometer_rate_scale_error: Vec6,
     /// Gains of the drive's built-in PID (what the converter inverts).
     pub pid: PidGains,
     /// Torque limit of the drive's PID (N·m).
@@ -82,11 +146,36 @@ impl ServoConfig {
             limits: CommandLimits::nominal(),
             kalman: KalmanConfig::thesis(),
             kalman_model_input: false,
+            potentiometer_rate: None,
+            potentiometer_rate_scale_error: Vec6::repeat(0.2),
+            hold_compensation: false,
             pid: PidGains::nominal(),
             torque_limit: 30.0,
         }
     }
 }
+
+impl ServoConfig {
+    /// The low-noise DSMC servo (docs/control.md, "Kalman filter in the loop"): [`Self::nominal`] with
+    /// [`KalmanConfig::low_noise`], the DSMC's model acceleration as the filter's known input
+    /// (`kalman_model_input`), the joint-rate hold compensation (`hold_compensation`) and the
+    /// potentiometer rate as a second filter measurement (`potentiometer_rate` = Table 4.1's 0.2233 bit ×
+    /// π/4096 rad/bit, scale error 0.2 for x, y, z and 0.12 for α, β, γ). Use with [`crate::DsmcGains::low_noise`]. KCSC and KJSC
+    /// ignore the DSMC-only options but would get the smoother filter: keep them on [`Self::nominal`].
+    pub fn low_noise() -> Self {
+        ServoConfig {
+            kalman: KalmanConfig::low_noise(),
+            kalman_model_input: true,
+            hold_compensation: true,
+            potentiometer_rate: Some(POTENTIOMETER_SIGMA_RAD),
+            potentiometer_rate_scale_error: Vec6::new(0.2, 0.2, 0.2, 0.12, 0.12, 0.12),
+            ..Self::nominal()
+        }
+    }
+}
+
+/// Table 4.1 potentiometer noise in rad: 0.2233 bit × η = π/4096 rad/bit.
+pub const POTENTIOMETER_SIGMA_RAD: f64 = 0.2233 * core::f64::consts::PI / 4096.0;
 
 /// What one tick produced.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,6 +202,10 @@ pub struct Servo {
     held_tau: Vec6,
     held_sliding: Vec6,
     held_theta_d: Vec6,
+    hold_h: Mat6,
+    theta_frame: Vec6,
+    pot_offset: Vec6,
+    ls: RateFit,
     last_frame_t: f64,
     last_kalman_t: f64,
     started: bool,
@@ -142,11 +235,46 @@ impl Servo {
         if !t0.is_finite() {
             return Err(CtrlError::NonFinite);
         }
+        if let Some(sigma) = config.potentiometer_rate {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return Err(CtrlError::InvalidParameter(
+                    "potentiometer rate sigma must be finite and > 0",
+                ));
+            }
+            if config.kalman.steady_state {
+                return Err(CtrlError::InvalidParameter(
+                    "potentiometer rate needs the propagated covariance (kalman.steady_state = false)",
+                ));
+            }
+        }
+        if !all_finite(config.potentiometer_rate_scale_error.as_slice())
+            || config
+                .potentiometer_rate_scale_error
+                .iter()
+                .any(|&x| x < 0.0)
+        {
+            return Err(CtrlError::InvalidParameter(
+                "potentiometer rate scale error must be finite and >= 0",
+            ));
+        }
         let theta0 = kp_nominal.theta_from_reading(initial_kappa);
         let kalman = PoseKalman::new(config.kalman, initial_pose)?;
         let converter = TorqueToPosition::new(config.pid, config.joint_dt, config.torque_limit)?;
         let guard = CommandGuard::new(config.limits, &theta0)?;
+        let hold_h = match (&scheme, config.hold_compensation) {
+            (Scheme::Dsmc(d), true) => d.hold_stiffness(initial_pose)?,
+            _ => Mat6::zeros(),
+        };
+        let pot_offset = if config.hold_compensation {
+            theta0 - ik(&kp_nominal, initial_pose)?
+        } else {
+            Vec6::zeros()
+        };
         Ok(Servo {
+            hold_h,
+            theta_frame: theta0,
+            pot_offset,
+            ls: RateFit::default(),
             kp_nominal,
             config,
             kalman,
@@ -193,6 +321,42 @@ impl Servo {
         self.guard.last_command()
     }
 
+    /// Feeds the filter the pose rate the potentiometers measured since the previous frame: the
+    /// least-squares slope of the joint angles, brought from the window's middle to the exposure time with
+    /// the filter's acceleration and mapped to χ̇ by J_θ⁻¹ at the (just updated) estimate. Variance per axis:
+    /// diag(J_θ⁻¹ J_θ⁻ᵀ) σ²/Σ(t − t̄)² + (scale_error · rate)².
+    fn potentiometer_rate_update(
+        &mut self,
+        sigma: f64,
+        t: f64,
+    ) -> core::result::Result<(), FaultReason> {
+        let fit = self.ls;
+        self.ls.clear();
+        let Some((slope, sxx)) = fit.slope() else {
+            return Ok(());
+        };
+        let est = self.kalman.estimate();
+        let j = jacobian_theta(&self.kp_nominal, &est.pose).map_err(FaultReason::Model)?;
+        let Some(j_inv) = j.try_inverse() else {
+            return Err(FaultReason::NonFiniteCommand);
+        };
+        // The slope is the mean rate over the window (middle at t − half); the filter's state is at the
+        // exposure time t − L.
+        let ahead = 0.5 * (t - self.last_frame_t) - self.config.camera_latency;
+        let rate = j_inv * slope + est.pose_ddot * ahead;
+        let var_joint = sigma * sigma / sxx;
+        let rel = self.config.potentiometer_rate_scale_error;
+        let var = Vec6::from_fn(|i, _| {
+            let row = j_inv.row(i);
+            let scale = rel[i] * rate[i];
+            row.dot(&row) * var_joint + scale * scale
+        });
+        self.kalman
+            .update_rate(&rate, &var)
+            .map(|_| ())
+            .map_err(|_| FaultReason::NonFiniteMeasurement)
+    }
+
     fn trip(&mut self, r: FaultReason) -> CtrlError {
         self.fault.trip(r)
     }
@@ -207,6 +371,14 @@ impl Servo {
         match &mut self.scheme {
             Scheme::Dsmc(d) => {
                 let out = d.step(reference, est, dt)?;
+                if self.config.hold_compensation {
+                    // θ̂ = the potentiometer angles at the pose the model was evaluated at (χ_m): IK plus
+                    // the averaged offset between the readings and the IK of the raw frames.
+                    let th_m = ik(&self.kp_nominal, &est.pose)?;
+                    self.theta_frame = th_m + self.pot_offset;
+                } else {
+                    self.theta_frame = *theta;
+                }
                 if self.config.kalman_model_input {
                     self.kalman.set_input(&out.accel_model)?;
                 }
@@ -259,6 +431,7 @@ impl Servo {
         self.held_theta_d = self.guard.last_command();
         self.held_tau = Vec6::zeros();
         self.held_sliding = Vec6::zeros();
+        self.ls.clear();
         self.last_frame_t = t;
         self.last_kalman_t = t - self.config.camera_latency;
         self.started = false;
@@ -285,6 +458,9 @@ impl Servo {
             return Err(self.trip(FaultReason::NonFiniteReference));
         }
         let min_dt = 1e-6;
+        if self.config.potentiometer_rate.is_some() {
+            self.ls.add(t - self.last_frame_t, &theta);
+        }
         let mut camera_step: Option<(PoseEstimate, f64)> = None;
         let mut frame = false;
         if let Some(z) = camera {
@@ -295,6 +471,22 @@ impl Servo {
             let dt = (exposed - self.last_kalman_t).max(min_dt);
             if self.kalman.step(dt, Some(z)).is_err() {
                 return Err(self.trip(FaultReason::NonFiniteMeasurement));
+            }
+            if self.config.hold_compensation && matches!(self.scheme, Scheme::Dsmc(_)) {
+                // Offset between the potentiometer angles and the IK of the *raw* frame (white noise,
+                // unbiased), never of the filter's estimate: its error must not leak into the offset.
+                match ik(&self.kp_nominal, z) {
+                    Ok(th_z) => {
+                        let w = dt / (dt + HOLD_OFFSET_TIME);
+                        self.pot_offset += (theta - th_z - self.pot_offset) * w;
+                    }
+                    Err(e) => return Err(self.trip(FaultReason::Model(e))),
+                }
+            }
+            if let Some(sigma) = self.config.potentiometer_rate {
+                if let Err(r) = self.potentiometer_rate_update(sigma, t) {
+                    return Err(self.trip(r));
+                }
             }
             let est = self.kalman.predicted(self.config.camera_latency);
             self.last_frame_t = t;
@@ -333,7 +525,11 @@ impl Servo {
             }
         }
         let theta_cmd = match self.scheme {
-            Scheme::Dsmc(_) => match self.converter.step(&self.held_tau, &theta, &mut self.guard) {
+            Scheme::Dsmc(_) => match self.converter.step(
+                &(self.held_tau + self.hold_h * (theta - self.theta_frame)),
+                &theta,
+                &mut self.guard,
+            ) {
                 Ok(o) => o.theta_cmd,
                 Err(CtrlError::Faulted(r)) => return Err(self.trip(r)),
                 Err(_) => return Err(self.trip(FaultReason::NonFiniteCommand)),

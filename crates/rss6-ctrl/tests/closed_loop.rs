@@ -13,7 +13,7 @@ mod common;
 
 use common::*;
 use rss6_core::KinematicParams;
-use rss6_ctrl::{DsmcGains, Fourier, Sinusoid, Trajectory};
+use rss6_ctrl::{DsmcGains, Fourier, KalmanConfig, ServoConfig, Sinusoid, Trajectory};
 
 fn print_table(title: &str, rows: &[(Which, Stats)]) {
     println!("\n{title}: RMSE / MAE against the true pose (mm, 1e-3 rad)");
@@ -94,8 +94,8 @@ fn check_kalman(s: &Stats) {
             est < cam,
             "axis {i}: the filter must lower the pose noise ({est:e} vs {cam:e})"
         );
-        // Translational rates are tracked; the angular ones are limited by the 0.0261° camera noise at
-        // 30 Hz (differencing noise ≈ 0.02 rad/s, as large as the motion) — reported, see docs/control.md.
+        // The default (thesis) servo tracks the translational rates only; its angular rates are lost in
+        // the 0.0261° camera noise the loop feeds back. All six: `low_noise_servo_filter_tracks_all_six_rates`.
         if i < 3 {
             assert!(
                 ve < 0.3 * v,
@@ -153,54 +153,66 @@ fn experiment2_dsmc_beats_kcsc_beats_kjsc() {
 
 #[test]
 fn theorem1_sliding_variable_enters_the_boundary_layer_and_stays() {
-    let setup = Setup::new(
-        KinematicParams::nominal(),
-        Noise {
-            camera: false,
-            potentiometer: false,
-        },
-        10.0,
-        0,
-    );
-    let s = run_scheme(Which::Dsmc, &Sinusoid::experiment1(), &setup);
-    assert!(s.first_fault.is_none());
-    let eps = DsmcGains::tuned().epsilon;
-    for i in 0..6 {
-        let m = s
+    let configs = [
+        ("default", ServoConfig::nominal(), DsmcGains::tuned()),
+        (
+            "low-noise",
+            ServoConfig::low_noise(),
+            DsmcGains::low_noise(),
+        ),
+    ];
+    for (name, config, gains) in configs {
+        let mut setup = Setup::new(
+            KinematicParams::nominal(),
+            Noise {
+                camera: false,
+                potentiometer: false,
+            },
+            10.0,
+            0,
+        );
+        setup.config = config;
+        setup.dsmc = gains;
+        let s = run_scheme(Which::Dsmc, &Sinusoid::experiment1(), &setup);
+        assert!(s.first_fault.is_none(), "{name}: {:?}", s.first_fault);
+        let eps = gains.epsilon;
+        for i in 0..6 {
+            let m = s
+                .sliding
+                .iter()
+                .filter(|x| x.0 > 1.0)
+                .map(|x| x.1[i].abs())
+                .fold(0.0, f64::max);
+            let m0 = s.sliding.iter().map(|x| x.1[i].abs()).fold(0.0, f64::max);
+            println!(
+                "{name} axis {i}: max |F| after 1 s {m:.3e} (overall {m0:.3e}), eps {:.1e}",
+                eps[i]
+            );
+        }
+        let inside = |f: &rss6_core::Vec6| (0..6).all(|i| f[i].abs() <= eps[i]);
+        // Reaching time: the frame after the last one outside the layer.
+        let last_out = s
             .sliding
             .iter()
-            .filter(|x| x.0 > 1.0)
-            .map(|x| x.1[i].abs())
-            .fold(0.0, f64::max);
-        let m0 = s.sliding.iter().map(|x| x.1[i].abs()).fold(0.0, f64::max);
-        println!(
-            "axis {i}: max |F| after 1 s {m:.3e} (overall {m0:.3e}), eps {:.1e}",
-            eps[i]
+            .rposition(|(_, f, _)| !inside(f))
+            .expect("F starts outside the layer");
+        assert!(
+            last_out + 1 < s.sliding.len(),
+            "{name}: F never settled inside the layer"
         );
+        let t_in = s.sliding[last_out + 1].0;
+        let t_end = s.sliding.last().unwrap().0;
+        let worst = s.sliding[last_out + 1..]
+            .iter()
+            .map(|(_, f, _)| (0..6).map(|i| f[i].abs() / eps[i]).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        println!("Theorem 1 ({name}): |F_i| <= eps for all i from t = {t_in:.3} s to {t_end:.3} s; max |F_i|/eps there {worst:.3}");
+        assert!(
+            t_in < 1.5,
+            "{name}: reaching phase too long: F last outside the layer at {t_in} s"
+        );
+        assert!(t_end > 9.9, "the run must cover 10 s");
     }
-    let inside = |f: &rss6_core::Vec6| (0..6).all(|i| f[i].abs() <= eps[i]);
-    // Reaching time: the frame after the last one outside the layer.
-    let last_out = s
-        .sliding
-        .iter()
-        .rposition(|(_, f, _)| !inside(f))
-        .expect("F starts outside the layer");
-    assert!(
-        last_out + 1 < s.sliding.len(),
-        "F never settled inside the layer"
-    );
-    let t_in = s.sliding[last_out + 1].0;
-    let t_end = s.sliding.last().unwrap().0;
-    let worst = s.sliding[last_out + 1..]
-        .iter()
-        .map(|(_, f, _)| (0..6).map(|i| f[i].abs() / eps[i]).fold(0.0, f64::max))
-        .fold(0.0, f64::max);
-    println!("Theorem 1: |F_i| <= eps for all i from t = {t_in:.3} s to {t_end:.3} s; max |F_i|/eps there {worst:.3}");
-    assert!(
-        t_in < 1.5,
-        "reaching phase too long: F last outside the layer at {t_in} s"
-    );
-    assert!(t_end > 9.9, "the run must cover 10 s");
 }
 
 /// Heavier study: the Experiment 1 ordering on five other randomly perturbed plants (and camera seeds).
@@ -219,16 +231,39 @@ fn experiment1_ordering_on_other_plants() {
             15.0,
             seed,
         );
-        let r: Vec<f64> = [Which::Kjsc, Which::Kcsc, Which::Dsmc]
+        let mut r: Vec<f64> = [Which::Kjsc, Which::Kcsc, Which::Dsmc]
             .into_iter()
             .map(|w| run_scheme(w, &traj, &setup).pos_rmse() * 1e3)
             .collect();
+        let mut low = setup;
+        low.config = ServoConfig::low_noise();
+        low.dsmc = DsmcGains::low_noise();
+        low.monitor = Some(KalmanConfig::thesis());
+        let l = run_scheme(Which::Dsmc, &traj, &low);
+        assert!(l.first_fault.is_none(), "seed {seed}: {:?}", l.first_fault);
+        let (whole, late) = kalman_ratios(&l);
+        let fmt = |r: &Ratios| {
+            r.iter()
+                .map(|(a, b)| format!("{a:.2}/{b:.2}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
         println!(
-            "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm",
-            r[0], r[1], r[2]
+            "plant seed {seed}: low-noise filter noise/velocity ratios x..gamma, whole run {}; after {MONITOR_FROM} s {}",
+            fmt(&whole),
+            fmt(&late)
+        );
+        r.push(l.pos_rmse() * 1e3);
+        println!(
+            "plant seed {seed}: position RMSE KJSC {:.3} KCSC {:.3} DSMC {:.3} mm, low-noise DSMC {:.3} mm / {:.3} mrad",
+            r[0],
+            r[1],
+            r[2],
+            r[3],
+            l.ang_rmse() * 1e3
         );
         assert!(
-            r[2] < r[1] && r[1] < r[0],
+            r[2] < r[1] && r[1] < r[0] && r[3] < r[1],
             "seed {seed}: ordering broken {r:?}"
         );
     }
@@ -314,5 +349,112 @@ fn model_aided_filter_in_the_dsmc_loop() {
             a.ang_rmse() < 1.2 * b.ang_rmse(),
             "{name}: orientation RMSE grew"
         );
+    }
+}
+
+/// Per-axis (RMS estimate error / RMS camera error, RMS χ̇ error / RMS true χ̇) of the servo's filter over
+/// the whole run and after [`MONITOR_FROM`] s (the initial step has converged by then).
+/// Per axis: (noise ratio, velocity ratio).
+type Ratios = [(f64, f64); 6];
+
+fn kalman_ratios(s: &Stats) -> (Ratios, Ratios) {
+    let (n, m) = (s.kf_n as f64, s.mon_n as f64);
+    let whole = core::array::from_fn(|i| {
+        (
+            (s.est_sq[i] / s.cam_sq[i]).sqrt(),
+            (s.vel_err_sq[i] / n).sqrt() / (s.vel_sq[i] / n).sqrt(),
+        )
+    });
+    let late = core::array::from_fn(|i| {
+        (
+            (s.mon_servo_est_sq[i] / s.mon_cam_sq[i]).sqrt(),
+            (s.mon_servo_vel_err_sq[i] / m).sqrt() / (s.mon_vel_sq[i] / m).sqrt(),
+        )
+    });
+    (whole, late)
+}
+
+/// The Kalman must-show in the DSMC loop, all six axes: with [`ServoConfig::low_noise`] (model input,
+/// joint-rate hold compensation, potentiometer rate; [`DsmcGains::low_noise`]) the filter's pose error
+/// is below the camera's (< 0.9 of it once the initial step has converged) and its χ̇ error below 0.3 of
+/// the true RMS χ̇ on every axis, over the whole run and after the step; both better than the default
+/// servo's on every axis, and the DSMC still beats KCSC.
+#[test]
+fn low_noise_servo_filter_tracks_all_six_rates() {
+    let e1 = Sinusoid::experiment1();
+    let e2 = Fourier::experiment2();
+    let cases: [(&str, &dyn Trajectory, f64); 2] = [("Exp. 1", &e1, 15.0), ("Exp. 2", &e2, 20.0)];
+    let names = ["x", "y", "z", "alpha", "beta", "gamma"];
+    for (name, traj, seconds) in cases {
+        let mut base = perturbed_setup(seconds);
+        // The monitor filter is not used; setting it makes run_scheme collect the servo filter's
+        // statistics after MONITOR_FROM s.
+        base.monitor = Some(KalmanConfig::thesis());
+        let mut low = perturbed_setup(seconds);
+        low.monitor = Some(KalmanConfig::thesis());
+        low.config = ServoConfig::low_noise();
+        low.dsmc = DsmcGains::low_noise();
+        let b = run_scheme(Which::Dsmc, traj, &base);
+        let l = run_scheme(Which::Dsmc, traj, &low);
+        let k = run_scheme(Which::Kcsc, traj, &perturbed_setup(seconds));
+        assert!(l.first_fault.is_none() && b.first_fault.is_none());
+        let (bw, bl) = kalman_ratios(&b);
+        let (lw, ll) = kalman_ratios(&l);
+        println!(
+            "{name}: DSMC position / orientation RMSE default {:.3} mm / {:.3} mrad, low-noise {:.3} mm / {:.3} mrad, KCSC {:.3} mm / {:.3} mrad",
+            b.pos_rmse() * 1e3,
+            b.ang_rmse() * 1e3,
+            l.pos_rmse() * 1e3,
+            l.ang_rmse() * 1e3,
+            k.pos_rmse() * 1e3,
+            k.ang_rmse() * 1e3
+        );
+        println!("{name}: est/raw noise and velocity error/rms velocity, default -> low-noise (whole run | after {MONITOR_FROM} s)");
+        for i in 0..6 {
+            println!(
+                "  {:<6} noise {:.2} -> {:.2}  velocity {:.2} -> {:.2} | noise {:.2} -> {:.2}  velocity {:.2} -> {:.2}",
+                names[i], bw[i].0, lw[i].0, bw[i].1, lw[i].1, bl[i].0, ll[i].0, bl[i].1, ll[i].1
+            );
+        }
+        for i in 0..6 {
+            let ax = names[i];
+            assert!(
+                lw[i].0 < 1.0,
+                "{name} {ax}: pose noise not lowered over the run ({})",
+                lw[i].0
+            );
+            assert!(
+                lw[i].0 < bw[i].0,
+                "{name} {ax}: noise not lower than the default's"
+            );
+            assert!(
+                lw[i].1 < bw[i].1,
+                "{name} {ax}: velocity not better than the default's"
+            );
+            assert!(
+                ll[i].0 < 0.9,
+                "{name} {ax}: pose noise ratio {} after the step",
+                ll[i].0
+            );
+            assert!(
+                ll[i].1 < 0.3,
+                "{name} {ax}: velocity ratio {} after the step",
+                ll[i].1
+            );
+            assert!(
+                lw[i].1 < 0.3,
+                "{name} {ax}: velocity ratio {} over the run",
+                lw[i].1
+            );
+        }
+        assert!(
+            l.pos_rmse() < k.pos_rmse() && l.ang_rmse() < k.ang_rmse(),
+            "{name}: low-noise DSMC must stay ahead of KCSC"
+        );
+        assert!(
+            l.pos_rmse() < 1.05 * b.pos_rmse(),
+            "{name}: position RMSE grew"
+        );
+        assert!(l.ang_rmse() < b.ang_rmse(), "{name}: orientation RMSE grew");
     }
 }

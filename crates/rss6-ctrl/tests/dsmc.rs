@@ -114,3 +114,51 @@ fn nan_estimate_latches_until_reset() {
     dsmc.reset();
     assert!(dsmc.step(&r, &good, 0.033).is_ok());
 }
+
+/// The hold stiffness H cancels, to first order, the pose dependence of a held holding torque: at
+/// χ0 + δ the model accelerates by ≈ S δ under τ_g(χ0) (≈ 190 rad/s² per rad in α, β at home), and by
+/// O(δ²) under τ_g(χ0) + H (θ(χ0 + δ) − θ(χ0)).
+#[test]
+fn hold_stiffness_cancels_the_held_torque_instability() {
+    use rss6_core::{forward_dynamics, ik};
+    let kp = KinematicParams::nominal();
+    let dp = DynamicParams::nominal();
+    let dsmc = Dsmc::new(kp, dp, DsmcGains::tuned()).unwrap();
+    for pose0 in [
+        home_pose(),
+        home_pose() + Vec6::new(0.01, -0.008, 0.005, 0.03, -0.02, 0.01),
+    ] {
+        let tau0 = dsmc.holding_torque(&pose0).unwrap();
+        assert!(
+            forward_dynamics(&kp, &dp, &pose0, &Vec6::zeros(), &tau0)
+                .unwrap()
+                .amax()
+                < 1e-9
+        );
+        let h = dsmc.hold_stiffness(&pose0).unwrap();
+        let th0 = ik(&kp, &pose0).unwrap();
+        for j in 0..6 {
+            let mut d = Vec6::zeros();
+            d[j] = if j < 3 { 2e-4 } else { 1e-3 };
+            let p = pose0 + d;
+            let held = forward_dynamics(&kp, &dp, &p, &Vec6::zeros(), &tau0).unwrap();
+            let tau = tau0 + h * (ik(&kp, &p).unwrap() - th0);
+            let comp = forward_dynamics(&kp, &dp, &p, &Vec6::zeros(), &tau).unwrap();
+            println!(
+                "axis {j}: |accel| held {:.3e}, compensated {:.3e}",
+                held.amax(),
+                comp.amax()
+            );
+            assert!(
+                held.amax() > 1e-2,
+                "axis {j}: no hold instability to cancel?"
+            );
+            assert!(
+                comp.amax() < 0.02 * held.amax(),
+                "axis {j}: compensation left {:e} of {:e}",
+                comp.amax(),
+                held.amax()
+            );
+        }
+    }
+}

@@ -11,7 +11,7 @@ use nalgebra::Matrix3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rss6_core::Vec6;
+use rss6_core::{home_pose, Vec6};
 use rss6_ctrl::{discrete_noise, transition, CtrlError, KalmanConfig, PoseKalman};
 
 #[test]
@@ -297,4 +297,52 @@ fn known_input_removes_the_lag_of_a_smooth_filter() {
         Err(CtrlError::NonFinite)
     );
     assert_eq!(kf.input(), Vec6::zeros());
+}
+
+/// A rate measurement pulls χ̇ toward it in proportion to the variances and shrinks its variance; bad
+/// input is refused with the state untouched; steady-state filters have no covariance to update.
+#[test]
+fn rate_measurement_updates_the_velocity() {
+    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    for _ in 0..30 {
+        kf.step(0.033, Some(&home_pose())).unwrap();
+    }
+    let before = kf;
+    let v = Vec6::new(0.01, -0.02, 0.005, 0.03, -0.01, 0.02);
+    let est = kf.update_rate(&v, &Vec6::repeat(1e-12)).unwrap();
+    assert_eq!(est.pose, before.estimate().pose, "the pose is the camera's");
+    assert!(
+        (est.pose_dot - v).amax() < 1e-3 * v.amax(),
+        "{} vs {v}",
+        est.pose_dot
+    );
+    // An uninformative measurement changes little.
+    let mut kf2 = before;
+    let est2 = kf2.update_rate(&v, &Vec6::repeat(1e6)).unwrap();
+    assert!((est2.pose_dot - before.estimate().pose_dot).amax() < 1e-6);
+    // Refused input leaves the state untouched.
+    let mut kf3 = before;
+    let mut bad = v;
+    bad[2] = f64::NAN;
+    assert!(matches!(
+        kf3.update_rate(&bad, &Vec6::repeat(1e-6)),
+        Err(CtrlError::NonFinite)
+    ));
+    assert!(matches!(
+        kf3.update_rate(&v, &Vec6::repeat(0.0)),
+        Err(CtrlError::InvalidParameter(_))
+    ));
+    assert_eq!(kf3, before);
+    let mut ss = PoseKalman::new(
+        KalmanConfig {
+            steady_state: true,
+            ..KalmanConfig::thesis()
+        },
+        &home_pose(),
+    )
+    .unwrap();
+    assert!(matches!(
+        ss.update_rate(&v, &Vec6::repeat(1e-6)),
+        Err(CtrlError::InvalidParameter(_))
+    ));
 }

@@ -77,6 +77,10 @@ fn every_step_is_allocation_free() {
             let z = (k % 3 != 0).then_some(r1.pose);
             sink += kf.step(0.033, z.as_ref()).unwrap().pose[0];
             sink += kf_ss.step(0.033, z.as_ref()).unwrap().pose_dot[1];
+            sink += kf
+                .update_rate(&r1.pose_dot, &Vec6::repeat(1e-6))
+                .unwrap()
+                .pose_dot[2];
             sink += dsmc.step(&r1, &est, 0.033).unwrap().tau_a[2];
             sink += kcsc.step(&r2, &est, 0.033).unwrap().theta_d[3];
             sink += vpid
@@ -96,6 +100,9 @@ fn every_step_is_allocation_free() {
         sink += dsmc.step(&r_hold(), &bad, 0.033).map_or(1.0, |_| 0.0);
         sink += dsmc.step(&r_hold(), &est, 0.033).map_or(1.0, |_| 0.0);
         sink += kf.step(0.033, Some(&bad.pose)).map_or(1.0, |_| 0.0);
+        sink += kf
+            .update_rate(&bad.pose, &Vec6::repeat(1e-6))
+            .map_or(1.0, |_| 0.0);
     });
     black_box(sink);
     assert_eq!(n, 0, "controller steps allocated {n} times");
@@ -107,11 +114,16 @@ fn every_step_is_allocation_free() {
         kalman_model_input: true,
         ..ServoConfig::nominal()
     };
-    for (which, config) in [
-        (Which::Dsmc, ServoConfig::nominal()),
-        (Which::Dsmc, aided),
-        (Which::Kcsc, ServoConfig::nominal()),
-        (Which::Kjsc, ServoConfig::nominal()),
+    for (which, config, gains) in [
+        (Which::Dsmc, ServoConfig::nominal(), DsmcGains::tuned()),
+        (Which::Dsmc, aided, DsmcGains::tuned()),
+        (
+            Which::Dsmc,
+            ServoConfig::low_noise(),
+            DsmcGains::low_noise(),
+        ),
+        (Which::Kcsc, ServoConfig::nominal(), DsmcGains::tuned()),
+        (Which::Kjsc, ServoConfig::nominal(), DsmcGains::tuned()),
     ] {
         let start = home_pose();
         let mut plant = ModelPlant::new(
@@ -129,7 +141,7 @@ fn every_step_is_allocation_free() {
         let mut servo = Servo::new(
             kp,
             config,
-            scheme(which, &theta0, DsmcGains::tuned()),
+            scheme(which, &theta0, gains),
             &start,
             &kappa0,
             0.0,

@@ -133,3 +133,50 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     );
     let _ = Vec6::zeros();
 }
+
+/// The low-noise options are checked at construction.
+#[test]
+fn low_noise_config_is_validated() {
+    let kp = KinematicParams::nominal();
+    let plant = ModelPlant::new(
+        kp,
+        DynamicParams::nominal(),
+        &home_pose(),
+        Noise {
+            camera: false,
+            potentiometer: false,
+        },
+        0,
+    );
+    let kappa0 = <ModelPlant as Plant>::potentiometers(&plant);
+    let theta0 = kp.theta_from_reading(&kappa0);
+    let make = |config: ServoConfig| {
+        Servo::new(
+            kp,
+            config,
+            scheme(Which::Dsmc, &theta0, DsmcGains::low_noise()),
+            &home_pose(),
+            &kappa0,
+            0.0,
+        )
+    };
+    assert!(make(ServoConfig::low_noise()).is_ok());
+    let mut c = ServoConfig::low_noise();
+    c.kalman.steady_state = true;
+    assert!(matches!(
+        make(c),
+        Err(rss6_ctrl::CtrlError::InvalidParameter(_))
+    ));
+    let mut c = ServoConfig::low_noise();
+    c.potentiometer_rate = Some(f64::NAN);
+    assert!(matches!(
+        make(c),
+        Err(rss6_ctrl::CtrlError::InvalidParameter(_))
+    ));
+    let mut c = ServoConfig::low_noise();
+    c.potentiometer_rate_scale_error[3] = -1.0;
+    assert!(matches!(
+        make(c),
+        Err(rss6_ctrl::CtrlError::InvalidParameter(_))
+    ));
+}
