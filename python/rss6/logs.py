@@ -221,10 +221,17 @@ class RunWriter:
         except OSError as e:
             raise LogError(f"cannot write {self.path}: {e}") from e
         self._closed = False
-        self._w = Writer(self._file, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        # Chunk CRCs and the data-section CRC let read_log tell damage from truncation.
+        self._w = Writer(
+            self._file,
+            chunk_size=chunk_size,
+            compression=CompressionType.ZSTD,
+            enable_crcs=True,
+            enable_data_crcs=True,
+        )
         self._channels: dict[str, int] = {}
         self._seq = 0
-        self._pending = 0  # messages not yet on disk
+        self._pending = 0  # messages added since the chunk in progress was last forced out
         self._synced = 0  # bytes handed to the OS
         self._last_sync = time.monotonic()
         self.messages = 0
@@ -358,9 +365,12 @@ class RunWriter:
             raise LogError(f"cannot write {self.path}: {e}") from e
 
     def _finish_chunk(self) -> None:
-        flush = getattr(self._w, "flush", None)  # mcap >= 1.2: finish the chunk in progress
-        if flush is not None and self._pending:
+        # mcap's Writer.flush finishes the chunk in progress (none if it is empty). Without it (old
+        # mcap versions) chunks are finished only when full.
+        flush = getattr(self._w, "flush", None)
+        if flush is not None:
             flush()
+        self._pending = 0
 
     def flush(self) -> None:
         """Finishes the chunk in progress and hands everything to the OS (and the disk with
@@ -386,7 +396,6 @@ class RunWriter:
                 os.fsync(self._file.fileno())
             self._synced = self._file.tell()
             self._last_sync = time.monotonic()
-            self._pending = 0
 
     def close(self, status: str | None = None) -> None:
         """Finishes the file (last chunk, summary, footer) and closes it; ``status`` (if given) is

@@ -203,7 +203,8 @@ def track(
     and ``target_in_effector`` (ᴱχ_t) turn camera frames into end-effector poses (default: the plant's
     truth, i.e. a perfectly known camera placement). ``reset`` puts the plant at home first (thesis
     §6.5.1). ``mcap``: log the run there as it goes — every simulated second the new samples are
-    appended and flushed, so a run killed mid-way leaves a readable log (:func:`rss6.logs.read_log`);
+    appended and flushed to the OS (before ``progress`` is called), so a run killed mid-way leaves a
+    log readable up to its last whole second (:func:`rss6.logs.read_log`);
     metadata: controller, trajectory, duration, then ``status`` ("finished", or "failed: …" if the run
     raised) and ``fault``. ``progress(t, duration)`` (s) is called every simulated second.
     """
@@ -252,6 +253,7 @@ def track(
                     "torque": (seg["t"], seg["torque"]),
                 }
             )
+            writer.flush()  # each simulated second is on disk before the run goes on
         if progress is not None and len(seg["t"]):
             progress(float(seg["t"][-1]), float(duration))
 
