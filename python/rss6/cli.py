@@ -493,7 +493,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--dwell", type=float, default=2.0, help="dwell per configuration (s, default 2)"
     )
     c.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    c.add_argument("--quick", action="store_true", help="fewer candidates and robots")
+    c.add_argument(
+        "--quick",
+        action="store_true",
+        help="fewer candidates and robots (--mcap: also shorter moves, 50 test configurations)",
+    )
     c.add_argument(
         "--plant",
         action="store_true",
