@@ -84,10 +84,13 @@ def test_killed_writer_leaves_every_finished_chunk_readable(tmp_path):
     t, pose = log.streams["true_pose"]
     tt, torque = log.streams["torque"]
     n = len(t)
-    assert 0 < n <= 12 * 500 and len(tt) == n and log.messages == 2 * n <= written
-    want_t = np.concatenate([block(k)[0] for k in range(12)])[:n]
-    want_pose = np.concatenate([block(k)[1] for k in range(12)])[:n]
-    want_torque = np.concatenate([block(k)[2] for k in range(12)])[:n]
+    # (the child may have written a block or two more while the kill was on its way)
+    assert 0 < n <= 40 * 500 and len(tt) == n and log.messages == 2 * n
+    assert 2 * n >= written - 2 * 500 * 2  # at most the last finished block's tail is missing
+    blocks = [block(k) for k in range(n // 500 + 1)]
+    want_t = np.concatenate([b[0] for b in blocks])[:n]
+    want_pose = np.concatenate([b[1] for b in blocks])[:n]
+    want_torque = np.concatenate([b[2] for b in blocks])[:n]
     # Exact: the stamps to the ns, the six-vectors bit for bit (JSON floats round-trip), the
     # positions bit for bit; angles went through a quaternion.
     np.testing.assert_array_equal(np.round(t * 1e9), np.round(want_t * 1e9))
@@ -127,8 +130,8 @@ def test_killed_servo_run_keeps_every_logged_second(tmp_path):
     assert not log.complete
     assert log.metadata["controller"] == "DSMC" and "status" not in log.metadata
     t, true = log.streams["true_pose"]
-    # every second reported done was on disk; at most the one in progress is missing
-    assert seconds * 1000 <= len(t) < (seconds + 2) * 1000
+    # every second reported done was on disk
+    assert seconds * 1000 <= len(t)
     # The same run, in this process, for as long as the log holds: the logged samples are its.
     ref = servo.track(
         rss6.ModelSim(KP, DP, seed=11), "dsmc", "exp1", duration=np.ceil(len(t) / 1000)
@@ -169,7 +172,7 @@ def test_killed_calibration_collection_keeps_its_finished_dwells(tmp_path):
     r = calibrate.read_mcap(path)
     assert not r.complete
     # every dwell reported finished is in the file, each with its full 200 κ samples
-    assert done <= len(r.used) <= done + 1 and r.used == list(range(len(r.used)))
+    assert done <= len(r.used) and r.used == list(range(len(r.used)))
     np.testing.assert_array_equal(r.kappa_samples, 200)
     thetas = calibrate.select_configurations(KP, "rpba", seed=0, candidates=300)
     assert [i for i, _ in r.dropped] == list(range(len(r.used), len(thetas)))
