@@ -51,6 +51,7 @@ from rss6._rss6 import (
 from rss6.errors import (
     CalibrationError,
     ControllerFaultError,
+    CorruptLogError,
     InvalidInputError,
     InvalidParameterError,
     LogError,
@@ -62,6 +63,7 @@ from rss6.errors import (
     ShapeError,
     SimulationError,
     SingularError,
+    TruncatedLogError,
     UnreachableError,
 )
 
@@ -79,6 +81,7 @@ __all__ = [
     "CalibrationError",
     "CalibrationResult",
     "ControllerFaultError",
+    "CorruptLogError",
     "Dsmc",
     "DynamicParams",
     "InvalidInputError",
@@ -100,6 +103,7 @@ __all__ = [
     "SingularError",
     "TorqueToPosition",
     "Trajectory",
+    "TruncatedLogError",
     "UnreachableError",
     "calibrate",
     "compose_poses",

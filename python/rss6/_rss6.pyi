@@ -315,6 +315,8 @@ def run_servo(
     kalman_r: ArrayLike | None = None,
     kalman_q_jerk: ArrayLike | None = None,
     camera_latency: float = 0.0,
+    on_segment: Callable[[dict[str, Any]], object] | None = None,
+    segment: float = 1.0,
 ) -> dict[str, Any]: ...
 
 # --- calibration ------------------------------------------------------------------------------

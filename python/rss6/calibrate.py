@@ -15,7 +15,6 @@ True
 
 from __future__ import annotations
 
-import contextlib
 import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -163,17 +162,31 @@ def collect(
         "move_time": repr(float(move_time)),
         "settle_time": repr(float(settle_time)),
         "kappa_rate": repr(KAPPA_RATE),
+        "windows": "[]",
     }
-    try:
-        _step_dwells(plant, th, dwell, move_time, settle_time, progress, raw, windows)
-    except BaseException:
-        # Keep the finished dwells (the reader ignores samples outside the windows), then re-raise.
-        with contextlib.suppress(Exception):
-            logs.write_run(mcap, _series(raw), {**metadata, "windows": json.dumps(windows)})
-        raise
-    streams = _series(raw)
-    logs.write_run(mcap, streams, {**metadata, "windows": json.dumps(windows)})
-    return _average_dwells(streams, windows, complete=True, drop=False, kappa_rate=KAPPA_RATE).data
+    written = dict.fromkeys(raw, 0)
+    # The log is written as the collection goes: after each dwell, its samples (one chunk, flushed)
+    # and then the windows so far, so a killed process leaves every finished dwell readable. If the
+    # collection fails, the writer records the error and finishes the file with the finished dwells.
+    with logs.RunWriter(mcap, metadata) as writer:
+
+        def on_dwell() -> None:
+            new = {
+                name: (
+                    np.asarray(t[written[name] :], dtype=np.float64),
+                    np.asarray(v[written[name] :], dtype=np.float64).reshape(-1, 6),
+                )
+                for name, (t, v) in raw.items()
+            }
+            written.update({name: len(t) for name, (t, _) in raw.items()})
+            writer.write_streams(new)
+            writer.add_metadata({"windows": json.dumps(windows)})
+
+        _step_dwells(plant, th, dwell, move_time, settle_time, progress, raw, windows, on_dwell)
+        writer.add_metadata({"status": "finished"})
+    return _average_dwells(
+        _series(raw), windows, complete=True, drop=False, kappa_rate=KAPPA_RATE
+    ).data
 
 
 def _series(raw: Mapping[str, tuple[list[float], list[F64]]]) -> dict[str, tuple[F64, F64]]:
@@ -199,10 +212,12 @@ def _step_dwells(
     progress: Callable[[int, int], Any] | None,
     raw: dict[str, tuple[list[float], list[F64]]],
     windows: list[list[float]],
+    on_dwell: Callable[[], Any] | None = None,
 ) -> None:
     """Steps ``plant`` through the configurations as rss6-ident's ``Stepped`` source does, appending
     the raw dwell samples to ``raw`` (kappa, camera_pose, theta_cmd: times, values) and, once a dwell
-    is finished, its window [t0, t1] to ``windows`` (s, plant times of its first and last tick)."""
+    is finished, its window [t0, t1] to ``windows`` (s, plant times of its first and last tick), then
+    calling ``on_dwell()``."""
     dt = float(plant.dt)
 
     def ticks(t: float) -> int:
@@ -236,6 +251,8 @@ def _step_dwells(
                 ct.append(t)
                 cv.append(np.asarray(z, dtype=np.float64))
         windows.append([float(start if start is not None else plant.time), float(plant.time)])
+        if on_dwell is not None:
+            on_dwell()
         if progress is not None:
             progress(l + 1, len(thetas))
 
@@ -343,7 +360,9 @@ def _average_dwells(
                 continue
         rows.append((l, kappa, pose, theta, len(ks), len(finite)))
     for l in range(len(windows), configurations or 0):
-        dropped.append((l, "not finished: the collection stopped before the end of its dwell"))
+        dropped.append(
+            (l, "not finished: the collection stopped before the end of its dwell" + cut)
+        )
     if (
         drop
         and not complete
@@ -377,21 +396,6 @@ def _average_dwells(
     )
 
 
-_MCAP_MAGIC = b"\x89MCAP0\r\n"
-
-
-def _ends_with_magic(path: Path) -> bool:
-    try:
-        with open(path, "rb") as f:
-            f.seek(0, 2)
-            if f.tell() < 2 * len(_MCAP_MAGIC):
-                return False
-            f.seek(-len(_MCAP_MAGIC), 2)
-            return f.read() == _MCAP_MAGIC
-    except OSError as e:
-        raise LogError(f"cannot read {path}: {e}") from e
-
-
 def read_mcap(path: Path) -> McapCalibration:
     """Reads a calibration log written by ``collect(..., mcap=path)`` (or any
     :func:`rss6.logs.write_run` log with ``kappa``, ``theta_cmd`` and ``camera_pose`` streams holding
@@ -399,22 +403,29 @@ def read_mcap(path: Path) -> McapCalibration:
     position, quaternion mean of the rotations: :func:`mean_pose`).
 
     Configurations are split by the metadata's dwell windows, or, in a log without metadata, where
-    θ_cmd changes or its samples pause. A truncated file (no MCAP end magic; ``.complete`` False) is
-    read up to its last whole chunk, as :func:`rss6.logs.read_run` does. Configurations with missing
+    θ_cmd changes or its samples pause. A truncated file (no MCAP footer, e.g. the collecting process
+    was killed; ``.complete`` False) is read up to its last whole chunk, as :func:`rss6.logs.read_log`
+    does: a log written by :func:`collect` then holds every dwell finished before the cut, with its
+    window. Configurations with missing
     or non-finite frames, or whose dwell the truncation cut short, are dropped and listed in
     ``.dropped`` as ``(index, reason)``. Raises :class:`rss6.LogError` for an unreadable file or one
-    without calibration data and :class:`rss6.CalibrationError` if no configuration is usable."""
-    complete = _ends_with_magic(path)
-    run = logs.read_run(path)
-    md = run.get("metadata")
+    without calibration data (:class:`rss6.CorruptLogError` if it is not MCAP or damaged) and
+    :class:`rss6.CalibrationError` if no configuration is usable."""
+    log = logs.read_log(path)
+    complete = log.complete
+    run = log.streams
+    md = log.metadata if any(name == "rss6" for name, _ in log.records) else None
     windows = None
     rate = None
     count = None
     if md is not None:
         if md.get("kind") != MCAP_KIND:
-            raise LogError(f"{path}: metadata kind is {md.get('kind')!r}, expected {MCAP_KIND!r}")
+            raise LogError(
+                f"{path}: not a calibration log written by collect() (metadata kind "
+                f"{md.get('kind')!r}, expected {MCAP_KIND!r})"
+            )
         try:
-            windows = [[float(a), float(b)] for a, b in json.loads(md["windows"])]
+            windows = [[float(a), float(b)] for a, b in json.loads(md.get("windows", "[]"))]
             rate = float(md["kappa_rate"])
             count = int(md["configurations"])
         except (KeyError, TypeError, ValueError) as e:

@@ -4,6 +4,9 @@
                          with KJSC, KCSC and DSMC; print Tables 6.1/6.2 beside the thesis's; write
                          MCAP logs and figures to ``--out``.
 ``rss6 calibrate --simulate``   the calibration study of §4.4.3: Tables 4.3–4.5 over random robots.
+``rss6 calibrate --mcap FILE``  collect a calibration on a simulated robot, logging the raw dwells to
+                         FILE as it goes, then calibrate from the log.
+``rss6 calibrate --from-mcap FILE``  calibrate from a logged collection (also a truncated one).
 ``rss6 track``           one tracking run (controller × trajectory) with an MCAP log.
 """
 
@@ -198,14 +201,108 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibrate_log(args: argparse.Namespace, path: str, plant: Any = None) -> int:
+    """Calibrates from the MCAP log at ``path`` (RPBA or implicit); with the simulated ``plant`` that
+    produced it, also prints Table 4.5's relative pose errors before and after."""
+    import rss6
+    from rss6 import calibrate
+
+    nominal = rss6.KinematicParams.nominal()
+    log = calibrate.read_mcap(path)
+    n_all = len(log.used) + len(log.dropped)
+    print(
+        f"{path}: {len(log.used)} of {n_all} configurations usable"
+        + ("" if log.complete else " (the file is truncated: read up to its last whole chunk)")
+    )
+    for index, why in log.dropped:
+        print(f"  configuration {index} left out: {why}")
+    if args.method == "implicit":
+        result = calibrate.implicit(log.data, nominal, calibrate.default_placement()[0])
+    else:
+        result = calibrate.rpba(log.data, nominal)
+    cost = result.cost_history
+    print(
+        f"{result.method}: {result.iterations} LM steps, cost {cost[0]:.4g} -> {cost[-1]:.4g}, "
+        f"rank {result.rank}/{result.parameter_count}"
+    )
+    u = result.unidentifiable
+    if u:
+        print(f"  {len(u)} parameters not identifiable from these data: {', '.join(u[:6])}, …")
+    b = np.asarray(result.errors)
+    print(
+        f"  identified errors: lengths/positions max {np.abs(b[:48]).max() * 1e3:.3f} mm, "
+        f"η max {np.abs(b[48:54]).max():.3g} rad/bit, Δθ max {np.degrees(np.abs(b[54:60]).max()):.3f}°"
+    )
+    if plant is not None:
+        lo, hi = calibrate.stroke(nominal)
+        n = 50 if args.quick else 100
+        unc = calibrate.relative_pose_errors(None, plant, n=n, seed=args.seed, stroke=(lo, hi))
+        cal = calibrate.relative_pose_errors(result, plant, n=n, seed=args.seed, stroke=(lo, hi))
+        print(
+            f"RMS relative pose errors on {n} test configurations (x, y, z mm; α, β, γ 1e-3 rad):"
+        )
+        for name, e in (("uncalibrated", unc["rms"]), (result.method, cal["rms"])):
+            print(f"  {name:13s} " + " ".join(f"{v * 1e3:8.4f}" for v in e))
+    if args.out:
+        result.params.to_toml(args.out)
+        print(f"wrote {args.out}")
+    return 0
+
+
+def cmd_calibrate_mcap(args: argparse.Namespace) -> int:
+    """``rss6 calibrate --mcap FILE``: collect on a simulated robot, logging to FILE, then calibrate."""
+    import rss6
+    from rss6 import calibrate
+
+    seed = args.seed
+    nominal = rss6.KinematicParams.nominal()
+    kp_true = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed))
+    sensor_design, target_design = calibrate.default_placement()
+    plant = make_plant(
+        "rapier" if args.plant else "model",
+        kp_true,
+        rss6.DynamicParams.nominal(),
+        seed,
+        calibrate.draw_external(sensor_design, seed + 1),
+        calibrate.draw_external(target_design, seed + 2),
+    )
+    lo, hi = calibrate.stroke(nominal)
+    method = "implicit" if args.method == "implicit" else "rpba"
+    thetas = calibrate.select_configurations(
+        nominal, method, seed, candidates=400 if args.quick else 5000, stroke=(lo, hi)
+    )
+    print(
+        f"collecting {len(thetas) - 1} {args.method} configurations + initial on rss6."
+        f"{type(plant).__name__} (robot with Table 4.2 errors, seed {seed}), dwell {args.dwell} s; "
+        f"logging to {args.mcap} (on disk after every dwell)",
+        flush=True,
+    )
+    plant.reset(rss6.home_pose())
+    with _progress(len(thetas), "calibration: measuring configurations", args.quiet) as bar:
+        calibrate.collect(
+            plant,
+            thetas,
+            args.dwell,
+            move_time=0.5 if args.quick else 1.0,
+            progress=lambda d, t: bar.update(1),
+            mcap=args.mcap,
+        )
+    return _calibrate_log(args, args.mcap, plant)
+
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
     import rss6
     from rss6 import _rss6, calibrate
 
+    if args.from_mcap:
+        return _calibrate_log(args, args.from_mcap)
+    if args.mcap:
+        return cmd_calibrate_mcap(args)
     if not args.simulate:
         print(
-            "rss6 calibrate: only --simulate is available from the command line; use the Python API "
-            "(rss6.calibrate) on logged data",
+            "rss6 calibrate: choose --simulate (the study of §4.4.3), --mcap FILE (collect on a "
+            "simulated robot, logging to FILE) or --from-mcap FILE (calibrate from a logged "
+            "collection)",
             file=sys.stderr,
         )
         return 2
@@ -298,9 +395,17 @@ def cmd_track(args: argparse.Namespace) -> int:
     )
     dp = rss6.DynamicParams.nominal()
     plant = make_plant(args.plant, kp_true, dp, args.seed, None, None)
-    r = servo.track(
-        plant, args.controller, args.trajectory, kp_model, dp, args.duration, mcap=args.mcap
-    )
+    with _progress(round(args.duration), f"{args.controller} on {args.trajectory}", False) as bar:
+        r = servo.track(
+            plant,
+            args.controller,
+            args.trajectory,
+            kp_model,
+            dp,
+            args.duration,
+            mcap=args.mcap,
+            progress=lambda t, d: bar.update(round(t + 1e-3) - bar.n),
+        )
     print(f"{r.controller} on {args.trajectory} ({args.duration} s, rss6.{type(plant).__name__})")
     print("RMSE (x, y, z mm; α, β, γ 1e-3 rad): " + " ".join(f"{v:.3f}" for v in r.table()["rmse"]))
     print("MAE  (x, y, z mm; α, β, γ 1e-3 rad): " + " ".join(f"{v:.3f}" for v in r.table()["mae"]))
@@ -347,12 +452,40 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser(
         "calibrate",
-        help="kinematic calibration; --simulate runs the study of thesis §4.4.3 (Tables 4.3–4.5)",
+        help="kinematic calibration: the study of thesis §4.4.3 (--simulate), a logged collection "
+        "(--mcap FILE) or a calibration from a log (--from-mcap FILE)",
         description="With --simulate: the actuator stroke (§4.4.1), the optimal configuration sets (§4.4.2) "
         "and the simulation study of §4.4.3 over random robots with Table 4.2 errors and Table 4.1 noise, "
-        "printing Tables 4.3, 4.4 and 4.5 (mean and 95th percentile) beside the thesis's.",
+        "printing Tables 4.3, 4.4 and 4.5 (mean and 95th percentile) beside the thesis's. "
+        "With --mcap FILE: visit the optimal configurations on a simulated robot, logging the raw "
+        "potentiometer and camera samples of every dwell to FILE as the collection goes, then calibrate "
+        "from the log and print the relative pose errors before and after. With --from-mcap FILE: "
+        "calibrate from such a log.",
     )
-    c.add_argument("--simulate", action="store_true", help="run the simulation study")
+    mode = c.add_mutually_exclusive_group()
+    mode.add_argument("--simulate", action="store_true", help="run the simulation study")
+    mode.add_argument(
+        "--mcap",
+        metavar="FILE",
+        help="collect a calibration on a simulated robot with Table 4.2 errors (seed --seed), "
+        "logging the raw dwells to FILE as it goes (on disk after every dwell), then calibrate from it",
+    )
+    mode.add_argument(
+        "--from-mcap",
+        metavar="FILE",
+        help="calibrate from a collection logged by --mcap or rss6.calibrate.collect(..., mcap=...); "
+        "a truncated log (collection killed mid-way) gives its finished configurations",
+    )
+    c.add_argument(
+        "--method",
+        choices=("rpba", "implicit"),
+        default="rpba",
+        help="with --mcap/--from-mcap: the calibration method (default rpba)",
+    )
+    c.add_argument(
+        "--out", metavar="TOML", help="with --mcap/--from-mcap: write the calibrated kinematics"
+    )
+    c.add_argument("--quiet", action="store_true", help="no progress bar")
     c.add_argument(
         "--robots", type=int, default=None, help="number of random robots (default 20, --quick 3)"
     )
@@ -360,11 +493,16 @@ def build_parser() -> argparse.ArgumentParser:
         "--dwell", type=float, default=2.0, help="dwell per configuration (s, default 2)"
     )
     c.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    c.add_argument("--quick", action="store_true", help="fewer candidates and robots")
+    c.add_argument(
+        "--quick",
+        action="store_true",
+        help="fewer candidates and robots (--mcap: also shorter moves, 50 test configurations)",
+    )
     c.add_argument(
         "--plant",
         action="store_true",
-        help="collect the data on the rapier plant (slow) instead of rss6-ident's analytic generator",
+        help="collect the data on the rapier plant (slow) instead of rss6-ident's analytic generator "
+        "(--simulate) or the analytic-model twin (--mcap)",
     )
     c.set_defaults(func=cmd_calibrate)
 
@@ -384,7 +522,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     t.add_argument("--plant", choices=("auto", "rapier", "model"), default="auto")
     t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--mcap", help="write the run to this MCAP file")
+    t.add_argument(
+        "--mcap", help="log the run to this MCAP file (as it goes: on disk every simulated second)"
+    )
     t.set_defaults(func=cmd_track)
     return p
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "CalibrationError",
     "ControllerFaultError",
+    "CorruptLogError",
     "InvalidInputError",
     "InvalidParameterError",
     "LogError",
@@ -22,6 +23,7 @@ __all__ = [
     "ShapeError",
     "SimulationError",
     "SingularError",
+    "TruncatedLogError",
     "UnreachableError",
 ]
 
@@ -97,6 +99,30 @@ class CalibrationError(Rss6Error):
 
 class LogError(Rss6Error):
     """An MCAP log could not be written or read."""
+
+
+class TruncatedLogError(LogError):
+    """An MCAP log ends before its footer (its writer stopped mid-run, e.g. the process was killed),
+    and a complete file was asked for (``rss6.logs.read_log(path, strict=True)``).
+
+    Attributes: ``path``, ``size`` (bytes in the file), ``readable`` (bytes up to the end of the last
+    whole record), ``chunks`` and ``messages`` (what a tolerant read recovers).
+    """
+
+    path: str
+    size: int
+    readable: int
+    chunks: int
+    messages: int
+
+
+class CorruptLogError(LogError):
+    """A file is not an MCAP log or its content is damaged (bad magic, a checksum mismatch, an
+    undecodable record or message). Attributes: ``path``, ``offset`` (byte where the damage was
+    found)."""
+
+    path: str
+    offset: int
 
 
 class ParamsFileError(Rss6Error):

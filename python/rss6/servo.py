@@ -14,6 +14,7 @@ optional MCAP log.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
@@ -24,7 +25,7 @@ from numpy.typing import NDArray
 
 from rss6 import _rss6
 from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
-from rss6.logs import write_run
+from rss6.logs import RunWriter, write_run
 
 __all__ = [
     "AXES",
@@ -191,6 +192,7 @@ def track(
     pid: tuple[float, float, float] | None = None,
     reset: bool = True,
     mcap: str | PathLike[str] | None = None,
+    progress: Callable[[float, float], Any] | None = None,
 ) -> TrackingResult:
     """Runs one servo experiment on ``plant`` (:class:`rss6.Plant` or :class:`rss6.ModelSim`).
 
@@ -200,7 +202,11 @@ def track(
     nominal kinematics and Table 5.1 dynamics; pass calibrated kinematics). ``sensor_in_base`` (ᴼχ_C)
     and ``target_in_effector`` (ᴱχ_t) turn camera frames into end-effector poses (default: the plant's
     truth, i.e. a perfectly known camera placement). ``reset`` puts the plant at home first (thesis
-    §6.5.1). ``mcap``: write the run there.
+    §6.5.1). ``mcap``: log the run there as it goes — every simulated second the new samples are
+    appended and flushed to the OS (before ``progress`` is called), so a run killed mid-way leaves a
+    log readable up to its last whole second (:func:`rss6.logs.read_log`);
+    metadata: controller, trajectory, duration, then ``status`` ("finished", or "failed: …" if the run
+    raised) and ``fault``. ``progress(t, duration)`` (s) is called every simulated second.
     """
     if not (np.isfinite(duration) and duration > 0):
         raise InvalidInputError(f"duration must be finite and > 0 s, got {duration}")
@@ -222,17 +228,59 @@ def track(
         raise InvalidInputError(
             "trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable"
         )
-    d = _rss6.run_servo(
-        plant,
-        controller,
-        traj,
-        duration,
-        kp,
-        dp,
-        sensor_in_base=sensor_in_base,
-        target_in_effector=target_in_effector,
-        pid=pid,
+    writer = (
+        RunWriter(
+            mcap,
+            {
+                "controller": str(controller).upper(),
+                "trajectory": name,
+                "duration": repr(float(duration)),
+            },
+        )
+        if mcap is not None
+        else None
     )
+
+    def on_segment(seg: dict[str, Any]) -> None:
+        if writer is not None:
+            writer.write_streams(
+                {
+                    "true_pose": (seg["t"], seg["true"]),
+                    "desired_pose": (seg["t"], seg["desired"]),
+                    "camera_pose": (seg["frame_t"], seg["measured"]),
+                    "estimate_pose": (seg["frame_t"], seg["estimate"]),
+                    "theta_cmd": (seg["t"], seg["theta_cmd"]),
+                    "torque": (seg["t"], seg["torque"]),
+                }
+            )
+            writer.flush()  # each simulated second is on disk before the run goes on
+        if progress is not None and len(seg["t"]):
+            progress(float(seg["t"][-1]), float(duration))
+
+    try:
+        d = _rss6.run_servo(
+            plant,
+            controller,
+            traj,
+            duration,
+            kp,
+            dp,
+            sensor_in_base=sensor_in_base,
+            target_in_effector=target_in_effector,
+            pid=pid,
+            on_segment=on_segment if (writer is not None or progress is not None) else None,
+        )
+        if writer is not None:
+            end = {"status": "finished"}
+            if d["fault"] is not None:
+                end["fault"] = f"t = {d['fault'][0]:.3f} s: {d['fault'][1]}"
+            writer.add_metadata(end)
+            writer.close()
+    except BaseException as e:
+        if writer is not None:
+            with contextlib.suppress(Exception):
+                writer.close(status=f"failed: {type(e).__name__}: {e}")
+        raise
     res = TrackingResult(
         controller=str(d["controller"]),
         trajectory=name,
@@ -251,5 +299,5 @@ def track(
         fault=d["fault"],
     )
     if mcap is not None:
-        res.write_mcap(mcap)
+        res.log_path = str(mcap)
     return res

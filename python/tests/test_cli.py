@@ -4,7 +4,9 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
+import rss6
 from rss6 import cli
 
 
@@ -75,7 +77,9 @@ def test_track_subcommand(tmp_path):
         str(tmp_path / "t.mcap"),
     )
     assert r.returncode == 0, r.stderr
-    assert "RMSE" in r.stdout and (tmp_path / "t.mcap").exists()
+    assert "RMSE" in r.stdout
+    log = rss6.logs.read_log(tmp_path / "t.mcap", strict=True)
+    assert log.metadata["status"] == "finished" and len(log.streams["true_pose"][0]) == 1000
 
 
 def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():
@@ -83,4 +87,53 @@ def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():
     assert r.returncode == 0, r.stderr[-2000:]
     for t in ("Table 4.3", "Table 4.4", "Table 4.5", "§4.4.1 stroke"):
         assert t in r.stdout
-    assert run("calibrate").returncode == 2  # without --simulate: explains and fails
+    bare = run("calibrate")  # without a mode: explains and fails
+    assert bare.returncode == 2 and "--from-mcap" in bare.stderr
+
+
+def test_calibrate_mcap_logs_a_collection_and_from_mcap_calibrates_from_it(tmp_path):
+    log, toml = tmp_path / "cal.mcap", tmp_path / "cal.toml"
+    r = run("calibrate", "--mcap", str(log), "--quick", "--dwell", "0.2", "--out", str(toml))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "configurations usable" in r.stdout and "RMS relative pose errors" in r.stdout
+    rows = [ln.split() for ln in r.stdout.splitlines() if ln.strip().startswith(("uncal", "rpba "))]
+    unc, cal = (np.array(row[1:], dtype=float) for row in rows)
+    assert np.all(cal < unc / 10), (unc, cal)  # calibrating from the log worked
+    # The log alone reproduces the calibration: same report line, same parameter file.
+    again = tmp_path / "again.toml"
+    f = run("calibrate", "--from-mcap", str(log), "--out", str(again))
+    assert f.returncode == 0, f.stderr[-2000:]
+    line = next(ln for ln in r.stdout.splitlines() if ln.startswith("rpba:"))
+    assert line in f.stdout.splitlines() and "truncated" not in f.stdout
+    assert again.read_text() == toml.read_text()
+    # A log cut short (collection killed mid-way) still calibrates from its finished dwells.
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(log.read_bytes()[: log.stat().st_size * 3 // 4])
+    c = run("calibrate", "--from-mcap", str(cut))
+    assert c.returncode == 0, c.stderr[-2000:]
+    assert "the file is truncated" in c.stdout and "left out: not finished" in c.stdout
+
+
+def test_calibrate_from_a_bad_log_is_a_clear_error(tmp_path):
+    garbage = tmp_path / "garbage.mcap"
+    garbage.write_bytes(b"this is not an MCAP file" * 50)
+    empty = tmp_path / "empty.mcap"
+    empty.write_bytes(b"")
+    servo_log = tmp_path / "servo.mcap"
+    rss6.logs.write_run(servo_log, {"torque": (np.arange(3) * 1e-3, np.zeros((3, 6)))}, {"a": "b"})
+    for path, kind, words in (
+        (garbage, "CorruptLogError", "bad magic"),
+        (empty, "TruncatedLogError", "empty"),
+        (tmp_path / "missing.mcap", "LogError", "cannot read"),
+        (servo_log, "LogError", "not a calibration log"),
+    ):
+        r = run("calibrate", "--from-mcap", str(path), timeout=120)
+        assert r.returncode == 1, (path, r.stdout, r.stderr)
+        assert r.stderr.startswith(f"rss6: error: {kind}: ") and words in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr and r.stdout == ""
+
+
+def test_calibrate_modes_are_exclusive(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["calibrate", "--simulate", "--from-mcap", "x.mcap"])
+    assert e.value.code == 2 and "not allowed with" in capsys.readouterr().err

@@ -79,3 +79,44 @@ def test_bad_streams_raise_log_error(tmp_path):
         logs.write_run(tmp_path / "a.mcap", {"torque": (t, np.zeros((3, 5)))})
     with pytest.raises(rss6.LogError, match="cannot read"):
         logs.read_run(tmp_path / "missing.mcap")
+
+
+def test_run_writer_appends_samples_and_metadata_as_it_goes(tmp_path):
+    s = streams(300)
+    p = tmp_path / "w.mcap"
+    t, tau = s["torque"]
+    with logs.RunWriter(p, {"controller": "KCSC", "trajectory": "exp1"}, flush_interval=0) as w:
+        w.write_streams({"true_pose": (s["true_pose"][0][:100], s["true_pose"][1][:100])})
+        w.write("torque", t[0], tau[0])  # one sample
+        w.write("torque", t[1:], tau[1:])
+        w.write("true_pose", s["true_pose"][0][100:], s["true_pose"][1][100:])
+        w.add_metadata({"status": "finished"})
+        on_disk = logs.read_log(p)  # readable while the writer is still open
+        assert not on_disk.complete and len(on_disk.streams["torque"][0]) == 300
+        assert on_disk.chunks >= 3  # flush_interval=0: every write finished its chunk
+    assert w.closed and w.messages == 600
+    back = logs.read_log(p, strict=True)
+    assert back.complete and back.messages == 600 and back.truncation == ""
+    np.testing.assert_array_equal(back.streams["torque"][1], tau)
+    np.testing.assert_allclose(back.streams["true_pose"][1], s["true_pose"][1], atol=1e-12)
+    assert back.metadata == {"controller": "KCSC", "trajectory": "exp1", "status": "finished"}
+    assert [name for name, _ in back.records] == ["rss6", "rss6"]
+    with pytest.raises(rss6.LogError, match="already closed"):
+        w.write("torque", t, tau)
+
+
+def test_run_writer_finishes_the_file_when_the_run_raises(tmp_path):
+    p = tmp_path / "failed.mcap"
+    t, tau = streams(50)["torque"]
+    with pytest.raises(ZeroDivisionError), logs.RunWriter(p) as w:
+        w.write("torque", t, tau)
+        _ = 1 / 0
+    back = logs.read_log(p, strict=True)
+    assert back.complete and back.metadata == {
+        "status": "failed: ZeroDivisionError: division by zero"
+    }
+    np.testing.assert_array_equal(back.streams["torque"][1], tau)
+    with pytest.raises(rss6.LogError, match="cannot write"):
+        logs.RunWriter(tmp_path / "no" / "such" / "dir.mcap")
+    with pytest.raises(rss6.LogError, match="non-decreasing"), logs.RunWriter(p) as w:
+        w.write("torque", t[::-1], tau)

@@ -363,73 +363,65 @@ pub(crate) struct PyDsmc {
     inner: Dsmc,
 }
 
-#[pymethods]
-impl PyDsmc {
-    /// Gains default to the tuned set of rss6-ctrl; any may be overridden with a (6,) array.
-    #[new]
-    #[pyo3(signature = (kp_model, dp_model, *, lambda_=None, kp=None, ki=None, kr=None, epsilon=None, integral_limit=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn py_new(
-        kp_model: &PyKinematicParams,
-        dp_model: &PyDynamicParams,
-        lambda_: Option<&Bound<'_, PyAny>>,
-        kp: Option<&Bound<'_, PyAny>>,
-        ki: Option<&Bound<'_, PyAny>>,
-        kr: Option<&Bound<'_, PyAny>>,
-        epsilon: Option<&Bound<'_, PyAny>>,
-        integral_limit: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Self> {
-        let d = DsmcGains::tuned();
-        let g = DsmcGains {
-            lambda: opt6(lambda_, "lambda_", d.lambda)?,
-            kp: opt6(kp, "kp", d.kp)?,
-            ki: opt6(ki, "ki", d.ki)?,
-            kr: opt6(kr, "kr", d.kr)?,
-            epsilon: opt6(epsilon, "epsilon", d.epsilon)?,
-            integral_limit: opt6(integral_limit, "integral_limit", d.integral_limit)?,
-        };
-        Ok(PyDsmc {
-            inner: Dsmc::new(kp_model.inner, dp_model.inner, g).map_err(ctrl_err)?,
-        })
-    }
+controller_methods!(
+    PyDsmc,
+    "Clears the integral, the held output and the fault.",
+    {
+        /// Gains default to the tuned set of rss6-ctrl; any may be overridden with a (6,) array.
+        #[new]
+        #[pyo3(signature = (kp_model, dp_model, *, lambda_=None, kp=None, ki=None, kr=None, epsilon=None, integral_limit=None))]
+        #[allow(clippy::too_many_arguments)]
+        fn py_new(
+            kp_model: &PyKinematicParams,
+            dp_model: &PyDynamicParams,
+            lambda_: Option<&Bound<'_, PyAny>>,
+            kp: Option<&Bound<'_, PyAny>>,
+            ki: Option<&Bound<'_, PyAny>>,
+            kr: Option<&Bound<'_, PyAny>>,
+            epsilon: Option<&Bound<'_, PyAny>>,
+            integral_limit: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<Self> {
+            let d = DsmcGains::tuned();
+            let g = DsmcGains {
+                lambda: opt6(lambda_, "lambda_", d.lambda)?,
+                kp: opt6(kp, "kp", d.kp)?,
+                ki: opt6(ki, "ki", d.ki)?,
+                kr: opt6(kr, "kr", d.kr)?,
+                epsilon: opt6(epsilon, "epsilon", d.epsilon)?,
+                integral_limit: opt6(integral_limit, "integral_limit", d.integral_limit)?,
+            };
+            Ok(PyDsmc {
+                inner: Dsmc::new(kp_model.inner, dp_model.inner, g).map_err(ctrl_err)?,
+            })
+        }
 
-    /// One camera-rate step of dt (s): returns dict tau_a (actuator torques, N·m), sliding (F),
-    /// generalized (τ in χ coordinates), tau_model (model part), in_boundary_layer (bool).
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        reference: &Bound<'py, PyAny>,
-        estimate: &Bound<'py, PyAny>,
-        dt: f64,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let r = self::reference(reference)?;
-        let e = self::estimate(estimate)?;
-        let o = self.inner.step(&r, &e, dt).map_err(ctrl_err)?;
-        let d = PyDict::new(py);
-        d.set_item("tau_a", out6(py, &o.tau_a))?;
-        d.set_item("sliding", out6(py, &o.sliding))?;
-        d.set_item("generalized", out6(py, &o.generalized))?;
-        d.set_item("tau_model", out6(py, &o.tau_model))?;
-        d.set_item("in_boundary_layer", o.in_boundary_layer)?;
-        Ok(d)
-    }
+        /// One camera-rate step of dt (s): returns dict tau_a (actuator torques, N·m), sliding (F),
+        /// generalized (τ in χ coordinates), tau_model (model part), in_boundary_layer (bool).
+        fn step<'py>(
+            &mut self,
+            py: Python<'py>,
+            reference: &Bound<'py, PyAny>,
+            estimate: &Bound<'py, PyAny>,
+            dt: f64,
+        ) -> PyResult<Bound<'py, PyDict>> {
+            let r = self::reference(reference)?;
+            let e = self::estimate(estimate)?;
+            let o = self.inner.step(&r, &e, dt).map_err(ctrl_err)?;
+            let d = PyDict::new(py);
+            d.set_item("tau_a", out6(py, &o.tau_a))?;
+            d.set_item("sliding", out6(py, &o.sliding))?;
+            d.set_item("generalized", out6(py, &o.generalized))?;
+            d.set_item("tau_model", out6(py, &o.tau_model))?;
+            d.set_item("in_boundary_layer", o.in_boundary_layer)?;
+            Ok(d)
+        }
 
-    /// The latched fault reason, or None.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        fault_text(self.inner.fault())
+        /// ∫F dt (6,).
+        fn integral<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+            out6(py, &self.inner.integral())
+        }
     }
-
-    /// ∫F dt (6,).
-    fn integral<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        out6(py, &self.inner.integral())
-    }
-
-    /// Clears the integral, the held output and the fault.
-    fn reset(&mut self) {
-        self.inner.reset();
-    }
-}
+);
 
 /// The kinematic Cartesian-space controller KCSC (eq. 6.40).
 #[pyclass(name = "Kcsc", module = "rss6._rss6")]
@@ -438,8 +430,7 @@ pub(crate) struct PyKcsc {
     inner: Kcsc,
 }
 
-#[pymethods]
-impl PyKcsc {
+controller_methods!(PyKcsc, "Clears the integral and the fault.", {
     /// KCSC on `kp_model`, starting at command `bias` (6,) rad (default zeros); gains default to the
     /// thesis's k_p = 0.3, k_i = 2.4, k_d = 0.001 on every axis.
     #[new]
@@ -479,18 +470,7 @@ impl PyKcsc {
             &self.inner.step(&r, &e, dt).map_err(ctrl_err)?.theta_d,
         ))
     }
-
-    /// The latched fault reason, or None.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        fault_text(self.inner.fault())
-    }
-
-    /// Clears the integral and the fault.
-    fn reset(&mut self) {
-        self.inner.reset();
-    }
-}
+});
 
 /// The kinematic joint-space controller KJSC (eq. 6.42).
 #[pyclass(name = "Kjsc", module = "rss6._rss6")]
@@ -499,8 +479,7 @@ pub(crate) struct PyKjsc {
     inner: Kjsc,
 }
 
-#[pymethods]
-impl PyKjsc {
+controller_methods!(PyKjsc, "Clears the integral and the fault.", {
     /// KJSC on `kp_model` (its IK turns χ_d into θ_d), starting at command `bias` (6,) rad.
     #[new]
     #[pyo3(signature = (kp_model, *, bias=None, kp=None, ki=None, kd=None))]
@@ -539,18 +518,7 @@ impl PyKjsc {
             &self.inner.step(&r, &th, dt).map_err(ctrl_err)?.theta_d,
         ))
     }
-
-    /// The latched fault reason, or None.
-    #[getter]
-    fn fault(&self) -> Option<String> {
-        fault_text(self.inner.fault())
-    }
-
-    /// Clears the integral and the fault.
-    fn reset(&mut self) {
-        self.inner.reset();
-    }
-}
+});
 
 /// The torque-to-position converter (eq. 6.37–6.38) with its command guard.
 #[pyclass(name = "TorqueToPosition", module = "rss6._rss6")]

@@ -13,121 +13,53 @@ use crate::params::{PyDynamicParams, PyKinematicParams};
 /// Two (6,) arrays.
 type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
-fn grav(g: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
+/// The gravity vector argument `g` (3,) m/s², default `GRAVITY`.
+pub(crate) fn grav(g: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
     match g {
         Some(g) => Ok(Vec3::from(vecn::<3>(g, "g")?)),
         None => Ok(GRAVITY),
     }
 }
 
-/// Mass matrix M̃(χ) (6, 6) in χ coordinates (eq. 6.2).
-#[pyfunction]
-pub(crate) fn mass_matrix<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    Ok(out_mat6(
-        py,
-        &rss6_core::mass_matrix(&kp.inner, &dp.inner, &pose).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// Mass matrix M̃(χ) (6, 6) in χ coordinates (eq. 6.2).
+    fn mass_matrix(kp: &PyKinematicParams, dp: &PyDynamicParams; pose) -> PyArray2 via out_mat6 =
+        rss6_core::mass_matrix(&kp.inner, &dp.inner, &pose)
+);
 
-/// Coriolis/centrifugal matrix C̃(χ, χ̇) (6, 6) (eq. 6.2); the velocity force is C̃ χ̇.
-#[pyfunction]
-pub(crate) fn coriolis<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-    pose_dot: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    let pd = vec6(pose_dot, "pose_dot")?;
-    Ok(out_mat6(
-        py,
-        &rss6_core::coriolis(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// Coriolis/centrifugal matrix C̃(χ, χ̇) (6, 6) (eq. 6.2); the velocity force is C̃ χ̇.
+    fn coriolis(kp: &PyKinematicParams, dp: &PyDynamicParams; pose, pose_dot) -> PyArray2
+        via out_mat6 = rss6_core::coriolis(&kp.inner, &dp.inner, &pose, &pose_dot)
+);
 
-/// Gravity vector G̃(χ) (6,) (eq. 6.2), N and N·m.
-#[pyfunction]
-#[pyo3(signature = (kp, dp, pose, *, g=None))]
-pub(crate) fn gravity<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-    g: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    let g = grav(g)?;
-    Ok(out6(
-        py,
-        &rss6_core::gravity_with(&kp.inner, &dp.inner, &pose, &g).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// Gravity vector G̃(χ) (6,) (eq. 6.2), N and N·m.
+    fn gravity(kp: &PyKinematicParams, dp: &PyDynamicParams; pose; g) -> PyArray1 via out6 =
+        rss6_core::gravity_with(&kp.inner, &dp.inner, &pose, &g)
+);
 
-/// Joint friction mapped to χ coordinates τ̃_f(χ, χ̇) (6,) (eq. 6.4).
-#[pyfunction]
-pub(crate) fn friction<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-    pose_dot: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    let pd = vec6(pose_dot, "pose_dot")?;
-    Ok(out6(
-        py,
-        &rss6_core::friction(&kp.inner, &dp.inner, &pose, &pd).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// Joint friction mapped to χ coordinates τ̃_f(χ, χ̇) (6,) (eq. 6.4).
+    fn friction(kp: &PyKinematicParams, dp: &PyDynamicParams; pose, pose_dot) -> PyArray1
+        via out6 = rss6_core::friction(&kp.inner, &dp.inner, &pose, &pose_dot)
+);
 
-/// Actuator torques τ_a (6,) N·m for the motion (χ, χ̇, χ̈) (eq. 6.1–6.4).
-#[pyfunction]
-#[pyo3(signature = (kp, dp, pose, pose_dot, pose_ddot, *, g=None))]
-pub(crate) fn inverse_dynamics<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-    pose_dot: &Bound<'py, PyAny>,
-    pose_ddot: &Bound<'py, PyAny>,
-    g: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let p = vec6(pose, "pose")?;
-    let pd = vec6(pose_dot, "pose_dot")?;
-    let pdd = vec6(pose_ddot, "pose_ddot")?;
-    let g = grav(g)?;
-    let tau = rss6_core::inverse_dynamics_with_gravity(&kp.inner, &dp.inner, &p, &pd, &pdd, &g)
-        .map_err(core)?;
-    Ok(out6(py, &tau))
-}
+vec6_fn!(
+    /// Actuator torques τ_a (6,) N·m for the motion (χ, χ̇, χ̈) (eq. 6.1–6.4).
+    fn inverse_dynamics(kp: &PyKinematicParams, dp: &PyDynamicParams; pose, pose_dot, pose_ddot; g)
+        -> PyArray1 via out6 = rss6_core::inverse_dynamics_with_gravity(
+            &kp.inner, &dp.inner, &pose, &pose_dot, &pose_ddot, &g,
+        )
+);
 
-/// Forward dynamics χ̈ (6,) from (χ, χ̇) and actuator torques τ_a (eq. 5.14).
-#[pyfunction]
-#[pyo3(signature = (kp, dp, pose, pose_dot, tau_a, *, g=None))]
-pub(crate) fn forward_dynamics<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    dp: &PyDynamicParams,
-    pose: &Bound<'py, PyAny>,
-    pose_dot: &Bound<'py, PyAny>,
-    tau_a: &Bound<'py, PyAny>,
-    g: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let p = vec6(pose, "pose")?;
-    let pd = vec6(pose_dot, "pose_dot")?;
-    let tau = vec6(tau_a, "tau_a")?;
-    let g = grav(g)?;
-    let a = rss6_core::forward_dynamics_with_gravity(&kp.inner, &dp.inner, &p, &pd, &tau, &g)
-        .map_err(core)?;
-    Ok(out6(py, &a))
-}
+vec6_fn!(
+    /// Forward dynamics χ̈ (6,) from (χ, χ̇) and actuator torques τ_a (eq. 5.14).
+    fn forward_dynamics(kp: &PyKinematicParams, dp: &PyDynamicParams; pose, pose_dot, tau_a; g)
+        -> PyArray1 via out6 = rss6_core::forward_dynamics_with_gravity(
+            &kp.inner, &dp.inner, &pose, &pose_dot, &tau_a, &g,
+        )
+);
 
 /// Regressor Γ (6, 64) with τ_a = Γ·Ξ (actuator-torque form of eq. 5.1).
 #[pyfunction]

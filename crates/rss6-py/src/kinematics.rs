@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use rss6_core::{FkOptions, KinematicParams, Vec6};
 
-use crate::convert::{out6, out_mat6, out_rows6, rows6, vec6};
+use crate::convert::{out6, out_rows6, rows6, vec6};
 use crate::errors::{core, core_at, invalid};
 use crate::params::PyKinematicParams;
 
@@ -56,18 +56,11 @@ pub(crate) fn home_pose(py: Python<'_>) -> Bound<'_, PyArray1<f64>> {
     out6(py, &rss6_core::home_pose())
 }
 
-/// Inverse kinematics θ = H_inv(χ) (eq. 3.3–3.16): joint angles (6,) rad for pose (6,) [m, rad].
-/// Raises UnreachableError (a ValueError) naming the leg.
-#[pyfunction]
-pub(crate) fn ik<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    pose: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    let th = rss6_core::ik(&kp.inner, &pose).map_err(core)?;
-    Ok(out6(py, &th))
-}
+vec6_fn!(
+    /// Inverse kinematics θ = H_inv(χ) (eq. 3.3–3.16): joint angles (6,) rad for pose (6,) [m, rad].
+    /// Raises UnreachableError (a ValueError) naming the leg.
+    fn ik(kp: &PyKinematicParams; pose) -> PyArray1 via out6 = rss6_core::ik(&kp.inner, &pose)
+);
 
 /// IK of every row of poses (N, 6) → thetas (N, 6). Releases the GIL. An error names the row.
 #[pyfunction]
@@ -147,30 +140,14 @@ pub(crate) fn fk_batch<'py>(
     Ok(out_rows6(py, &out))
 }
 
-/// J_θ (6, 6) at pose (eq. 5.3): θ̇ = J_θ χ̇.
-#[pyfunction]
-pub(crate) fn jacobian_theta<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    pose: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    Ok(out_mat6(
-        py,
-        &rss6_core::jacobian_theta(&kp.inner, &pose).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// J_θ (6, 6) at pose (eq. 5.3): θ̇ = J_θ χ̇.
+    fn jacobian_theta(kp: &PyKinematicParams; pose) -> PyArray2 via out_mat6 =
+        rss6_core::jacobian_theta(&kp.inner, &pose)
+);
 
-/// J_ad (6, 6) at pose (eq. 3.30): θ̇ = J_ad [Ė; ω].
-#[pyfunction]
-pub(crate) fn jacobian_ad<'py>(
-    py: Python<'py>,
-    kp: &PyKinematicParams,
-    pose: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let pose = vec6(pose, "pose")?;
-    Ok(out_mat6(
-        py,
-        &rss6_core::jacobian_ad(&kp.inner, &pose).map_err(core)?,
-    ))
-}
+vec6_fn!(
+    /// J_ad (6, 6) at pose (eq. 3.30): θ̇ = J_ad [Ė; ω].
+    fn jacobian_ad(kp: &PyKinematicParams; pose) -> PyArray2 via out_mat6 =
+        rss6_core::jacobian_ad(&kp.inner, &pose)
+);

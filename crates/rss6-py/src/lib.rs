@@ -4,6 +4,9 @@
 
 use pyo3::prelude::*;
 
+#[macro_use]
+mod macros;
+
 mod calib;
 mod convert;
 mod ctrl;

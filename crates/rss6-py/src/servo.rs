@@ -23,6 +23,8 @@ use crate::plant::{sim_err, with_robot, SimRobot};
 /// drive's nominal one.
 struct Adapter<'a> {
     robot: &'a mut dyn SimRobot,
+    /// Set by the observer when an `on_segment` callback raised: the next step stops the run.
+    stop: std::cell::Cell<bool>,
     sensor_in_base: Vec6,
     target_inv: Vec6,
     kp_model: KinematicParams,
@@ -34,6 +36,9 @@ impl Plant for Adapter<'_> {
     type Error = String;
 
     fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
+        if self.stop.get() {
+            return Err("run stopped: the on_segment callback raised".to_string());
+        }
         if self.convert {
             let kappa = self.kp_model.reading_from_theta(theta_cmd);
             self.robot.step(&self.kp_nominal.theta_from_reading(&kappa))
@@ -106,13 +111,51 @@ struct Log {
     fault: Option<(f64, String)>,
 }
 
+/// The rows of `log` from tick `from.0` and camera frame `from.1` on, as the dict passed to
+/// `run_servo`'s `on_segment` callback (same keys and units as its result).
+fn segment_dict<'py>(
+    py: Python<'py>,
+    log: &Log,
+    from: (usize, usize),
+) -> PyResult<Bound<'py, PyDict>> {
+    let (a, f) = from;
+    let d = PyDict::new(py);
+    d.set_item("t", out1(py, log.t.get(a..).unwrap_or_default()))?;
+    for (key, v) in [
+        ("desired", &log.desired),
+        ("true", &log.truth),
+        ("theta_cmd", &log.theta_cmd),
+        ("torque", &log.torque),
+    ] {
+        d.set_item(key, out_rows6(py, v.get(a..).unwrap_or_default()))?;
+    }
+    d.set_item(
+        "frame_t",
+        out1(py, log.frame_t.get(f..).unwrap_or_default()),
+    )?;
+    for (key, v) in [
+        ("frame_desired", &log.frame_desired),
+        ("frame_true", &log.frame_truth),
+        ("measured", &log.measured),
+        ("estimate", &log.estimate),
+        ("estimate_dot", &log.estimate_dot),
+        ("sliding", &log.sliding),
+    ] {
+        d.set_item(key, out_rows6(py, v.get(f..).unwrap_or_default()))?;
+    }
+    Ok(d)
+}
+
 /// Runs the closed loop for `duration` s on `plant` (rss6.Plant or rss6.ModelSim) and returns a dict
 /// of arrays (see `rss6.servo.track`). `controller`: "dsmc", "kcsc" or "kjsc". `trajectory`: an
 /// rss6.Trajectory, or a tuple of three (N, 6) arrays (χ_d, χ̇_d, χ̈_d) tabulated every plant tick.
 /// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t) convert camera frames to χ_E; default: the
 /// plant's truth. `pid`: the drive's PID gains the converter inverts (default rss6-ctrl's nominal).
+/// `on_segment`: called with a dict of the rows recorded since its previous call (same keys as the
+/// result, without "controller" and "fault") every `segment` s of simulated time and once at the end,
+/// so a caller can log the run as it goes; if it raises, the run stops and the error propagates.
 #[pyfunction]
-#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0))]
+#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0, on_segment=None, segment=1.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_servo<'py>(
     py: Python<'py>,
@@ -130,12 +173,20 @@ pub(crate) fn run_servo<'py>(
     kalman_r: Option<&Bound<'py, PyAny>>,
     kalman_q_jerk: Option<&Bound<'py, PyAny>>,
     camera_latency: f64,
+    on_segment: Option<&Bound<'py, PyAny>>,
+    segment: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(duration.is_finite() && duration > 0.0) {
         return Err(invalid(format!(
             "duration must be finite and > 0 s, got {duration}"
         )));
     }
+    if !(segment.is_finite() && segment > 0.0) {
+        return Err(invalid(format!(
+            "segment must be finite and > 0 s, got {segment}"
+        )));
+    }
+    let on_segment: Option<Py<PyAny>> = on_segment.map(|cb| cb.clone().unbind());
     let traj = if let Ok(t) = trajectory.cast::<PyTrajectory>() {
         AnyTraj::Builtin(t.get().inner.clone())
     } else if let Ok((p, v, a)) =
@@ -208,6 +259,7 @@ pub(crate) fn run_servo<'py>(
         let t0 = robot.time();
         let mut adapter = Adapter {
             robot,
+            stop: std::cell::Cell::new(false),
             sensor_in_base: sensor,
             target_inv: pose_inverse(&target),
             kp_model,
@@ -251,6 +303,16 @@ pub(crate) fn run_servo<'py>(
         // The observer sees the plant after the tick's step; record the true pose at the start of the
         // tick, when the reference was sampled and the consumed camera frame was taken.
         let mut start_pose = adapter.robot.true_pose();
+        let segment_ticks = ((segment / dt).round() as usize).max(1);
+        let mut sent = (0usize, 0usize);
+        let mut callback_error: Option<PyErr> = None;
+        let deliver = |log: &Log, sent: &mut (usize, usize)| -> PyResult<()> {
+            if let Some(cb) = on_segment.as_ref() {
+                Python::attach(|py| cb.call1(py, (segment_dict(py, log, *sent)?,)))?;
+            }
+            *sent = (log.t.len(), log.frame_t.len());
+            Ok(())
+        };
         let summary = py.detach(|| {
             run(
                 &mut adapter,
@@ -280,10 +342,25 @@ pub(crate) fn run_servo<'py>(
                         let f = rec.tick.and_then(|k| k.dsmc).map(|(_, f)| f);
                         log.sliding.push(f.unwrap_or(Vec6::repeat(f64::NAN)));
                     }
+                    if on_segment.is_some()
+                        && callback_error.is_none()
+                        && log.t.len() - sent.0 >= segment_ticks
+                    {
+                        if let Err(e) = deliver(&log, &mut sent) {
+                            callback_error = Some(e);
+                            p.stop.set(true);
+                        }
+                    }
                 },
             )
         });
+        if let Some(e) = callback_error {
+            return Err(e);
+        }
         let summary = summary.map_err(sim_err)?;
+        if on_segment.is_some() && (log.t.len() > sent.0 || sent == (0, 0)) {
+            deliver(&log, &mut sent)?;
+        }
         log.fault = summary.first_fault.map(|(t, r)| (t - t0, r.to_string()));
         Ok(log)
     })??;
