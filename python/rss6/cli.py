@@ -405,6 +405,7 @@ def cmd_track(args: argparse.Namespace) -> int:
             args.duration,
             mcap=args.mcap,
             progress=lambda t, d: bar.update(round(t + 1e-3) - bar.n),
+            tuning=args.tuning,
         )
     print(f"{r.controller} on {args.trajectory} ({args.duration} s, rss6.{type(plant).__name__})")
     print("RMSE (x, y, z mm; α, β, γ 1e-3 rad): " + " ".join(f"{v:.3f}" for v in r.table()["rmse"]))
@@ -514,6 +515,12 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--controller", choices=CONTROLLERS, default="dsmc")
     t.add_argument("--trajectory", choices=tuple(EXPERIMENTS), default="exp1")
     t.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
+    t.add_argument(
+        "--tuning",
+        choices=("thesis", "low_noise"),
+        default="thesis",
+        help="servo tuning: the thesis's (default) or the low-noise DSMC servo (DSMC only)",
+    )
     t.add_argument(
         "--true-kinematics", help="TOML file of the robot's true kinematics (default nominal)"
     )

@@ -193,6 +193,7 @@ def track(
     reset: bool = True,
     mcap: str | PathLike[str] | None = None,
     progress: Callable[[float, float], Any] | None = None,
+    tuning: str = "thesis",
 ) -> TrackingResult:
     """Runs one servo experiment on ``plant`` (:class:`rss6.Plant` or :class:`rss6.ModelSim`).
 
@@ -207,6 +208,10 @@ def track(
     log readable up to its last whole second (:func:`rss6.logs.read_log`);
     metadata: controller, trajectory, duration, then ``status`` ("finished", or "failed: …" if the run
     raised) and ``fault``. ``progress(t, duration)`` (s) is called every simulated second.
+    ``tuning``: "thesis" (the thesis's Kalman filter and DSMC gains, the default) or "low_noise"
+    (DSMC only: rss6-ctrl's ``ServoConfig::low_noise`` + ``DsmcGains::low_noise`` — hold compensation
+    between frames, potentiometer rates in the filter, a smoother filter; its estimate tracks all six
+    pose rates, see docs/control.md).
     """
     if not (np.isfinite(duration) and duration > 0):
         raise InvalidInputError(f"duration must be finite and > 0 s, got {duration}")
@@ -233,6 +238,7 @@ def track(
             mcap,
             {
                 "controller": str(controller).upper(),
+                "tuning": str(tuning),
                 "trajectory": name,
                 "duration": repr(float(duration)),
             },
@@ -269,6 +275,7 @@ def track(
             target_in_effector=target_in_effector,
             pid=pid,
             on_segment=on_segment if (writer is not None or progress is not None) else None,
+            tuning=tuning,
         )
         if writer is not None:
             end = {"status": "finished"}

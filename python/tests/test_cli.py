@@ -80,6 +80,31 @@ def test_track_subcommand(tmp_path):
     assert "RMSE" in r.stdout
     log = rss6.logs.read_log(tmp_path / "t.mcap", strict=True)
     assert log.metadata["status"] == "finished" and len(log.streams["true_pose"][0]) == 1000
+    low = run(
+        "track",
+        "--tuning",
+        "low_noise",
+        "--duration",
+        "1",
+        "--plant",
+        "model",
+        "--mcap",
+        str(tmp_path / "l.mcap"),
+    )
+    assert low.returncode == 0, low.stderr
+    assert rss6.logs.read_log(tmp_path / "l.mcap", strict=True).metadata["tuning"] == "low_noise"
+    bad = run(
+        "track",
+        "--controller",
+        "kjsc",
+        "--tuning",
+        "low_noise",
+        "--duration",
+        "1",
+        "--plant",
+        "model",
+    )
+    assert bad.returncode != 0 and "DSMC only" in bad.stderr and "Traceback" not in bad.stderr
 
 
 def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():

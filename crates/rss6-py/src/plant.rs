@@ -49,6 +49,8 @@ pub(crate) trait SimRobot: Send {
     fn torque(&self) -> Vec6;
     /// The hidden truth.
     fn truth(&self) -> Truth;
+    /// (loop-closure gap after the last tick, solver gap before the projection) (m).
+    fn gaps(&self) -> (f64, f64);
 }
 
 /// Any rss6-sim robot (rapier plant or model twin) as a [`SimRobot`].
@@ -86,6 +88,9 @@ impl<R: RobotSim + Send> SimRobot for SimWrap<R> {
     }
     fn torque(&self) -> Vec6 {
         self.robot.torques()
+    }
+    fn gaps(&self) -> (f64, f64) {
+        (self.robot.loop_closure_error(), self.robot.solver_gap())
     }
     fn truth(&self) -> Truth {
         let t = self.robot.truth();
@@ -298,6 +303,18 @@ macro_rules! sim_class {
             /// True physical joint angles θ (6,).
             fn true_theta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
                 Ok(out6(py, &self.lock()?.true_theta()))
+            }
+
+            /// Largest distance between joint anchors that should coincide, after the last tick (m);
+            /// 0 for the model twin.
+            fn loop_closure_error(&self) -> PyResult<f64> {
+                Ok(self.lock()?.gaps().0)
+            }
+
+            /// Largest loop gap rapier's solver left in the last tick before the post-step
+            /// projection (m); 0 for the model twin.
+            fn solver_gap(&self) -> PyResult<f64> {
+                Ok(self.lock()?.gaps().1)
             }
 
             /// Plant time (s).

@@ -155,7 +155,7 @@ fn segment_dict<'py>(
 /// result, without "controller" and "fault") every `segment` s of simulated time and once at the end,
 /// so a caller can log the run as it goes; if it raises, the run stops and the error propagates.
 #[pyfunction]
-#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0, on_segment=None, segment=1.0))]
+#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0, on_segment=None, segment=1.0, tuning="thesis"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_servo<'py>(
     py: Python<'py>,
@@ -175,6 +175,7 @@ pub(crate) fn run_servo<'py>(
     camera_latency: f64,
     on_segment: Option<&Bound<'py, PyAny>>,
     segment: f64,
+    tuning: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(duration.is_finite() && duration > 0.0) {
         return Err(invalid(format!(
@@ -229,7 +230,26 @@ pub(crate) fn run_servo<'py>(
         Some(s) => vec6(s, "target_in_effector")?,
         None => truth.target_in_effector,
     };
-    let mut config = ServoConfig::nominal();
+    let controller = controller.to_ascii_lowercase();
+    let low_noise = match tuning.to_ascii_lowercase().replace('-', "_").as_str() {
+        "thesis" => false,
+        "low_noise" => true,
+        other => {
+            return Err(invalid(format!(
+                "tuning must be 'thesis' or 'low_noise', got '{other}'"
+            )))
+        }
+    };
+    if low_noise && controller != "dsmc" {
+        return Err(invalid(format!(
+            "tuning 'low_noise' is for the DSMC only (controller '{controller}')"
+        )));
+    }
+    let mut config = if low_noise {
+        ServoConfig::low_noise()
+    } else {
+        ServoConfig::nominal()
+    };
     if let Some((lp, li, ld)) = pid {
         config.pid = PidGains { lp, li, ld };
     }
@@ -242,7 +262,6 @@ pub(crate) fn run_servo<'py>(
         config.kalman.q_jerk = vec6(q, "kalman_q_jerk")?;
     }
     config.camera_latency = camera_latency;
-    let controller = controller.to_ascii_lowercase();
 
     let result = with_robot(plant, |robot| -> PyResult<Log> {
         let dt = robot.dt();
@@ -282,7 +301,12 @@ pub(crate) fn run_servo<'py>(
         };
         let scheme = match controller.as_str() {
             "dsmc" => {
-                Scheme::Dsmc(Dsmc::new(kp_model, dp_model, DsmcGains::tuned()).map_err(ctrl_err)?)
+                let gains = if low_noise {
+                    DsmcGains::low_noise()
+                } else {
+                    DsmcGains::tuned()
+                };
+                Scheme::Dsmc(Dsmc::new(kp_model, dp_model, gains).map_err(ctrl_err)?)
             }
             "kcsc" => Scheme::Kcsc(
                 Kcsc::new(kp_model, CartesianPidGains::thesis(), &theta0).map_err(ctrl_err)?,

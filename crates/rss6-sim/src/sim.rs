@@ -229,6 +229,15 @@ pub trait RobotSim {
     fn torques(&self) -> Vec6;
     /// The secret truth.
     fn truth(&self) -> Truth;
+    /// Largest loop-closure gap after the last tick (m); 0 for an exact model.
+    fn loop_closure_error(&self) -> f64 {
+        0.0
+    }
+    /// Largest gap the physics engine's solver left in the last tick before any post-step
+    /// projection (m); 0 for an exact model.
+    fn solver_gap(&self) -> f64 {
+        0.0
+    }
 }
 
 /// A rigid-body engine that the robot wrapper drives.
@@ -383,6 +392,12 @@ impl<P: Physics> Robot<P> {
 }
 
 impl<P: Physics> RobotSim for Robot<P> {
+    fn loop_closure_error(&self) -> f64 {
+        self.physics.loop_closure_error()
+    }
+    fn solver_gap(&self) -> f64 {
+        self.physics.solver_gap()
+    }
     fn reset(&mut self, pose: &Vec6) -> Result<()> {
         let theta = ik(&self.cfg.kinematics, pose)?;
         self.physics.place(pose, &theta)?;
