@@ -31,6 +31,7 @@ __all__ = [
     "AXES",
     "THESIS_TABLES",
     "TrackingResult",
+    "filter_statistics",
     "named_trajectory",
     "track",
 ]
@@ -152,6 +153,32 @@ class TrackingResult:
             metadata={"controller": self.controller, "trajectory": self.trajectory},
         )
         self.log_path = str(path)
+
+
+def filter_statistics(result: TrackingResult, after: float = 2.0) -> tuple[F64, F64]:
+    """How well the servo's Kalman filter did in a simulated run (the true pose is known).
+
+    Returns ``(noise_ratio, rate_ratio)``, each (6,) per pose axis: the standard deviation of
+    (estimate − true pose) over that of (camera pose − true pose) at the camera frames (< 1: the filter
+    lowers the pose noise; the mean is removed so that a constant offset of the camera pose, e.g. from
+    estimated external parameters, does not count as noise), and the RMS of (χ̇ estimate − true χ̇)
+    over the RMS of the true χ̇ at the frames after ``after`` seconds (the initial step excluded; true
+    χ̇ by central differences of the 1 kHz true pose).
+    """
+    if len(result.frame_time) < 3 or not np.any(result.frame_time > after):
+        raise InvalidInputError(f"need camera frames after {after} s to compare rates")
+    rate = np.gradient(result.true, result.time, axis=0)
+    idx = np.clip(np.searchsorted(result.time, result.frame_time - 1e-9), 0, len(result.time) - 1)
+    true_rate = rate[idx]
+    late = result.frame_time > after
+
+    def rms(a: F64) -> F64:
+        return np.asarray(np.sqrt((a**2).mean(0)), dtype=np.float64)
+
+    est, cam = result.estimate - result.frame_true, result.measured - result.frame_true
+    noise = rms(est - est.mean(0)) / rms(cam - cam.mean(0))
+    vel = rms((result.estimate_dot - true_rate)[late]) / rms(true_rate[late])
+    return noise, vel
 
 
 def _tabulate(fn: Callable[[float], Any], dt: float, duration: float) -> tuple[F64, F64, F64]:

@@ -50,8 +50,9 @@ def test_demo_quick_writes_logs_figures_and_tables(tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     assert "Table 6.1" in r.stdout and "Table 6.2" in r.stdout and "RPBA" in r.stdout
     for exp in ("exp1", "exp2"):
-        for c in ("kjsc", "kcsc", "dsmc"):
+        for c in ("kjsc", "kcsc", "dsmc", "dsmc_low_noise"):
             assert (out / f"{exp}_{c}.mcap").stat().st_size > 0
+    assert "3. Kalman filter inside the DSMC loop" in r.stdout and "fault" not in r.stdout
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert pngs == [
         "fig4_8_relative_pose_errors.png",

@@ -76,21 +76,6 @@ def test_thesis_tables_are_complete():
     assert servo.THESIS_TABLES["exp1"]["rmse"]["DSMC"][0] == 0.44
 
 
-def _filter_ratios(r: servo.TrackingResult, after: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
-    """(estimate error / camera error, rate error / true rate) per axis, RMS over the frames."""
-    rate = np.gradient(r.true, r.time, axis=0)  # true χ̇ from the 1 kHz true pose
-    idx = np.clip(np.searchsorted(r.time, r.frame_time - 1e-9), 0, len(r.time) - 1)
-    true_rate = rate[idx]
-    late = r.frame_time > after
-
-    def rms(a: np.ndarray) -> np.ndarray:
-        return np.asarray(np.sqrt((a**2).mean(0)))
-
-    noise = rms(r.estimate - r.frame_true) / rms(r.measured - r.frame_true)
-    vel = rms((r.estimate_dot - true_rate)[late]) / rms(true_rate[late])
-    return noise, vel
-
-
 def test_low_noise_servo_tracks_every_pose_rate_on_the_rapier_plant():
     # Issue 4's must-show on the rapier plant: with tuning="low_noise" the filter inside the DSMC loop
     # lowers the pose noise and its χ̇ estimate tracks the true rate on all six axes; the thesis
@@ -99,7 +84,9 @@ def test_low_noise_servo_tracks_every_pose_rate_on_the_rapier_plant():
         tuning: servo.track(rss6.Plant(KP, DP, seed=7), "dsmc", "exp1", duration=8.0, tuning=tuning)
         for tuning in ("thesis", "low_noise")
     }
-    (n_thesis, v_thesis), (n_low, v_low) = (_filter_ratios(res[t]) for t in ("thesis", "low_noise"))
+    (n_thesis, v_thesis), (n_low, v_low) = (
+        servo.filter_statistics(res[t]) for t in ("thesis", "low_noise")
+    )
     print("noise ratio thesis", n_thesis.round(2), "low-noise", n_low.round(2))
     print("rate ratio  thesis", v_thesis.round(2), "low-noise", v_low.round(2))
     assert res["low_noise"].fault is None
@@ -116,3 +103,6 @@ def test_low_noise_tuning_is_dsmc_only():
         servo.track(plant, "kcsc", "exp1", duration=0.1, tuning="low_noise")
     with pytest.raises(rss6.InvalidInputError, match="tuning must be"):
         servo.track(plant, "dsmc", "exp1", duration=0.1, tuning="fast")
+    short = servo.track(plant, "dsmc", "exp1", duration=0.5)
+    with pytest.raises(rss6.InvalidInputError, match="frames after 2.0 s"):
+        servo.filter_statistics(short)
