@@ -132,21 +132,27 @@ def cmd_demo(args: argparse.Namespace) -> int:
     # 2. Servo experiments (thesis §6.5) with the calibrated kinematics and Table 5.1 dynamics.
     durations = {"exp1": 6.0, "exp2": 6.0} if quick else {"exp1": 25.0, "exp2": 42.0}
     results: dict[str, dict[str, Any]] = {}
+
+    def run_servo(exp: str, controller: str, tuning: str = "thesis") -> Any:
+        suffix = "" if tuning == "thesis" else f"_{tuning}"
+        return servo.track(
+            plant,
+            controller=controller,
+            trajectory=exp,
+            kp_model=result.params,
+            dp_model=dp,
+            duration=durations[exp],
+            sensor_in_base=sensor_est,
+            target_in_effector=result.target_in_effector,
+            mcap=out / f"{exp}_{controller}{suffix}.mcap",
+            tuning=tuning,
+        )
+
     with _progress(len(EXPERIMENTS) * len(CONTROLLERS), "servo experiments", quiet) as bar:
         for exp in EXPERIMENTS:
             results[exp] = {}
             for c in CONTROLLERS:
-                r = servo.track(
-                    plant,
-                    controller=c,
-                    trajectory=exp,
-                    kp_model=result.params,
-                    dp_model=dp,
-                    duration=durations[exp],
-                    sensor_in_base=sensor_est,
-                    target_in_effector=result.target_in_effector,
-                    mcap=out / f"{exp}_{c}.mcap",
-                )
+                r = run_servo(exp, c)
                 results[exp][r.controller] = r
                 bar.update(1)
     tables = []
@@ -200,18 +206,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     ]
     with _progress(len(EXPERIMENTS), "low-noise DSMC", quiet) as bar:
         for exp in EXPERIMENTS:
-            low = servo.track(
-                plant,
-                controller="dsmc",
-                trajectory=exp,
-                kp_model=result.params,
-                dp_model=dp,
-                duration=durations[exp],
-                sensor_in_base=sensor_est,
-                target_in_effector=result.target_in_effector,
-                mcap=out / f"{exp}_dsmc_low_noise.mcap",
-                tuning="low_noise",
-            )
+            low = run_servo(exp, "dsmc", "low_noise")
             bar.update(1)
             if low.fault is not None:
                 lines.append(f"   {exp} low-noise DSMC fault: {low.fault}")

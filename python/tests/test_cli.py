@@ -81,30 +81,11 @@ def test_track_subcommand(tmp_path):
     assert "RMSE" in r.stdout
     log = rss6.logs.read_log(tmp_path / "t.mcap", strict=True)
     assert log.metadata["status"] == "finished" and len(log.streams["true_pose"][0]) == 1000
-    low = run(
-        "track",
-        "--tuning",
-        "low_noise",
-        "--duration",
-        "1",
-        "--plant",
-        "model",
-        "--mcap",
-        str(tmp_path / "l.mcap"),
-    )
+    quick_model = ["--duration", "1", "--plant", "model"]
+    low = run("track", "--tuning", "low_noise", *quick_model, "--mcap", str(tmp_path / "l.mcap"))
     assert low.returncode == 0, low.stderr
     assert rss6.logs.read_log(tmp_path / "l.mcap", strict=True).metadata["tuning"] == "low_noise"
-    bad = run(
-        "track",
-        "--controller",
-        "kjsc",
-        "--tuning",
-        "low_noise",
-        "--duration",
-        "1",
-        "--plant",
-        "model",
-    )
+    bad = run("track", "--controller", "kjsc", "--tuning", "low_noise", *quick_model)
     assert bad.returncode != 0 and "DSMC only" in bad.stderr and "Traceback" not in bad.stderr
 
 
