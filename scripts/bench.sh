@@ -26,6 +26,7 @@ kinematics/fk_warm 1000
 kinematics/fk_cold 3000
 dynamics/inverse_dynamics 2000
 plant_tick_4_iterations 50000
+control/camera_step 5000
 '
 
 mkdir -p "$CRITERION_DIR"
