@@ -5,8 +5,10 @@
 //! centre (Assumption 1) and its principal inertia comes from the true [`DynamicParams`]
 //! (wrench frame: x along B→T, z along the revolute axis; link frame: z along T→A; platform = ΣE).
 //! Gravity −z (or tilted by the `base_tilt` effect). The six closed loops are impulse joints (rapier
-//! multibodies cannot close loops), so they hold only to the solver's tolerance: the loop-closure gap is
-//! reported by [`RapierPhysics::loop_closure_error`] and tested.
+//! multibodies cannot close loops), so rapier holds them only to its solver's tolerance (≈ 50 µm at
+//! the default 4 iterations); a post-step projection onto the loop constraints
+//! ([`crate::SolverConfig::projection`], on by default) closes them after every tick. Both gaps are
+//! reported ([`Physics::loop_closure_error`], [`Physics::solver_gap`]) and tested.
 //!
 //! Joint friction: Coulomb friction f_c is a velocity motor on each revolute joint with target speed
 //! 0 and force bound f_c (it sticks, as real friction does); viscous friction −f_v θ̇ is an applied
@@ -338,9 +340,10 @@ impl RapierPhysics {
     /// Cline & Pai 2003). The wrenches are put back on their revolute axes; the wrench angles and
     /// the platform pose move by the smallest mass-weighted step that makes every |A_i − T_i| equal
     /// its link length (Newton, at most 4 iterations, to 1e-13 m); each link is then set exactly
-    /// between its two joints and its angular velocity turned with it (its spin about its own axis kept). Velocities are left as the solver
-    /// made them (projecting them too with this lumped metric made the plant–twin agreement worse).
-    /// Uses only the bodies' joint anchors, not the analytic model.
+    /// between its two joints and its angular velocity turned with it (its spin about its own axis
+    /// kept). Velocities are otherwise left as the solver made them (projecting them too with this
+    /// lumped metric made the plant–twin agreement worse). Uses only the bodies' joint anchors, not
+    /// the analytic model.
     fn project(&mut self) {
         if self.legs.len() != LEGS {
             return;
