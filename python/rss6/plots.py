@@ -115,12 +115,19 @@ def tracking_errors(results: Sequence[Any], path: str | PathLike[str], title: st
 def table_text(
     measured: Mapping[str, Any], thesis: Mapping[str, Mapping[str, Sequence[float]]], title: str
 ) -> str:
-    """A text table of RMSE/MAE per axis: ours beside the thesis's (mm and 1e-3 rad)."""
+    """A text table of RMSE/MAE per axis: ours beside the thesis's (mm and 1e-3 rad).
+
+    Runs of ``measured`` under names the thesis has no column for (e.g. "DSMC-LN", the low-noise
+    servo) get an rss6 column of their own at the end.
+    """
     names = ["KJSC", "KCSC", "DSMC"]
+    extra = [n for n in measured if n not in names]
     axes = ["x (mm)", "y (mm)", "z (mm)", "α (1e-3 rad)", "β (1e-3 rad)", "γ (1e-3 rad)"]
     lines = [title, ""]
-    head = f"{'axis':14s} {'stat':5s} " + " ".join(
-        f"{n + ' rss6':>10s} {n + ' thesis':>11s}" for n in names
+    head = (
+        f"{'axis':14s} {'stat':5s} "
+        + " ".join(f"{n + ' rss6':>10s} {n + ' thesis':>11s}" for n in names)
+        + "".join(f" {n + ' rss6':>12s}" for n in extra)
     )
     lines.append(head)
     lines.append("-" * len(head))
@@ -130,5 +137,7 @@ def table_text(
             for n in names:
                 ours = measured[n].table()[stat][k] if n in measured else float("nan")
                 cells.append(f"{ours:10.3f} {thesis[stat][n][k]:11.3g}")
-            lines.append(f"{ax:14s} {stat.upper():5s} " + " ".join(cells))
+            row = f"{ax:14s} {stat.upper():5s} " + " ".join(cells)
+            row += "".join(f" {measured[n].table()[stat][k]:12.3f}" for n in extra)
+            lines.append(row)
     return "\n".join(lines)

@@ -53,6 +53,7 @@ def test_demo_quick_writes_logs_figures_and_tables(tmp_path):
         for c in ("kjsc", "kcsc", "dsmc", "dsmc_low_noise"):
             assert (out / f"{exp}_{c}.mcap").stat().st_size > 0
     assert "3. Kalman filter inside the DSMC loop" in r.stdout and "fault" not in r.stdout
+    assert "DSMC-LN rss6" in r.stdout and "Against the thesis's DSMC" in r.stdout
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert pngs == [
         "fig4_8_relative_pose_errors.png",
