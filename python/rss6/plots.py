@@ -72,34 +72,32 @@ def relative_pose_errors(
 def tracking(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
     """Figs. 6.4/6.7: the desired trajectory (blue solid) and the measured pose of each run
     (:class:`rss6.servo.TrackingResult`) in the thesis's line styles."""
-    fig, axes = _figure()
-    first = results[0]
-    for k, ax in enumerate(axes):
-        ax.plot(first.time, first.desired[:, k] * 1e3, "tab:blue", lw=1.2, label="desired")
-        for r in results:
-            color, ls = _STYLE.get(r.controller, ("gray", "-"))
-            ax.plot(
-                r.frame_time, r.measured[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
-            )
-        ax.set_ylabel(_LABELS[k])
-        ax.set_title(_TITLES[k], fontsize=9)
-        ax.grid(alpha=0.3)
-    axes[2].set_xlabel("time (s)")
-    axes[5].set_xlabel("time (s)")
-    axes[0].legend(fontsize=8)
-    if title:
-        fig.suptitle(title)
-    _save(fig, path)
+    _per_axis(results, lambda r: r.measured, path, title, desired=True)
 
 
 def tracking_errors(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
     """Figs. 6.5/6.8: tracking errors χ_d − χ_measured of each run."""
+    _per_axis(results, lambda r: r.errors, path, title, desired=False)
+
+
+def _per_axis(
+    results: Sequence[Any],
+    series: Any,
+    path: str | PathLike[str],
+    title: str,
+    desired: bool,
+) -> None:
+    """Six panels (x, y, z in mm; α, β, γ in 1e-3 rad): ``series(run)`` at the camera frames of each
+    run, with the desired pose of the first run underneath if ``desired``."""
     fig, axes = _figure()
     for k, ax in enumerate(axes):
+        if desired:
+            first = results[0]
+            ax.plot(first.time, first.desired[:, k] * 1e3, "tab:blue", lw=1.2, label="desired")
         for r in results:
             color, ls = _STYLE.get(r.controller, ("gray", "-"))
             ax.plot(
-                r.frame_time, r.errors[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
+                r.frame_time, series(r)[:, k] * 1e3, color=color, ls=ls, lw=1.0, label=r.controller
             )
         ax.set_ylabel(_LABELS[k])
         ax.set_title(_TITLES[k], fontsize=9)
