@@ -31,60 +31,36 @@ fn kinematics(c: &mut Criterion) {
             ik(black_box(&kp), black_box(&cold[k])).unwrap()
         })
     });
-    // Warm start: solve sample k+1 of the 1 kHz path starting from sample k's pose (what the previous
-    // solve returned, to 1e-13).
-    let mut k = 0usize;
-    g.bench_function("fk_warm", |b| {
-        b.iter(|| {
-            k = (k + 1) % N;
-            fk(
-                &kp,
-                black_box(&path_theta[k + 1]),
-                black_box(&path[k]),
-                &opts,
-            )
-            .unwrap()
-        })
-    });
-    let mut k = 0usize;
-    g.bench_function("fk_cold", |b| {
-        b.iter(|| {
-            k = (k + 1) % N;
-            fk(
-                &kp,
-                black_box(&cold_theta[k]),
-                black_box(&home_pose()),
-                &opts,
-            )
-            .unwrap()
-        })
-    });
-    let mut k = 0usize;
-    g.bench_function("fk_theta_newton_warm", |b| {
-        b.iter(|| {
-            k = (k + 1) % N;
-            fk_theta_newton(
-                &kp,
-                black_box(&path_theta[k + 1]),
-                black_box(&path[k]),
-                &opts,
-            )
-            .unwrap()
-        })
-    });
-    let mut k = 0usize;
-    g.bench_function("fk_theta_newton_cold", |b| {
-        b.iter(|| {
-            k = (k + 1) % N;
-            fk_theta_newton(
-                &kp,
-                black_box(&cold_theta[k]),
-                black_box(&home_pose()),
-                &opts,
-            )
-            .unwrap()
-        })
-    });
+    // Both FK methods, warm and cold. Warm: solve sample k+1 of the 1 kHz path starting from sample
+    // k's pose (what the previous solve returned, to 1e-13). Cold: a box pose from home.
+    type FkFn =
+        fn(&KinematicParams, &Vec6, &Vec6, &FkOptions) -> rss6_core::Result<rss6_core::FkSolution>;
+    let home = home_pose();
+    for (method, solve) in [
+        ("fk", fk as FkFn),
+        ("fk_theta_newton", fk_theta_newton as FkFn),
+    ] {
+        let mut k = 0usize;
+        g.bench_function(format!("{method}_warm"), |b| {
+            b.iter(|| {
+                k = (k + 1) % N;
+                solve(
+                    &kp,
+                    black_box(&path_theta[k + 1]),
+                    black_box(&path[k]),
+                    &opts,
+                )
+                .unwrap()
+            })
+        });
+        let mut k = 0usize;
+        g.bench_function(format!("{method}_cold"), |b| {
+            b.iter(|| {
+                k = (k + 1) % N;
+                solve(&kp, black_box(&cold_theta[k]), black_box(&home), &opts).unwrap()
+            })
+        });
+    }
     let mut k = 0usize;
     g.bench_function("jacobian_theta", |b| {
         b.iter(|| {
