@@ -14,7 +14,7 @@
 //! K_r/ε inside, no jump. The Lyapunov argument of eq. 6.35–6.36 only uses the outside-the-layer branch,
 //! so Theorem 1's ultimate bound |F_i| ≤ ε is unchanged.
 
-use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
+use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
 use rss6_core::{dynamics_terms, DynamicParams, KinematicParams, Mat6, Vec6};
@@ -220,14 +220,7 @@ impl Dsmc {
         estimate: &PoseEstimate,
         dt: f64,
     ) -> Result<DsmcOutput> {
-        self.fault.check()?;
-        check_dt(dt)?;
-        if !reference.is_finite() {
-            return Err(self.fault.trip(FaultReason::NonFiniteReference));
-        }
-        if !(all_finite(estimate.pose.as_slice()) && all_finite(estimate.pose_dot.as_slice())) {
-            return Err(self.fault.trip(FaultReason::NonFiniteMeasurement));
-        }
+        self.fault.admit_estimate(reference, estimate, dt)?;
         let g = &self.gains;
         let e = reference.pose - estimate.pose;
         let e_dot = reference.pose_dot - estimate.pose_dot;

@@ -124,4 +124,32 @@ impl FaultLatch {
     pub(crate) fn clear(&mut self) {
         self.reason = None;
     }
+    /// The checks every controller step starts with: not latched, a valid `dt`, a finite reference
+    /// (latches `NonFiniteReference` otherwise).
+    pub(crate) fn admit(
+        &mut self,
+        reference: &crate::trajectory::Reference,
+        dt: f64,
+    ) -> Result<()> {
+        self.check()?;
+        check_dt(dt)?;
+        if !reference.is_finite() {
+            return Err(self.trip(FaultReason::NonFiniteReference));
+        }
+        Ok(())
+    }
+    /// [`Self::admit`] plus a finite pose estimate and rate (latches `NonFiniteMeasurement`
+    /// otherwise).
+    pub(crate) fn admit_estimate(
+        &mut self,
+        reference: &crate::trajectory::Reference,
+        estimate: &crate::kalman::PoseEstimate,
+        dt: f64,
+    ) -> Result<()> {
+        self.admit(reference, dt)?;
+        if !(all_finite(estimate.pose.as_slice()) && all_finite(estimate.pose_dot.as_slice())) {
+            return Err(self.trip(FaultReason::NonFiniteMeasurement));
+        }
+        Ok(())
+    }
 }

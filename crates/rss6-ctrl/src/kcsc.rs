@@ -8,7 +8,7 @@
 //! the law start bumplessly from any resting configuration. The law is integral-dominated: the integral
 //! holds the pose offset and k_p, k_d shape the transient.
 
-use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
+use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
 use rss6_core::{jacobian_theta, KinematicParams, Vec6};
@@ -104,14 +104,7 @@ impl Kcsc {
         estimate: &PoseEstimate,
         dt: f64,
     ) -> Result<JointCommand> {
-        self.fault.check()?;
-        check_dt(dt)?;
-        if !reference.is_finite() {
-            return Err(self.fault.trip(FaultReason::NonFiniteReference));
-        }
-        if !(all_finite(estimate.pose.as_slice()) && all_finite(estimate.pose_dot.as_slice())) {
-            return Err(self.fault.trip(FaultReason::NonFiniteMeasurement));
-        }
+        self.fault.admit_estimate(reference, estimate, dt)?;
         let j_theta = match jacobian_theta(&self.kp_model, &estimate.pose) {
             Ok(j) => j,
             Err(e) => return Err(self.fault.trip(FaultReason::Model(e))),

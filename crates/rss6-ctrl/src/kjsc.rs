@@ -7,7 +7,7 @@
 //! θ̇_r = J_θ(χ_d) χ̇_d and a backward difference of θ. KJSC never sees the camera, so kinematic errors
 //! of the robot go straight into the Cartesian error — the point of the comparison in Tables 6.1/6.2.
 
-use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
+use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kcsc::JointCommand;
 use crate::trajectory::Reference;
 use rss6_core::{ik, jacobian_theta, KinematicParams, Vec6};
@@ -90,11 +90,7 @@ impl Kjsc {
     /// One step `dt` (s) after the previous one, with the potentiometer angles `theta` (nominal
     /// convention, rad).
     pub fn step(&mut self, reference: &Reference, theta: &Vec6, dt: f64) -> Result<JointCommand> {
-        self.fault.check()?;
-        check_dt(dt)?;
-        if !reference.is_finite() {
-            return Err(self.fault.trip(FaultReason::NonFiniteReference));
-        }
+        self.fault.admit(reference, dt)?;
         if !all_finite(theta.as_slice()) {
             return Err(self.fault.trip(FaultReason::NonFiniteJoint));
         }
