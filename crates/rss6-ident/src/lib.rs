@@ -31,8 +31,7 @@ pub use crate::calibrate::{
     CalibrationResult, DroppedConfiguration, JacobianMode, Progress,
 };
 pub use crate::data::{
-    collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource, Stepped,
-    SteppedRobot,
+    collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,
 };
 pub use crate::error::{IdentError, Method, Result};
 pub use crate::generator::{
@@ -43,7 +42,7 @@ pub use crate::model::{
     gauge_aligned_error, parameter_names, parameter_scale, GAUGE_DESCRIPTIONS, N_GAUGE,
     SIGMA_DTHETA, SIGMA_ETA, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION, SIGMA_LENGTH,
 };
-pub use crate::plant::{plant_nominal_target, random_plant, sim_source, SimRobot};
+pub use crate::plant::{plant_nominal_target, random_plant, sim_source};
 pub use crate::selection::{
     observability_index, select_configurations, select_configurations_with, stroke, stroke_with,
     SelectionOptions, SelectionReport, StrokeOptions,

@@ -213,7 +213,7 @@ pub fn run_robot_with_source(
 
 /// [`run_robot`] on the rapier plant: the truth is drawn the same way (Table 4.2 around `nominal`,
 /// external poses around the simulator's defaults) and the data come from the plant's PID, potentiometers
-/// and stereo CMM through [`crate::Stepped`]. Set `opts.target_nominal` to [`crate::plant_nominal_target`].
+/// and stereo CMM through the experiment layer's dwell runner. Set `opts.target_nominal` to [`crate::plant_nominal_target`].
 pub fn run_plant_robot(
     nominal: &KinematicParams,
     opts: &StudyOptions,

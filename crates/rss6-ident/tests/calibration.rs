@@ -359,11 +359,14 @@ struct Mock {
     kp: KinematicParams,
 }
 
-impl SteppedRobot for Mock {
+impl rss6_exp::Robot for Mock {
     fn dt(&self) -> f64 {
         1e-3
     }
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<()> {
+    fn time(&self) -> f64 {
+        self.tick as f64 * 1e-3
+    }
+    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> rss6_exp::Result<()> {
         self.cmd = *theta_cmd;
         self.tick += 1;
         Ok(())
@@ -376,22 +379,23 @@ impl SteppedRobot for Mock {
             None
         }
     }
-    fn potentiometers(&mut self) -> Vec6 {
+    fn potentiometers(&self) -> Vec6 {
         let s = if self.tick % 4 < 2 { 0.5 } else { -0.5 };
         self.kp.reading_from_theta(&self.cmd).add_scalar(s)
     }
 }
 
 #[test]
-fn stepped_adapter_averages_over_the_dwell() {
+fn dwell_runner_averages_over_the_dwell() {
     let kp = nominal();
-    let mut src = Stepped::new(
+    let mut src = rss6_exp::dwell::DwellSession::new(
         Mock {
             tick: 0,
             cmd: Vec6::zeros(),
             kp,
         },
         Vec6::zeros(),
+        rss6_exp::dwell::DwellSpec::default(),
     );
     let th = Vec6::new(0.1, -0.2, 0.3, 0.0, 0.05, -0.1);
     let c = src.measure(&th, 2.0).unwrap();

@@ -11,8 +11,8 @@ fn rpba_on_rapier_plant_data_improves_relative_accuracy() {
     let nominal = KinematicParams::nominal();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let (mut source, truth) = random_plant(&nominal, &mut rng, 4).unwrap();
-    source.move_time = 0.6;
-    source.settle_time = 0.4;
+    source.spec.move_time = 0.6;
+    source.spec.settle_time = 0.4;
     let mut thetas = vec![Vec6::zeros()];
     thetas.extend(test_configurations(13, 5, (-0.4, 0.4)));
     let data = collect(&mut source, &thetas, 1.0).unwrap();

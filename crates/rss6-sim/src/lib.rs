@@ -7,6 +7,7 @@ mod effects;
 mod error;
 mod log;
 mod params_file;
+#[cfg(feature = "rapier")]
 mod plant;
 mod sensors;
 mod sim;
@@ -27,6 +28,7 @@ pub use crate::params_file::{
     save_kinematic_params, save_pid_gains, save_truth, BodiesFile, BodyFile, DynamicParamsFile,
     KinematicParamsFile, PidGainsFile, TruthFile,
 };
+#[cfg(feature = "rapier")]
 pub use crate::plant::{Plant, RapierPhysics};
 pub use crate::sensors::{
     kabsch, measure_with, Camera, CmmConfig, CMM_ANGLE_NOISE, CMM_POSITION_NOISE,

@@ -267,7 +267,7 @@ struct Rotor {
     omega: f64,
 }
 
-/// A simulated robot: physics + PID + drive train + sensors. See [`crate::Plant`] and
+/// A simulated robot: physics + PID + drive train + sensors. See `Plant` (feature `rapier`) and
 /// [`crate::ModelSim`].
 pub struct Robot<P: Physics> {
     pub(crate) physics: P,
