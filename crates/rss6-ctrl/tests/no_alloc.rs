@@ -126,7 +126,7 @@ fn every_step_is_allocation_free() {
         (Which::Kjsc, ServoConfig::nominal(), DsmcGains::tuned()),
     ] {
         let start = home_pose();
-        let mut plant = ModelPlant::new(
+        let mut plant = rig(
             KinematicParams::perturbed(&table_4_2_errors(3)),
             dp,
             &start,
@@ -136,7 +136,7 @@ fn every_step_is_allocation_free() {
             },
             5,
         );
-        let kappa0 = <ModelPlant as Plant>::potentiometers(&plant);
+        let kappa0 = <Rig as Plant>::potentiometers(&plant);
         let theta0 = kp.theta_from_reading(&kappa0);
         let mut servo = Servo::new(
             kp,

@@ -55,7 +55,7 @@ fn latency_compensation_helps_with_a_late_camera() {
 fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     let start = home_pose();
     let kp = KinematicParams::nominal();
-    let mut plant = ModelPlant::new(
+    let mut plant = rig(
         KinematicParams::perturbed(&table_4_2_errors(7)),
         DynamicParams::nominal(),
         &start,
@@ -81,8 +81,8 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     run(&mut plant, &mut servo, &traj, 0.0, 2000, |_, _| {}).unwrap();
     assert!(servo.fault().is_none());
     // A NaN frame: the servo faults and holds; the plant keeps running 0.5 s on the held command.
-    let t = plant.time();
-    let mut bad = plant.state.pose;
+    let t = rss6_ctrl::Plant::time(&plant);
+    let mut bad = plant.robot.model_state().pose;
     bad[2] = f64::NAN;
     let held = servo.held_command();
     let r = servo.tick(t, &traj.sample(t), Some(&bad), &plant.potentiometers());
@@ -100,18 +100,23 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     );
     assert_eq!(
         *servo.converter().shadow(),
-        plant.pid,
+        *plant.robot.drive_pid(),
         "shadow drifted from the drive during the fault"
     );
     // Restart at the camera's pose: the first commands continue from the held one (rate limit) and the
     // tracking error comes back down.
-    servo.reset(plant.time(), &plant.state.pose).unwrap();
+    servo
+        .reset(
+            rss6_ctrl::Plant::time(&plant),
+            &plant.robot.model_state().pose,
+        )
+        .unwrap();
     let mut first = None;
     let mut late_err: f64 = 0.0;
     run(&mut plant, &mut servo, &traj, 0.0, 3000, |rec, p| {
         first.get_or_insert(rec.theta_cmd);
         if rec.t > 4.5 {
-            let e = traj.sample(p.time()).pose - p.state.pose;
+            let e = traj.sample(rss6_ctrl::Plant::time(p)).pose - p.robot.model_state().pose;
             late_err = late_err.max(e.fixed_rows::<3>(0).amax());
         }
     })
@@ -122,7 +127,7 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
         jump <= ServoConfig::nominal().limits.max_rate * 1e-3 + 1e-15,
         "bump {jump} rad"
     );
-    assert_eq!(*servo.converter().shadow(), plant.pid);
+    assert_eq!(*servo.converter().shadow(), *plant.robot.drive_pid());
     println!(
         "after restart: max position error over the last 0.5 s {:.3} mm",
         late_err * 1e3
@@ -138,7 +143,7 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
 #[test]
 fn low_noise_config_is_validated() {
     let kp = KinematicParams::nominal();
-    let plant = ModelPlant::new(
+    let plant = rig(
         kp,
         DynamicParams::nominal(),
         &home_pose(),
@@ -148,7 +153,7 @@ fn low_noise_config_is_validated() {
         },
         0,
     );
-    let kappa0 = <ModelPlant as Plant>::potentiometers(&plant);
+    let kappa0 = <Rig as Plant>::potentiometers(&plant);
     let theta0 = kp.theta_from_reading(&kappa0);
     let make = |config: ServoConfig| {
         Servo::new(

@@ -165,6 +165,26 @@ pub struct ServoOutcome {
     pub first_fault: Option<(f64, FaultReason)>,
 }
 
+/// The camera-rate controller `controller` on the model (`kp_model`, `dp_model`): the DSMC with
+/// `dsmc` gains; KCSC and KJSC with the thesis's gains ([`CartesianPidGains::thesis`],
+/// [`JointSpaceGains::thesis`]), starting from the joint command `theta0` (rad, the controller's
+/// convention).
+pub fn scheme(
+    controller: Controller,
+    kp_model: &KinematicParams,
+    dp_model: &DynamicParams,
+    dsmc: &DsmcGains,
+    theta0: &Vec6,
+) -> Result<Scheme> {
+    Ok(match controller {
+        Controller::Dsmc => Scheme::Dsmc(Dsmc::new(*kp_model, *dp_model, *dsmc)?),
+        Controller::Kcsc => {
+            Scheme::Kcsc(Kcsc::new(*kp_model, CartesianPidGains::thesis(), theta0)?)
+        }
+        Controller::Kjsc => Scheme::Kjsc(Kjsc::new(*kp_model, JointSpaceGains::thesis(), theta0)?),
+    })
+}
+
 /// The servo for `spec` on a robot now reading `kappa0` at time `t0`, with the Kalman filter starting
 /// at the first camera frame if `frame` is pending, else at the model's FK of the readings.
 fn build_servo(

@@ -82,6 +82,12 @@ pub struct CmmConfig {
     pub period: f64,
     /// Latency from exposure to the reading being available (s).
     pub latency: f64,
+    /// Pose-space noise instead of the stereo model: `Some([σ_position (m), σ_angle (rad)])` adds
+    /// independent Gaussian noise to each axis of the true ᶜχ_t (Table 4.1 per axis:
+    /// [`CMM_POSITION_NOISE`], [`CMM_ANGLE_NOISE`]), with no projection, triangulation or dropped
+    /// frames. `None` (default): the stereo tracker.
+    #[serde(default)]
+    pub pose_noise: Option<[f64; 2]>,
 }
 
 impl CmmConfig {
@@ -111,6 +117,16 @@ impl CmmConfig {
             pixel_noise: DEFAULT_PIXEL_NOISE,
             period: 0.033,
             latency: 0.0,
+            pose_noise: None,
+        }
+    }
+
+    /// The stereo head's timing with Table 4.1's pose noise applied per axis of ᶜχ_t (see
+    /// [`CmmConfig::pose_noise`]): the thesis's noise model, isotropic where the stereo model is not.
+    pub fn table_4_1() -> Self {
+        CmmConfig {
+            pose_noise: Some([CMM_POSITION_NOISE, CMM_ANGLE_NOISE]),
+            ..Self::c_track()
         }
     }
 
@@ -120,6 +136,13 @@ impl CmmConfig {
             return Err(SimError::InvalidConfig(
                 "the CMM needs at least 4 reflectors".into(),
             ));
+        }
+        if let Some([p, a]) = self.pose_noise {
+            if !(p.is_finite() && p >= 0.0 && a.is_finite() && a >= 0.0) {
+                return Err(SimError::InvalidConfig(
+                    "CMM pose noise must be finite and >= 0".into(),
+                ));
+            }
         }
         if !(self.period > 0.0 && self.latency >= 0.0 && self.pixel_noise >= 0.0) {
             return Err(SimError::InvalidConfig(
@@ -196,7 +219,7 @@ impl OpticalCmm {
             cfg,
             latency,
             next_capture: 0.0,
-            pending: Default::default(),
+            pending: std::collections::VecDeque::with_capacity(16),
             out: None,
             rng,
             dropped: 0,
@@ -257,6 +280,14 @@ impl OpticalCmm {
 
 /// Simulates one CMM frame with the given configuration and RNG.
 pub fn measure_with<R: Rng>(cfg: &CmmConfig, c_chi_t: &Vec6, rng: &mut R) -> Result<Vec6> {
+    if let Some([sp, sa]) = cfg.pose_noise {
+        let np = Normal::new(0.0, sp).map_err(|e| SimError::InvalidConfig(e.to_string()))?;
+        let na = Normal::new(0.0, sa).map_err(|e| SimError::InvalidConfig(e.to_string()))?;
+        return Ok(Vec6::from_fn(|i, _| {
+            let n = if i < 3 { &np } else { &na };
+            c_chi_t[i] + n.sample(rng)
+        }));
+    }
     let iso = pose_to_isometry(c_chi_t);
     let noise = Normal::new(0.0, cfg.pixel_noise.max(0.0))
         .map_err(|e| SimError::InvalidConfig(e.to_string()))?;

@@ -381,6 +381,11 @@ impl<P: Physics> Robot<P> {
         self.cmm.latency()
     }
 
+    /// The drive's built-in joint PID (its integral and derivative memory).
+    pub fn drive_pid(&self) -> &JointPid {
+        &self.pid
+    }
+
     /// The gravity vector acting on the robot (m/s², base frame): part of the truth.
     pub fn gravity(&self) -> Vec3 {
         self.setup.gravity

@@ -1,6 +1,7 @@
-//! The analytic-model "robot" for closed-loop tests: rss6-core forward dynamics + RK4 at 1 kHz, the
-//! drive's [`JointPid`] on potentiometer readings (500 Hz, 0.2233 bit noise), a 30 Hz camera with the
-//! Table 4.1 noise, and kinematics that may differ from the controllers' nominal model (Table 4.2 sizes).
+//! Closed-loop tests run on the experiment layer (rss6-exp): the analytic-model twin of rss6-sim (rss6-core
+//! forward dynamics + RK4 at 1 kHz, the drive's PID on 500 Hz potentiometers with Table 4.1 noise, a
+//! 30 Hz camera with Table 4.1 pose noise), seen through [`rss6_exp::View`] as the real robot is, and
+//! driven by [`rss6_exp::servo::track`]. This file only sets experiments up and reduces their records.
 #![allow(
     dead_code,
     unreachable_pub,
@@ -13,19 +14,13 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rss6_core::{
-    ik, rk4_step, CoreError, DynamicParams, KinematicParams, ModelState, Vec6, N_KIN_ERRORS,
-};
-use rss6_ctrl::servo::{run, TickRecord};
-use rss6_ctrl::{
-    CartesianPidGains, Dsmc, DsmcGains, JointPid, JointSpaceGains, Kcsc, Kjsc, PidGains, Plant,
-    Scheme, Servo, ServoConfig, Trajectory,
-};
+use rss6_core::{jacobian_theta, DynamicParams, KinematicParams, Vec6, N_KIN_ERRORS};
+use rss6_ctrl::{DsmcGains, PidGains, Scheme, ServoConfig, Trajectory};
+use rss6_exp::servo::{track, Controller, ServoSpec, Tuning};
+use rss6_exp::{Convention, Externals, Flow, Observer, Record, View};
+use rss6_sim::{CmmConfig, ModelSim, RobotSim, SimConfig};
 
-/// Table 4.1 camera noise (1σ): 0.0096 mm, 0.0261°.
-pub const CAMERA_SIGMA: [f64; 2] = [0.0096e-3, 0.0261 * core::f64::consts::PI / 180.0];
-/// Table 4.1 potentiometer noise (1σ, bits).
-pub const POT_SIGMA: f64 = 0.2233;
+pub use rss6_exp::servo::Controller as Which;
 
 #[derive(Debug, Clone, Copy)]
 pub struct Noise {
@@ -33,132 +28,52 @@ pub struct Noise {
     pub potentiometer: bool,
 }
 
-pub struct ModelPlant {
-    pub kp_true: KinematicParams,
-    pub kp_nominal: KinematicParams,
-    pub dp: DynamicParams,
-    pub pid: JointPid,
-    pub state: ModelState,
-    pub tick: u64,
-    pub dt: f64,
-    pub camera_every: u64,
-    pub pot_every: u64,
-    /// Frames are delivered this many ticks after exposure.
-    pub camera_latency_ticks: u64,
-    in_flight: std::collections::VecDeque<(u64, Vec6)>,
+/// The model twin of a robot with kinematics `kp_true`, at rest at `start`, with Table 4.1 noise where
+/// `noise` asks for it and a camera latency of `latency_ticks` ms.
+pub fn model_sim(
+    kp_true: KinematicParams,
+    dp: DynamicParams,
+    start: &Vec6,
     noise: Noise,
-    kappa: Vec6,
-    pending_frame: Option<Vec6>,
-    rng: ChaCha8Rng,
+    seed: u64,
+    latency_ticks: u64,
+) -> ModelSim {
+    let mut cfg = SimConfig::new(kp_true, dp, PidGains::nominal());
+    cfg.seed = seed;
+    cfg.cmm = CmmConfig::table_4_1();
+    if !noise.camera {
+        cfg.cmm.pose_noise = Some([0.0, 0.0]);
+    }
+    if !noise.potentiometer {
+        cfg.pot_noise = 0.0;
+    }
+    cfg.cmm.latency = latency_ticks as f64 * cfg.dt;
+    // The target at the end-effector origin: Table 4.1's noise is then the noise of χ_E (a target offset
+    // turns angle noise into position noise through its lever arm).
+    cfg.target_in_effector = Vec6::zeros();
+    let mut sim = ModelSim::new(cfg).unwrap();
+    sim.reset(start).unwrap();
+    sim
 }
 
-impl ModelPlant {
-    pub fn new(
-        kp_true: KinematicParams,
-        dp: DynamicParams,
-        start: &Vec6,
-        noise: Noise,
-        seed: u64,
-    ) -> Self {
-        let mut p = ModelPlant {
-            kp_true,
-            kp_nominal: KinematicParams::nominal(),
-            dp,
-            pid: JointPid::new(PidGains::nominal(), 1e-3, 30.0),
-            state: ModelState {
-                pose: *start,
-                pose_dot: Vec6::zeros(),
-            },
-            tick: 0,
-            dt: 1e-3,
-            camera_every: 33,
-            pot_every: 2,
-            camera_latency_ticks: 0,
-            in_flight: std::collections::VecDeque::with_capacity(8),
-            noise,
-            kappa: Vec6::zeros(),
-            pending_frame: None,
-            rng: ChaCha8Rng::seed_from_u64(seed),
-        };
-        p.sample_potentiometers();
-        p.sample_camera();
-        p
-    }
+/// The twin as a controller sees it: frames through its true external parameters, commands in the
+/// drive's convention.
+pub type Rig = View<ModelSim>;
 
-    pub fn time(&self) -> f64 {
-        self.tick as f64 * self.dt
-    }
-
-    pub fn true_theta(&self) -> Vec6 {
-        ik(&self.kp_true, &self.state.pose).expect("plant left its workspace")
-    }
-
-    fn sample_potentiometers(&mut self) {
-        let theta = self.true_theta();
-        let mut kappa = self.kp_true.reading_from_theta(&theta);
-        if self.noise.potentiometer {
-            let n = Normal::new(0.0, POT_SIGMA).unwrap();
-            for k in kappa.iter_mut() {
-                *k += n.sample(&mut self.rng);
-            }
-        }
-        self.kappa = kappa;
-    }
-
-    fn sample_camera(&mut self) {
-        let mut z = self.state.pose;
-        if self.noise.camera {
-            for i in 0..6 {
-                let s = CAMERA_SIGMA[i / 3];
-                z[i] += Normal::new(0.0, s).unwrap().sample(&mut self.rng);
-            }
-        }
-        self.in_flight
-            .push_back((self.tick + self.camera_latency_ticks, z));
-        self.deliver();
-    }
-
-    fn deliver(&mut self) {
-        while let Some(&(due, z)) = self.in_flight.front() {
-            if due > self.tick {
-                break;
-            }
-            self.in_flight.pop_front();
-            self.pending_frame = Some(z);
-        }
-    }
-}
-
-impl Plant for ModelPlant {
-    type Error = CoreError;
-
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<(), CoreError> {
-        // The drive's PID works on the nominal-convention angle of its own potentiometer reading.
-        let theta_meas = self.kp_nominal.theta_from_reading(&self.kappa);
-        let tau = self.pid.step(theta_cmd, &theta_meas);
-        self.state = rk4_step(&self.kp_true, &self.dp, &self.state, &tau, self.dt)?;
-        self.tick += 1;
-        if self.tick % self.pot_every == 0 {
-            self.sample_potentiometers();
-        }
-        if self.tick % self.camera_every == 0 {
-            self.sample_camera();
-        }
-        self.deliver();
-        Ok(())
-    }
-
-    fn camera(&mut self) -> Option<Vec6> {
-        self.pending_frame.take()
-    }
-
-    fn potentiometers(&self) -> Vec6 {
-        self.kappa
-    }
-
-    fn time(&self) -> f64 {
-        ModelPlant::time(self)
-    }
+pub fn rig(
+    kp_true: KinematicParams,
+    dp: DynamicParams,
+    start: &Vec6,
+    noise: Noise,
+    seed: u64,
+) -> Rig {
+    let sim = model_sim(kp_true, dp, start, noise, seed, 0);
+    let truth = RobotSim::truth(&sim);
+    let ext = Externals {
+        sensor_in_base: truth.sensor_in_base,
+        target_in_effector: truth.target_in_effector,
+    };
+    View::new(sim, ext, KinematicParams::nominal(), Convention::Drive)
 }
 
 /// Table 4.2 error sizes drawn once (seeded): positions/lengths 1 mm, η 5e-5 rad/bit, Δθ 0.05 rad.
@@ -176,20 +91,10 @@ pub fn table_4_2_errors(seed: u64) -> [f64; N_KIN_ERRORS] {
     b
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Which {
-    Dsmc,
-    Kcsc,
-    Kjsc,
-}
-
+/// The controller `which` on the nominal model, starting at `theta0`.
 pub fn scheme(which: Which, theta0: &Vec6, dsmc: DsmcGains) -> Scheme {
     let kp = KinematicParams::nominal();
-    match which {
-        Which::Dsmc => Scheme::Dsmc(Dsmc::new(kp, DynamicParams::nominal(), dsmc).unwrap()),
-        Which::Kcsc => Scheme::Kcsc(Kcsc::new(kp, CartesianPidGains::thesis(), theta0).unwrap()),
-        Which::Kjsc => Scheme::Kjsc(Kjsc::new(kp, JointSpaceGains::thesis(), theta0).unwrap()),
-    }
+    rss6_exp::servo::scheme(which, &kp, &DynamicParams::nominal(), &dsmc, theta0).unwrap()
 }
 
 /// Per-run statistics (errors against the TRUE pose).
@@ -216,7 +121,7 @@ pub struct Stats {
     pub mon_vel_sq: [f64; 6],
     pub mon_servo_est_sq: [f64; 6],
     pub mon_servo_vel_err_sq: [f64; 6],
-    /// Per-tick error trace (t, e = χ_d − χ_true) sampled at camera frames.
+    /// Per-frame error trace (t, e = χ_d − χ_true).
     pub trace: Vec<(f64, Vec6)>,
     /// Per-frame true sliding variable F = ė + λe and the DSMC's own F.
     pub sliding: Vec<(f64, Vec6, Vec6)>,
@@ -268,97 +173,102 @@ impl Setup {
     }
 }
 
-/// Runs one scheme on the analytic plant along `traj`, starting at rest at home.
+/// Reduces the records of a run to [`Stats`].
+struct StatsObserver {
+    kp_true: KinematicParams,
+    lambda: Vec6,
+    monitor: Option<(rss6_ctrl::PoseKalman, f64)>,
+    st: Stats,
+}
+
+impl Observer for StatsObserver {
+    fn record(&mut self, r: &Record) -> Flow {
+        let (Some(truth), Some(reference)) = (r.truth, r.reference) else {
+            return Flow::Continue;
+        };
+        let st = &mut self.st;
+        let e = reference.pose - truth.pose;
+        for i in 0..6 {
+            st.sq[i] += e[i] * e[i];
+            st.abs[i] += e[i].abs();
+        }
+        st.pos_sq += e.fixed_rows::<3>(0).norm_squared();
+        st.ang_sq += e.fixed_rows::<3>(3).norm_squared();
+        st.n += 1;
+        let Some(z) = r.camera else {
+            return Flow::Continue;
+        };
+        // The true pose rate: θ̇ = J_θ χ̇ (eq. 5.3) on the true kinematics.
+        let j = jacobian_theta(&self.kp_true, &truth.pose).unwrap();
+        let v_true = j.lu().solve(&truth.theta_dot).unwrap();
+        if let Some(est) = r.estimate {
+            for i in 0..6 {
+                st.cam_sq[i] += (z[i] - truth.pose[i]).powi(2);
+                st.est_sq[i] += (est.pose[i] - truth.pose[i]).powi(2);
+                st.vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
+                st.vel_sq[i] += v_true[i].powi(2);
+            }
+            st.kf_n += 1;
+            if let Some((mf, last_t)) = self.monitor.as_mut() {
+                let m = mf.step((r.t - *last_t).max(1e-6), Some(&z)).unwrap();
+                *last_t = r.t;
+                if r.t > MONITOR_FROM {
+                    for i in 0..6 {
+                        st.mon_cam_sq[i] += (z[i] - truth.pose[i]).powi(2);
+                        st.mon_est_sq[i] += (m.pose[i] - truth.pose[i]).powi(2);
+                        st.mon_vel_err_sq[i] += (m.pose_dot[i] - v_true[i]).powi(2);
+                        st.mon_vel_sq[i] += v_true[i].powi(2);
+                        st.mon_servo_est_sq[i] += (est.pose[i] - truth.pose[i]).powi(2);
+                        st.mon_servo_vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
+                    }
+                    st.mon_n += 1;
+                }
+            }
+        }
+        let f_true = (reference.pose_dot - v_true) + self.lambda.component_mul(&e);
+        let f_ctrl = r.dsmc.map(|d| d.1).unwrap_or(Vec6::zeros());
+        st.sliding.push((r.t, f_true, f_ctrl));
+        st.trace.push((r.t, e));
+        Flow::Continue
+    }
+}
+
+/// Runs one scheme on the model twin along `traj`, starting at rest at home, through the experiment
+/// layer's servo runner.
 pub fn run_scheme(which: Which, traj: &dyn Trajectory, setup: &Setup) -> Stats {
     let start = rss6_core::home_pose();
-    let mut plant = ModelPlant::new(
+    let sim = model_sim(
         setup.kp_true,
         DynamicParams::nominal(),
         &start,
         setup.noise,
         setup.seed,
+        setup.latency_ticks,
     );
-    plant.camera_latency_ticks = setup.latency_ticks;
+    let truth = RobotSim::truth(&sim);
+    let ext = Externals {
+        sensor_in_base: truth.sensor_in_base,
+        target_in_effector: truth.target_in_effector,
+    };
     let kp = KinematicParams::nominal();
-    let kappa0 = plant.potentiometers();
-    let theta0 = kp.theta_from_reading(&kappa0);
-    let mut servo = Servo::new(
-        kp,
-        setup.config,
-        scheme(which, &theta0, setup.dsmc),
-        &start,
-        &kappa0,
-        0.0,
-    )
-    .unwrap();
-    let lambda = setup.dsmc.lambda;
-    let mut st = Stats::default();
-    let ticks = (setup.seconds / 1e-3).round() as u32;
-    let mut prev = plant.state;
-    let mut monitor = setup
-        .monitor
-        .map(|c| (rss6_ctrl::PoseKalman::new(c, &start).unwrap(), 0.0_f64));
-    let summary = run(
-        &mut plant,
-        &mut servo,
-        traj,
-        0.0,
-        ticks,
-        |rec: &TickRecord, p: &ModelPlant| {
-            // Error at the start of the tick: reference at t vs the true pose at t. The plant has already
-            // stepped, so compare with the reference at the plant's new time instead.
-            let t = p.time();
-            let r = traj.sample(t);
-            let e = r.pose - p.state.pose;
-            for i in 0..6 {
-                st.sq[i] += e[i] * e[i];
-                st.abs[i] += e[i].abs();
-            }
-            st.pos_sq += e.fixed_rows::<3>(0).norm_squared();
-            st.ang_sq += e.fixed_rows::<3>(3).norm_squared();
-            st.n += 1;
-            if let (Some(z), Some(tick)) = (rec.camera, rec.tick) {
-                // The frame and the estimate are for rec.t, when the true state was `prev`.
-                if let Some(est) = tick.estimate {
-                    let v_true = prev.pose_dot;
-                    for i in 0..6 {
-                        st.cam_sq[i] += (z[i] - prev.pose[i]).powi(2);
-                        st.est_sq[i] += (est.pose[i] - prev.pose[i]).powi(2);
-                        st.vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
-                        st.vel_sq[i] += v_true[i].powi(2);
-                    }
-                    st.kf_n += 1;
-                    if let Some((mf, last_t)) = monitor.as_mut() {
-                        let m = mf.step((rec.t - *last_t).max(1e-6), Some(&z)).unwrap();
-                        *last_t = rec.t;
-                        if rec.t > MONITOR_FROM {
-                            for i in 0..6 {
-                                st.mon_cam_sq[i] += (z[i] - prev.pose[i]).powi(2);
-                                st.mon_est_sq[i] += (m.pose[i] - prev.pose[i]).powi(2);
-                                st.mon_vel_err_sq[i] += (m.pose_dot[i] - v_true[i]).powi(2);
-                                st.mon_vel_sq[i] += v_true[i].powi(2);
-                                st.mon_servo_est_sq[i] += (est.pose[i] - prev.pose[i]).powi(2);
-                                st.mon_servo_vel_err_sq[i] += (est.pose_dot[i] - v_true[i]).powi(2);
-                            }
-                            st.mon_n += 1;
-                        }
-                    }
-                }
-            }
-            prev = p.state;
-            if rec.tick.map(|x| x.frame).unwrap_or(false) {
-                let f_true = (r.pose_dot - p.state.pose_dot) + lambda.component_mul(&e);
-                let f_ctrl = rec
-                    .tick
-                    .and_then(|x| x.dsmc)
-                    .map(|d| d.1)
-                    .unwrap_or(Vec6::zeros());
-                st.sliding.push((t, f_true, f_ctrl));
-                st.trace.push((t, e));
-            }
-        },
-    )
-    .unwrap();
-    st.first_fault = summary.first_fault;
-    st
+    let mut spec = ServoSpec::new(which, Tuning::Tuned, kp, DynamicParams::nominal(), ext).unwrap();
+    spec.config = setup.config;
+    spec.dsmc = setup.dsmc;
+    spec.duration = setup.seconds;
+    let mut obs = StatsObserver {
+        kp_true: setup.kp_true,
+        lambda: setup.dsmc.lambda,
+        monitor: setup
+            .monitor
+            .map(|c| (rss6_ctrl::PoseKalman::new(c, &start).unwrap(), 0.0_f64)),
+        st: Stats::default(),
+    };
+    let outcome = track(sim, &spec, traj, &mut obs).unwrap();
+    obs.st.first_fault = outcome.first_fault;
+    obs.st
+}
+
+/// Shown so the compiler sees the controller type used (Which is an alias of it).
+pub fn controller_name(c: Controller) -> &'static str {
+    c.name()
 }
