@@ -55,9 +55,6 @@ pub enum SimError {
         /// What the parser said.
         message: String,
     },
-    /// An MCAP log could not be written or read.
-    #[error("MCAP log: {0}")]
-    Mcap(String),
 }
 
 impl From<CoreError> for SimError {
@@ -66,11 +63,6 @@ impl From<CoreError> for SimError {
     }
 }
 
-impl From<mcap::McapError> for SimError {
-    fn from(e: mcap::McapError) -> Self {
-        SimError::Mcap(e.to_string())
-    }
-}
 
 /// Result alias of the crate.
 pub type Result<T> = std::result::Result<T, SimError>;

@@ -5,7 +5,6 @@
 
 mod effects;
 mod error;
-mod log;
 mod params_file;
 #[cfg(feature = "rapier")]
 mod plant;
@@ -20,9 +19,6 @@ pub use crate::effects::{
     REGISTRY,
 };
 pub use crate::error::{Result, SimError};
-pub use crate::log::{
-    read_log, read_log_bytes, McapLogger, RunLog, TickRecord, DEFAULT_CHUNK_SIZE, TOPICS,
-};
 pub use crate::params_file::{
     load_dynamic_params, load_kinematic_params, load_pid_gains, load_truth, save_dynamic_params,
     save_kinematic_params, save_pid_gains, save_truth, BodiesFile, BodyFile, DynamicParamsFile,
