@@ -68,7 +68,7 @@ from rss6.errors import (
 )
 
 try:  # the rapier plant (rss6-sim) is optional in builds without it
-    from rss6._rss6 import Plant  # type: ignore[attr-defined]
+    from rss6._rss6 import Plant
 except ImportError:  # pragma: no cover - depends on the build
     Plant = None  # type: ignore[assignment,misc]
 

@@ -6,7 +6,7 @@ from typing import Any, Literal, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from typing_extensions import TypeAlias
+from typing_extensions import Self, TypeAlias
 
 _F64: TypeAlias = NDArray[np.float64]
 _Path: TypeAlias = str | PathLike[str]
@@ -278,7 +278,7 @@ class _SimBase:
         solver_iterations: int | None = None,
         potentiometer_noise: float | None = None,
         pixel_noise: float | None = None,
-    ) -> Any: ...
+    ) -> Self: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
     def true_pose(self) -> _F64: ...
