@@ -42,6 +42,7 @@ __all__ = [
     "ServoTable",
     "make_plant",
     "run",
+    "servo_table",
 ]
 
 F64 = NDArray[np.float64]
@@ -296,6 +297,21 @@ class DemoReport:
         return self.text()
 
 
+def servo_table(
+    experiment: TrajectoryName, title: str, runs: Mapping[str, TrackingResult]
+) -> ServoTable:
+    """The table of ``runs`` (column name → run) on ``experiment`` beside the thesis's table for it
+    (Table 6.1 for "exp1", 6.2 for "exp2")."""
+    return ServoTable(
+        experiment=experiment,
+        title=title,
+        rmse={n: r.rmse for n, r in runs.items()},
+        mae={n: r.mae for n, r in runs.items()},
+        thesis=servo.THESIS_TABLES[experiment],
+        faults={n: r.fault for n, r in runs.items() if r.fault is not None},
+    )
+
+
 def make_plant(
     kind: PlantKind,
     kp_true: _rss6.KinematicParams,
@@ -445,14 +461,8 @@ def run(
             columns, errors, f"{EXPERIMENTS[exp]}: errors (Fig. {fig_e.replace('_', '.')})"
         )
         files += [tracking, errors]
-        tables[exp] = ServoTable(
-            experiment=exp,
-            title=f"Table {tab} — {EXPERIMENTS[exp]}, {durations[exp]:.0f} s on rss6.{kind}",
-            rmse={n: r.rmse for n, r in runs[exp].items()},
-            mae={n: r.mae for n, r in runs[exp].items()},
-            thesis=servo.THESIS_TABLES[exp],
-            faults={n: r.fault for n, r in runs[exp].items() if r.fault is not None},
-        )
+        title = f"Table {tab} — {EXPERIMENTS[exp]}, {durations[exp]:.0f} s on rss6.{kind}"
+        tables[exp] = servo_table(exp, title, runs[exp])
 
     # 3. How well each DSMC servo's Kalman filter did (the true pose is known in simulation).
     filters = []
