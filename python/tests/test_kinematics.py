@@ -247,9 +247,9 @@ def test_toml_round_trip(tmp_path):
 def test_bad_toml_raises_params_file_error(tmp_path):
     p = tmp_path / "bad.toml"
     p.write_text("base_joints = 3\n")
-    with pytest.raises(rss6.ParamsFileError, match="bad.toml"):
+    with pytest.raises(rss6.ParamsFileError, match=r"bad\.toml"):
         rss6.KinematicParams.load(p)
-    with pytest.raises(rss6.ParamsFileError, match="missing.toml: No such file"):
+    with pytest.raises(rss6.ParamsFileError, match=r"missing\.toml: No such file"):
         rss6.KinematicParams.load(tmp_path / "missing.toml")
 
 

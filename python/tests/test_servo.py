@@ -40,7 +40,7 @@ def test_callable_trajectory_is_tabulated():
     plant = rss6.ModelSim(KP, DP, seed=4)
     r = servo.track(plant, "kcsc", traj.sample, duration=1.0)
     np.testing.assert_allclose(r.desired[500], traj.sample(0.5)[0], atol=1e-12)
-    with pytest.raises(rss6.ShapeError, match="pose at t = 0.000 s"):
+    with pytest.raises(rss6.ShapeError, match=r"pose at t = 0\.000 s"):
         servo.track(plant, "kcsc", lambda t: (np.zeros(5), np.zeros(6), np.zeros(6)), duration=0.1)
     with pytest.raises(rss6.InvalidInputError, match="controller must be"):
         servo.track(plant, "pid", "exp1", duration=0.1)
@@ -132,5 +132,5 @@ def test_low_noise_tuning_is_dsmc_only():
     with pytest.raises(rss6.InvalidInputError, match="tuning must be"):
         servo.track(plant, "dsmc", "exp1", duration=0.1, tuning="fast")
     short = servo.track(plant, "dsmc", "exp1", duration=0.5)
-    with pytest.raises(rss6.InvalidInputError, match="frames after 2.0 s"):
+    with pytest.raises(rss6.InvalidInputError, match=r"frames after 2\.0 s"):
         servo.filter_statistics(short)
