@@ -16,7 +16,7 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
@@ -77,7 +77,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _calibrate_log(args: argparse.Namespace, path: str, plant: Any = None) -> int:
+def _calibrate_log(args: argparse.Namespace, path: str, plant: Robot | None = None) -> int:
     """Calibrates from the MCAP log at ``path`` (RPBA or implicit); with the simulated ``plant`` that
     produced it, also prints Table 4.5's relative pose errors before and after."""
     import rss6

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import rss6
+from rss6.types import Robot
 
 KP = rss6.KinematicParams.nominal()
 DP = rss6.DynamicParams.nominal()
@@ -12,6 +13,7 @@ SIMS = [rss6.ModelSim, rss6.Plant]
 @pytest.mark.parametrize("cls", SIMS)
 def test_call_shape_and_rates(cls):
     sim = cls(KP, DP, seed=1)
+    assert isinstance(sim, Robot)  # what the workflows call on a plant (rss6.types)
     sim.reset(rss6.home_pose())
     assert sim.time == 0.0 and sim.dt == pytest.approx(1e-3)
     frames = 0
