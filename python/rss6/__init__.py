@@ -10,7 +10,8 @@ R = Rx(α)·Ry(β)·Rz(γ). Every error derives from :class:`rss6.Rss6Error` (se
 True
 
 Submodules: :mod:`rss6.servo` (tracking experiments), :mod:`rss6.calibrate` (RPBA, implicit),
-:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.cli` (the ``rss6`` command).
+:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.demo` (the demo as data),
+:mod:`rss6.types` (``Literal`` names, the ``Robot`` protocol), :mod:`rss6.cli` (the ``rss6`` command).
 """
 
 from __future__ import annotations
