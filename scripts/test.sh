@@ -15,7 +15,11 @@ step "cargo test --workspace (rss6-py is tested through pytest below)"
 cargo test --workspace --exclude rss6-py
 step "install the Python package from this checkout"
 bash scripts/setup.sh
-step "mypy stubtest rss6._rss6"
-python3 -m mypy.stubtest rss6._rss6 --ignore-missing-stub
+step "ruff check python/rss6 python/tests"
+python3 -m ruff check python/rss6 python/tests
+step "mypy python/rss6 (settings in pyproject.toml)"
+python3 -m mypy python/rss6
+step "mypy stubtest rss6._rss6 (every runtime name must be in the stub)"
+python3 -m mypy.stubtest rss6._rss6
 step "pytest"
 python3 -m pytest python/tests -q

@@ -10,7 +10,8 @@ R = Rx(α)·Ry(β)·Rz(γ). Every error derives from :class:`rss6.Rss6Error` (se
 True
 
 Submodules: :mod:`rss6.servo` (tracking experiments), :mod:`rss6.calibrate` (RPBA, implicit),
-:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.cli` (the ``rss6`` command).
+:mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.demo` (the demo as data),
+:mod:`rss6.types` (``Literal`` names, the ``Robot`` protocol), :mod:`rss6.cli` (the ``rss6`` command).
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ from rss6.errors import (
 )
 
 try:  # the rapier plant (rss6-sim) is optional in builds without it
-    from rss6._rss6 import Plant  # type: ignore[attr-defined]
+    from rss6._rss6 import Plant
 except ImportError:  # pragma: no cover - depends on the build
     Plant = None  # type: ignore[assignment,misc]
 

@@ -6,7 +6,49 @@ from typing import Any, Literal, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from typing_extensions import TypeAlias
+from typing_extensions import Self, TypeAlias
+
+__all__ = [
+    "CalibrationData",
+    "CalibrationResult",
+    "Dsmc",
+    "DynamicParams",
+    "KalmanFilter",
+    "Kcsc",
+    "KinematicParams",
+    "Kjsc",
+    "ModelSim",
+    "Plant",
+    "TorqueToPosition",
+    "Trajectory",
+    "calibration_study",
+    "collect",
+    "compose_poses",
+    "coriolis",
+    "dynamics_terms",
+    "fk",
+    "fk_batch",
+    "forward_dynamics",
+    "friction",
+    "gravity",
+    "home_pose",
+    "ik",
+    "ik_batch",
+    "implicit",
+    "inverse_dynamics",
+    "invert_pose",
+    "jacobian_ad",
+    "jacobian_theta",
+    "mass_matrix",
+    "regressor",
+    "relative_pose_errors_raw",
+    "rk4_step",
+    "rpba",
+    "run_servo",
+    "select_configurations",
+    "simulate",
+    "stroke",
+]
 
 _F64: TypeAlias = NDArray[np.float64]
 _Path: TypeAlias = str | PathLike[str]
@@ -278,7 +320,7 @@ class _SimBase:
         solver_iterations: int | None = None,
         potentiometer_noise: float | None = None,
         pixel_noise: float | None = None,
-    ) -> Any: ...
+    ) -> Self: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
     def true_pose(self) -> _F64: ...

@@ -16,229 +16,68 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
+from rss6.types import CONTROLLERS, TRAJECTORIES, TUNINGS, PlantKind, Robot
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+    from tqdm import tqdm
+
+    from rss6._rss6 import DynamicParams, KinematicParams
+
 __all__ = ["build_parser", "main"]
 
-EXPERIMENTS = {
-    "exp1": "Experiment 1 (sinusoid, 0.5 rad/s)",
-    "exp2": "Experiment 2 (Fourier, n = 5, ω0 = 0.15 rad/s)",
-}
-CONTROLLERS = ("kjsc", "kcsc", "dsmc")
 
-
-def _progress(total: int, desc: str, quiet: bool) -> Any:
-    from tqdm import tqdm  # type: ignore[import-untyped]
+def _progress(total: int, desc: str, quiet: bool) -> tqdm[NoReturn]:
+    from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, disable=quiet, leave=False, file=sys.stderr)
 
 
 def make_plant(
-    kind: str, kp_true: Any, dp: Any, seed: int, sensor_in_base: Any, target_in_effector: Any
-) -> Any:
-    """The simulated "real robot": the rapier plant if available (``kind`` "rapier" or "auto"), else
-    the analytic-model twin."""
+    kind: PlantKind,
+    kp_true: KinematicParams,
+    dp: DynamicParams,
+    seed: int,
+    sensor_in_base: ArrayLike | None,
+    target_in_effector: ArrayLike | None,
+) -> Robot:
+    """The simulated "real robot" (see :func:`rss6.demo.make_plant`)."""
+    from rss6 import demo
+
+    _check_plant(kind)
+    return demo.make_plant(kind, kp_true, dp, seed, sensor_in_base, target_in_effector)
+
+
+def _check_plant(kind: PlantKind) -> None:
+    """Exits if ``kind`` asks for the rapier plant and this build has none."""
     import rss6
 
-    if kind in ("rapier", "auto") and rss6.Plant is not None:
-        return rss6.Plant(
-            kp_true,
-            dp,
-            seed=seed,
-            sensor_in_base=sensor_in_base,
-            target_in_effector=target_in_effector,
-        )
-    if kind == "rapier":
+    if kind == "rapier" and rss6.Plant is None:
         raise SystemExit("rss6: this build has no rapier plant (rss6.Plant); use --plant model")
-    return rss6.ModelSim(
-        kp_true, dp, seed=seed, sensor_in_base=sensor_in_base, target_in_effector=target_in_effector
-    )
-
-
-def _say(msg: str, quiet: bool = False) -> None:
-    if not quiet:
-        print(msg, flush=True)
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    import rss6
-    from rss6 import calibrate, plots, servo
+    from rss6 import demo
 
-    t_start = time.perf_counter()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    quick, quiet, seed = args.quick, args.quiet, args.seed
-    nominal = rss6.KinematicParams.nominal()
-    dp = rss6.DynamicParams.nominal()
-
-    # The default robot: nominal geometry with seeded Table 4.2 errors, camera placed roughly.
-    kp_true = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed))
-    sensor_design, target_design = calibrate.default_placement()
-    sensor_true = calibrate.draw_external(sensor_design, seed + 1)
-    target_true = calibrate.draw_external(target_design, seed + 2)
-    plant = make_plant(args.plant, kp_true, dp, seed, sensor_true, target_true)
-    kind = type(plant).__name__
-    _say(f"rss6 demo: robot with Table 4.2 errors (seed {seed}) simulated by rss6.{kind}", quiet)
-    if kind != "Plant":
-        _say(
-            "  (rapier plant not in this build: using the analytic-model twin as the robot)", quiet
-        )
-
-    # 1. Kinematic calibration by RPBA on the plant (thesis ch. 4).
-    lo, hi = calibrate.stroke(nominal)
-    thetas = calibrate.select_configurations(
-        nominal, "rpba", seed, candidates=400 if quick else 5000, stroke=(lo, hi)
+    quiet = bool(args.quiet)
+    _check_plant(args.plant)
+    report = demo.run(
+        args.out,
+        quick=args.quick,
+        seed=args.seed,
+        plant=args.plant,
+        progress=lambda total, desc: _progress(total, desc, quiet),
     )
-    dwell = 0.5 if quick else 2.0
-    plant.reset(rss6.home_pose())
-    with _progress(len(thetas), "calibration: measuring configurations", quiet) as bar:
-        data = calibrate.collect(
-            plant,
-            thetas,
-            dwell,
-            move_time=0.5 if quick else 1.0,
-            progress=lambda d, t: bar.update(1),
-        )
-    result = calibrate.rpba(data, nominal)
-    sensor_est = calibrate.sensor_in_base_from_reference(data, result)
-    n_test = 50 if quick else 100
-    unc = calibrate.relative_pose_errors(None, plant, n=n_test, seed=seed, stroke=(lo, hi))
-    cal = calibrate.relative_pose_errors(result, plant, n=n_test, seed=seed, stroke=(lo, hi))
-    result.params.to_toml(out / "calibrated_kinematics.toml")
-    plots.relative_pose_errors(
-        unc["errors"],
-        cal["errors"],
-        out / "fig4_8_relative_pose_errors.png",
-        "Relative pose errors (Fig. 4.8)",
-    )
-    _say(
-        f"\n1. RPBA calibration: stroke ({np.degrees(lo):.1f}°, {np.degrees(hi):.1f}°), "
-        f"{len(thetas) - 1} configurations + initial, dwell {dwell} s, {result.iterations} LM steps, "
-        f"rank {result.rank}/{result.parameter_count}",
-        quiet,
-    )
-    _say(
-        f"   RMS relative pose errors on {n_test} test configurations (x, y, z mm; α, β, γ 1e-3 rad):",
-        quiet,
-    )
-    for name, e in (("uncalibrated", unc["rms"]), ("RPBA", cal["rms"])):
-        _say(f"   {name:13s} " + " ".join(f"{v * 1e3:8.4f}" for v in e), quiet)
-    thesis = np.asarray(calibrate.THESIS_TABLE_4_5["RPBA"]) * 1e3
-    _say(f"   {'thesis RPBA':13s} " + " ".join(f"{v:8.4f}" for v in thesis), quiet)
-
-    # 2. Servo experiments (thesis §6.5) with the calibrated kinematics and Table 5.1 dynamics.
-    durations = {"exp1": 6.0, "exp2": 6.0} if quick else {"exp1": 25.0, "exp2": 42.0}
-    results: dict[str, dict[str, Any]] = {}
-
-    def run_servo(exp: str, controller: str, tuning: str = "thesis") -> Any:
-        suffix = "" if tuning == "thesis" else f"_{tuning}"
-        return servo.track(
-            plant,
-            controller=controller,
-            trajectory=exp,
-            kp_model=result.params,
-            dp_model=dp,
-            duration=durations[exp],
-            sensor_in_base=sensor_est,
-            target_in_effector=result.target_in_effector,
-            mcap=out / f"{exp}_{controller}{suffix}.mcap",
-            tuning=tuning,
-        )
-
-    # The three controllers of the thesis, then the DSMC with the low-noise servo ("DSMC-LN").
-    runs_to_do = [(c, "thesis") for c in CONTROLLERS] + [("dsmc", "low_noise")]
-    with _progress(len(EXPERIMENTS) * len(runs_to_do), "servo experiments", quiet) as bar:
-        for exp in EXPERIMENTS:
-            results[exp] = {}
-            for c, tuning in runs_to_do:
-                r = run_servo(exp, c, tuning)
-                results[exp][r.controller + ("-LN" if tuning == "low_noise" else "")] = r
-                bar.update(1)
-    tables = []
-    verdicts: list[tuple[str, str, bool, bool]] = []
-    faults: list[str] = []
-    beats = {"DSMC": 0, "DSMC-LN": 0}
-    cells = {"DSMC": 0, "DSMC-LN": 0}
-    for exp, fig_t, fig_e, tab in (("exp1", "6_4", "6_5", "6.1"), ("exp2", "6_7", "6_8", "6.2")):
-        runs = [results[exp][n] for n in ("KJSC", "KCSC", "DSMC")]
-        plots.tracking(
-            runs,
-            out / f"fig{fig_t}_{exp}_tracking.png",
-            f"{EXPERIMENTS[exp]}: tracking (Fig. {fig_t.replace('_', '.')})",
-        )
-        plots.tracking_errors(
-            runs,
-            out / f"fig{fig_e}_{exp}_errors.png",
-            f"{EXPERIMENTS[exp]}: errors (Fig. {fig_e.replace('_', '.')})",
-        )
-        text = plots.table_text(
-            results[exp],
-            servo.THESIS_TABLES[exp],
-            f"Table {tab} — {EXPERIMENTS[exp]}, {durations[exp]:.0f} s on rss6.{kind}",
-        )
-        tables.append(text)
-        for k, ax in enumerate(servo.AXES):
-            rm = {n: results[exp][n].rmse[k] for n in ("KJSC", "KCSC", "DSMC")}
-            verdicts.append((exp, ax, rm["DSMC"] < rm["KCSC"], rm["KCSC"] < rm["KJSC"]))
-        for n, r in results[exp].items():
-            if r.fault is not None:
-                faults.append(f"{exp} {n}: {r.fault}")
-        for stat in ("rmse", "mae"):
-            thesis_dsmc = servo.THESIS_TABLES[exp][stat]["DSMC"]
-            for n in ("DSMC", "DSMC-LN"):
-                ours = results[exp][n].table()[stat]
-                beats[n] += int(np.sum(np.asarray(ours) < np.asarray(thesis_dsmc)))
-                cells[n] += len(thesis_dsmc)
-    report = "\n\n".join(tables)
-    n_axes = len(verdicts)
-    dk = [f"{e} {a}" for e, a, d, _ in verdicts if not d]
-    kj = [f"{e} {a}" for e, a, _, k in verdicts if not k]
-    summary = (
-        f"RMSE ordering (thesis: DSMC < KCSC < KJSC on every axis): DSMC < KCSC on {n_axes - len(dk)}/{n_axes} axes"
-        + (f" (not on {', '.join(dk)})" if dk else "")
-        + f"; KCSC < KJSC on {n_axes - len(kj)}/{n_axes} axes"
-        + (f" (not on {', '.join(kj)})" if kj else "")
-        + ".\nAgainst the thesis's DSMC (RMSE and MAE cells of both tables): rss6 DSMC lower in "
-        + f"{beats['DSMC']}/{cells['DSMC']}, rss6 DSMC with the low-noise servo (DSMC-LN) lower in "
-        + f"{beats['DSMC-LN']}/{cells['DSMC-LN']}."
-    )
-    if faults:
-        summary += "\nController faults: " + "; ".join(faults)
-
-    # 3. How well each DSMC servo's Kalman filter did (the true pose is known in simulation).
-    lines = [
-        (
-            "3. Kalman filter inside the DSMC loop, thesis tuning vs the low-noise servo "
-            "(std of filter/camera pose error, rms rate error/true rate after 2 s; RMSE vs the true pose)"
-        )
-    ]
-    for exp in EXPERIMENTS:
-        for name, r in (("thesis", results[exp]["DSMC"]), ("low-noise", results[exp]["DSMC-LN"])):
-            noise, rate = servo.filter_statistics(r)
-            lines.append(
-                f"   {exp} {name:9s} noise x..γ {' '.join(f'{v:4.2f}' for v in noise)} | "
-                f"rate {' '.join(f'{v:4.2f}' for v in rate)} | "
-                f"RMSE {np.linalg.norm(r.rmse_true[:3]) * 1e3:.3f} mm "
-                f"{np.linalg.norm(r.rmse_true[3:]) * 1e3:.3f} mrad"
-            )
-    kalman = "\n".join(lines)
-    (out / "tables.txt").write_text(report + "\n\n" + summary + "\n\n" + kalman + "\n")
-    _say("\n2. Servo experiments (rss6 = this run; thesis = Tables 6.1/6.2)\n", quiet)
-    _say(report, quiet)
-    _say("\n" + summary, quiet)
-    _say("\n" + kalman, quiet)
-    _say(
-        f"\nwrote {out}/: 8 MCAP logs, 5 figures, tables.txt, calibrated_kinematics.toml "
-        f"({time.perf_counter() - t_start:.1f} s)",
-        quiet,
-    )
+    if not quiet:
+        print(report.text(), flush=True)
     return 0
 
 
-def _calibrate_log(args: argparse.Namespace, path: str, plant: Any = None) -> int:
+def _calibrate_log(args: argparse.Namespace, path: str, plant: Robot | None = None) -> int:
     """Calibrates from the MCAP log at ``path`` (RPBA or implicit); with the simulated ``plant`` that
     produced it, also prints Table 4.5's relative pose errors before and after."""
     import rss6
@@ -550,11 +389,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Runs one servo experiment on the simulated robot and prints RMSE/MAE per axis.",
     )
     t.add_argument("--controller", choices=CONTROLLERS, default="dsmc")
-    t.add_argument("--trajectory", choices=tuple(EXPERIMENTS), default="exp1")
+    t.add_argument("--trajectory", choices=TRAJECTORIES, default="exp1")
     t.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
     t.add_argument(
         "--tuning",
-        choices=("thesis", "low_noise"),
+        choices=TUNINGS,
         default="thesis",
         help="servo tuning: the thesis's (default) or the low-noise DSMC servo (DSMC only)",
     )

@@ -1,4 +1,7 @@
-"""Figures like the thesis's (matplotlib, Agg backend; PNG files).
+"""Figures like the thesis's (PNG files).
+
+Figures are built as :class:`matplotlib.figure.Figure` objects rendered by the Agg canvas, so the
+caller's matplotlib backend (and pyplot's figure list) is never touched.
 
 * :func:`relative_pose_errors` — Fig. 4.8: relative pose errors per test configuration, uncalibrated
   vs calibrated.
@@ -8,11 +11,18 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from os import PathLike
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from rss6.servo import TrackingResult
 
 __all__ = ["relative_pose_errors", "tracking", "tracking_errors"]
 
@@ -29,26 +39,24 @@ _TITLES = (
 _STYLE = {"KJSC": ("tab:purple", "--"), "KCSC": ("black", ":"), "DSMC": ("tab:red", "-.")}
 
 
-def _figure() -> tuple[Any, Any]:
-    import matplotlib
+def _figure() -> tuple[Figure, list[Axes]]:
+    """A 3 × 2 figure on its own Agg canvas; panels in the order x, y, z, α, β, γ (column-wise)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    fig = Figure(figsize=(11, 9))
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, 2, sharex=True)
+    return fig, list(axes.T.ravel())
 
-    fig, axes = plt.subplots(3, 2, figsize=(11, 9), sharex=True)
-    return fig, axes.T.ravel()
 
-
-def _save(fig: Any, path: str | PathLike[str]) -> None:
-    import matplotlib.pyplot as plt
-
+def _save(fig: Figure, path: str | PathLike[str]) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def relative_pose_errors(
-    uncalibrated: Any, calibrated: Any, path: str | PathLike[str], title: str = ""
+    uncalibrated: ArrayLike, calibrated: ArrayLike, path: str | PathLike[str], title: str = ""
 ) -> None:
     """Fig. 4.8: errors (n, 6) (m, rad) of the uncalibrated and the calibrated model per test
     configuration, in mm and mrad."""
@@ -69,20 +77,22 @@ def relative_pose_errors(
     _save(fig, path)
 
 
-def tracking(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
+def tracking(results: Sequence[TrackingResult], path: str | PathLike[str], title: str = "") -> None:
     """Figs. 6.4/6.7: the desired trajectory (blue solid) and the measured pose of each run
     (:class:`rss6.servo.TrackingResult`) in the thesis's line styles."""
     _per_axis(results, lambda r: r.measured, path, title, desired=True)
 
 
-def tracking_errors(results: Sequence[Any], path: str | PathLike[str], title: str = "") -> None:
+def tracking_errors(
+    results: Sequence[TrackingResult], path: str | PathLike[str], title: str = ""
+) -> None:
     """Figs. 6.5/6.8: tracking errors χ_d − χ_measured of each run."""
     _per_axis(results, lambda r: r.errors, path, title, desired=False)
 
 
 def _per_axis(
-    results: Sequence[Any],
-    series: Any,
+    results: Sequence[TrackingResult],
+    series: Callable[[TrackingResult], NDArray[np.float64]],
     path: str | PathLike[str],
     title: str,
     desired: bool,
@@ -111,7 +121,9 @@ def _per_axis(
 
 
 def table_text(
-    measured: Mapping[str, Any], thesis: Mapping[str, Mapping[str, Sequence[float]]], title: str
+    measured: Mapping[str, TrackingResult],
+    thesis: Mapping[str, Mapping[str, Sequence[float]]],
+    title: str,
 ) -> str:
     """A text table of RMSE/MAE per axis: ours beside the thesis's (mm and 1e-3 rad).
 

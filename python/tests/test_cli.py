@@ -63,6 +63,7 @@ def test_demo_quick_writes_logs_figures_and_tables(tmp_path):
         "fig6_8_exp2_errors.png",
     ]
     assert "Table 6.1" in (out / "tables.txt").read_text()
+    assert (out / "tables.txt").read_text().rstrip("\n") in r.stdout  # the same tables printed
     assert (out / "calibrated_kinematics.toml").exists()
 
 

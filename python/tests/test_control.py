@@ -104,18 +104,61 @@ def test_controllers_reject_malformed_references():
         rss6.Dsmc(KP, DP, epsilon=np.zeros(6))
 
 
-def test_kcsc_and_kjsc_move_toward_the_reference():
-    ref = (rss6.home_pose() + np.array([0.002, 0, 0, 0, 0, 0]), np.zeros(6), np.zeros(6))
+def test_kcsc_command_is_eq_6_40():
+    # θ_d = J_θ(χ_m)·(k_p e + k_d ė + k_i Σ e dt), e = χ_d − χ_m, with the thesis's gains (§5.5):
+    # k_p = 0.3, k_d = 0.001 s, k_i = 2.4 1/s, and θ_bias = 0.
+    dt = 0.033
+    pose = rss6.home_pose() + np.array([0.001, -0.002, 0.003, 0.01, -0.02, 0.015])
+    e = np.array([0.002, -0.001, 0.0005, 0.004, 0.003, -0.002])
+    e_dot = np.array([0.01, 0.02, -0.01, 0.05, -0.04, 0.03])
+    est = (pose, np.zeros(6), np.zeros(6))
+    ref = (pose + e, e_dot, np.zeros(6))
+    j = rss6.jacobian_theta(KP, pose)
     k = rss6.Kcsc(KP)
-    th = k.step(ref, (rss6.home_pose(), np.zeros(6), np.zeros(6)), 0.033)
-    assert th.shape == (6,)
-    # the command moves the joints the way J_θ says a +x step needs
-    expected = rss6.jacobian_theta(KP, rss6.home_pose()) @ np.array([1.0, 0, 0, 0, 0, 0])
-    assert np.dot(th, expected) > 0
-    j = rss6.Kjsc(KP)
-    th2 = j.step(ref, np.zeros(6), 0.033)
-    assert th2.shape == (6,) and np.dot(th2, expected) > 0
-    assert k.fault is None and j.fault is None
+    np.testing.assert_allclose(
+        k.step(ref, est, dt), j @ (0.3 * e + 0.001 * e_dot + 2.4 * e * dt), rtol=1e-12, atol=1e-15
+    )
+    # the integral accumulates; a bias shifts the command
+    np.testing.assert_allclose(
+        k.step(ref, est, dt),
+        j @ (0.3 * e + 0.001 * e_dot + 2.4 * 2 * e * dt),
+        rtol=1e-12,
+        atol=1e-15,
+    )
+    bias = np.full(6, 0.1)
+    np.testing.assert_allclose(
+        rss6.Kcsc(KP, bias=bias).step(ref, est, dt),
+        bias + j @ (0.3 * e + 0.001 * e_dot + 2.4 * e * dt),
+        rtol=1e-12,
+        atol=1e-15,
+    )
+    assert k.fault is None
+
+
+def test_kjsc_command_is_eq_6_42():
+    # θ_d = k_p e + k_d ė + k_i Σ e dt with e = IK(χ_d) − θ, ė = J_θ(χ_d) χ̇_d − θ̇ (θ̇ by differences of
+    # the potentiometer angles, 0 on the first step); thesis gains k_p = 0.3, k_d = 0.001, k_i = 2.4.
+    dt = 0.033
+    pose_d = rss6.home_pose() + np.array([0.002, 0.001, -0.001, 0.01, 0.0, -0.01])
+    pose_d_dot = np.array([0.01, 0.0, 0.02, 0.0, 0.03, 0.0])
+    ref = (pose_d, pose_d_dot, np.zeros(6))
+    theta_r = rss6.ik(KP, pose_d)
+    theta_r_dot = rss6.jacobian_theta(KP, pose_d) @ pose_d_dot
+    k = rss6.Kjsc(KP)
+    th0 = np.zeros(6)
+    e0 = theta_r - th0
+    np.testing.assert_allclose(
+        k.step(ref, th0, dt), 0.3 * e0 + 0.001 * theta_r_dot + 2.4 * e0 * dt, rtol=1e-12, atol=1e-15
+    )
+    th1 = np.full(6, 0.002)
+    e1 = theta_r - th1
+    np.testing.assert_allclose(
+        k.step(ref, th1, dt),
+        0.3 * e1 + 0.001 * (theta_r_dot - (th1 - th0) / dt) + 2.4 * (e0 + e1) * dt,
+        rtol=1e-12,
+        atol=1e-15,
+    )
+    assert k.fault is None
 
 
 def test_torque_to_position_inverts_the_drive_pid():

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import rss6
+from scipy.spatial.transform import Rotation
 
 KP = rss6.KinematicParams.nominal()
 POSE = np.array([0.01, -0.005, 0.12, 0.02, -0.01, 0.03])
@@ -130,6 +131,48 @@ def test_pose_compose_and_invert():
     np.testing.assert_allclose(ident, np.zeros(6), atol=1e-14)
 
 
+def rx(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def ry(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def rz(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def rotation_of(pose):
+    """R of a pose, read from the bindings: composing with a pure translation e_i gives p + R e_i."""
+    p = np.asarray(pose, dtype=float)
+    return np.column_stack(
+        [rss6.compose_poses(p, np.r_[np.eye(3)[i], 0, 0, 0])[:3] - p[:3] for i in range(3)]
+    )
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pose_rotation_is_rx_ry_rz_and_scipy_intrinsic_xyz(seed):
+    rng = np.random.default_rng(seed)
+    a = np.r_[rng.uniform(-0.2, 0.2, 3), rng.uniform(-1.2, 1.2, 3)]
+    b = np.r_[rng.uniform(-0.2, 0.2, 3), rng.uniform(-1.2, 1.2, 3)]
+    r_a = rotation_of(a)
+    # R = Rx(α)·Ry(β)·Rz(γ), built by hand from cos/sin …
+    np.testing.assert_allclose(r_a, rx(a[3]) @ ry(a[4]) @ rz(a[5]), atol=1e-14)
+    # … which is scipy's intrinsic "XYZ" (extrinsic "xyz" is the reverse product Rz·Ry·Rx)
+    np.testing.assert_allclose(r_a, Rotation.from_euler("XYZ", a[3:]).as_matrix(), atol=1e-14)
+    assert not np.allclose(r_a, Rotation.from_euler("xyz", a[3:]).as_matrix(), atol=1e-3)
+    # compose: p = p_a + R_a p_b, R = R_a R_b, angles back by scipy's intrinsic XYZ
+    c = rss6.compose_poses(a, b)
+    np.testing.assert_allclose(c[:3], a[:3] + r_a @ b[:3], atol=1e-14)
+    r_c = Rotation.from_euler("XYZ", a[3:]) * Rotation.from_euler("XYZ", b[3:])
+    np.testing.assert_allclose(rotation_of(c), r_c.as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(c[3:], r_c.as_euler("XYZ"), atol=1e-12)
+
+
 def test_perturbed_params_and_error_vector_round_trip():
     b = np.random.default_rng(1).normal(0, 1e-3, 60)
     kp = rss6.KinematicParams.perturbed(b)
@@ -204,9 +247,9 @@ def test_toml_round_trip(tmp_path):
 def test_bad_toml_raises_params_file_error(tmp_path):
     p = tmp_path / "bad.toml"
     p.write_text("base_joints = 3\n")
-    with pytest.raises(rss6.ParamsFileError, match="bad.toml"):
+    with pytest.raises(rss6.ParamsFileError, match=r"bad\.toml"):
         rss6.KinematicParams.load(p)
-    with pytest.raises(rss6.ParamsFileError, match="missing.toml: No such file"):
+    with pytest.raises(rss6.ParamsFileError, match=r"missing\.toml: No such file"):
         rss6.KinematicParams.load(tmp_path / "missing.toml")
 
 

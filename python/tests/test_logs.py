@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import rss6
 from rss6 import logs
+from scipy.spatial.transform import Rotation
 
 
 def streams(n=200):
@@ -48,13 +49,14 @@ def test_poses_are_foxglove_frame_transforms(tmp_path):
 
 
 def test_quaternion_convention_matches_the_core_rotation():
+    # the logged quaternion (x, y, z, w) is the rotation of the pose: R = Rx(α)·Ry(β)·Rz(γ), scipy's
+    # intrinsic "XYZ"; the core's R is read off compose_poses (p + R e_i for a pure translation e_i)
     pose = np.array([0.0, 0.0, 0.0, 0.3, -0.2, 0.5])
-    x, y, z, w = logs.euler_to_quaternion(pose)[0]
-    first_column = [1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)]
-    np.testing.assert_allclose(
-        rss6.compose_poses(pose, [1, 0, 0, 0, 0, 0])[:3], first_column, atol=1e-14
-    )
-    np.testing.assert_allclose(logs.quaternion_to_euler([[x, y, z, w]])[0], pose[3:], atol=1e-14)
+    q = logs.euler_to_quaternion(pose)[0]
+    core = np.column_stack([rss6.compose_poses(pose, np.r_[e, 0, 0, 0])[:3] for e in np.eye(3)])
+    np.testing.assert_allclose(Rotation.from_quat(q).as_matrix(), core, atol=1e-14)
+    np.testing.assert_allclose(Rotation.from_euler("XYZ", pose[3:]).as_quat(), q, atol=1e-14)
+    np.testing.assert_allclose(logs.quaternion_to_euler([q])[0], pose[3:], atol=1e-14)
 
 
 def test_truncated_file_is_readable_up_to_its_last_chunk(tmp_path):

@@ -22,9 +22,6 @@ def test_track_shapes_and_statistics():
         assert arr.shape == (n, 6) and arr.dtype == np.float64, name
     for name in ("frame_desired", "measured", "frame_true", "estimate", "estimate_dot", "sliding"):
         assert getattr(r, name).shape == (m, 6), name
-    e = r.frame_desired - r.measured
-    np.testing.assert_allclose(r.rmse, np.sqrt((e**2).mean(0)))
-    np.testing.assert_allclose(r.mae, np.abs(e).mean(0))
     assert r.controller == "DSMC" and r.trajectory == "exp1" and r.fault is None
     # camera poses converted with the true external parameters equal the true pose up to zero-mean noise
     d = r.measured - r.frame_true
@@ -43,7 +40,7 @@ def test_callable_trajectory_is_tabulated():
     plant = rss6.ModelSim(KP, DP, seed=4)
     r = servo.track(plant, "kcsc", traj.sample, duration=1.0)
     np.testing.assert_allclose(r.desired[500], traj.sample(0.5)[0], atol=1e-12)
-    with pytest.raises(rss6.ShapeError, match="pose at t = 0.000 s"):
+    with pytest.raises(rss6.ShapeError, match=r"pose at t = 0\.000 s"):
         servo.track(plant, "kcsc", lambda t: (np.zeros(5), np.zeros(6), np.zeros(6)), duration=0.1)
     with pytest.raises(rss6.InvalidInputError, match="controller must be"):
         servo.track(plant, "pid", "exp1", duration=0.1)
@@ -67,13 +64,44 @@ def test_track_writes_and_reads_back_an_mcap_log(tmp_path):
     assert (md["controller"], md["trajectory"], md["status"]) == ("KCSC", "exp2", "finished")
 
 
-def test_thesis_tables_are_complete():
-    for exp in ("exp1", "exp2"):
-        for stat in ("rmse", "mae"):
-            for c in ("KJSC", "KCSC", "DSMC"):
-                assert len(servo.THESIS_TABLES[exp][stat][c]) == 6
-    # Table 6.1's DSMC x RMSE
-    assert servo.THESIS_TABLES["exp1"]["rmse"]["DSMC"][0] == 0.44
+def test_statistics_of_a_known_error_sequence():
+    # camera errors χ_d − χ_measured of 1, −1, 1, 7 (× 1 mm on x … × 6 mrad on γ): RMSE √13 = 3.6056,
+    # MAE 2.5; true-pose errors a constant 2 (× the same sizes): RMSE = MAE = 2.
+    size = np.array([1e-3, 2e-3, 3e-3, 4e-3, 5e-3, 6e-3])
+    desired = np.tile([0.01, -0.02, 0.12, 0.1, -0.2, 0.3], (4, 1))
+    measured = desired - np.outer([1.0, -1.0, 1.0, 7.0], size)
+    true = desired - 2 * size
+    one = np.zeros((1, 6))
+    r = servo.TrackingResult(
+        controller="X",
+        trajectory="hand",
+        time=np.zeros(1),
+        desired=one,
+        true=one,
+        theta_cmd=one,
+        torque=one,
+        frame_time=np.arange(4) * 0.033,
+        frame_desired=desired,
+        measured=measured,
+        frame_true=true,
+        estimate=desired,
+        estimate_dot=0 * desired,
+        sliding=0 * desired,
+    )
+    np.testing.assert_allclose(r.rmse, 3.605551275463989 * size, rtol=1e-12)
+    np.testing.assert_allclose(r.mae, 2.5 * size, rtol=1e-12)
+    np.testing.assert_allclose(r.rmse_true, 2 * size, rtol=1e-12)
+    np.testing.assert_allclose(r.mae_true, 2 * size, rtol=1e-12)
+    # the thesis's table units: mm and 1e-3 rad
+    np.testing.assert_allclose(r.table()["mae"], [2.5, 5.0, 7.5, 10.0, 12.5, 15.0], rtol=1e-12)
+    np.testing.assert_allclose(r.errors[3], 7 * size, rtol=1e-12)
+    # no camera frame: no statistics
+    empty = servo.TrackingResult(
+        "X",
+        "hand",
+        *([np.zeros(0)] + [np.zeros((0, 6))] * 4 + [np.zeros(0)] + [np.zeros((0, 6))] * 6),
+    )
+    assert np.isnan(empty.rmse).all() and np.isnan(empty.mae_true).all()
 
 
 def test_low_noise_servo_tracks_every_pose_rate_on_the_rapier_plant():
@@ -104,5 +132,5 @@ def test_low_noise_tuning_is_dsmc_only():
     with pytest.raises(rss6.InvalidInputError, match="tuning must be"):
         servo.track(plant, "dsmc", "exp1", duration=0.1, tuning="fast")
     short = servo.track(plant, "dsmc", "exp1", duration=0.5)
-    with pytest.raises(rss6.InvalidInputError, match="frames after 2.0 s"):
+    with pytest.raises(rss6.InvalidInputError, match=r"frames after 2\.0 s"):
         servo.filter_statistics(short)
