@@ -9,6 +9,8 @@ step "cargo fmt --all --check"
 cargo fmt --all --check
 step "cargo clippy --workspace --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
+step "offline estimation builds without the physics engine (rss6-exp, rss6-sim without 'rapier')"
+cargo check -p rss6-exp -p rss6-sim --no-default-features
 step "cargo doc --no-deps (warnings are errors)"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --exclude rss6-py
 step "cargo test --workspace (rss6-py is tested through pytest below)"
