@@ -200,21 +200,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shared_trig_matches_the_explicit_formulas() {
+    fn rotation_is_the_product_of_elementary_rotations_and_rates_invert() {
+        // Eq. 3.2, R = Rx(α)·Ry(β)·Rz(γ), checked against an independent construction: nalgebra's
+        // axis-angle rotations about x, y, z multiplied in that order.
+        use nalgebra::{Rotation3, Vector3};
+        let cases = [
+            (0.3, -0.7, 1.1),
+            (-2.9, 1.4, 3.0),
+            (0.0, core::f64::consts::FRAC_PI_2, -0.4),
+        ];
+        for (a, b, g) in cases {
+            let rx = Rotation3::from_axis_angle(&Vector3::x_axis(), a);
+            let ry = Rotation3::from_axis_angle(&Vector3::y_axis(), b);
+            let rz = Rotation3::from_axis_angle(&Vector3::z_axis(), g);
+            let product = (rx * ry * rz).into_inner();
+            assert!(
+                (rotation(a, b, g) - product).amax() < 1e-15,
+                "({a}, {b}, {g})"
+            );
+        }
         let (a, b, g) = (0.3, -0.7, 1.1);
-        let (sa, ca, sb, cb, sg, cg) = (sin(a), cos(a), sin(b), cos(b), sin(g), cos(g));
-        let explicit = Mat3::new(
-            cb * cg,
-            -cb * sg,
-            sb,
-            ca * sg + cg * sb * sa,
-            -sb * sa * sg + ca * cg,
-            -cb * sa,
-            sa * sg - ca * cg * sb,
-            ca * sb * sg + cg * sa,
-            cb * ca,
-        );
-        assert!((rotation(a, b, g) - explicit).amax() < 1e-15);
         let w = Vec3::new(0.2, -0.5, 0.9);
         let rates = EulerTrig::new(a, b, g).euler_rates(&w);
         let back = rates.map(|r| euler_rate_jacobian(a, b) * r);
