@@ -61,50 +61,33 @@ impl<P: Physics> Robot for rss6_sim::Robot<P> {
     }
 }
 
-impl<R: Robot + ?Sized> Robot for &mut R {
-    fn dt(&self) -> f64 {
-        (**self).dt()
-    }
-    fn time(&self) -> f64 {
-        (**self).time()
-    }
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<()> {
-        (**self).step_joint_command(theta_cmd)
-    }
-    fn camera(&mut self) -> Option<Vec6> {
-        (**self).camera()
-    }
-    fn potentiometers(&self) -> Vec6 {
-        (**self).potentiometers()
-    }
-    fn truth(&self) -> Option<Truth> {
-        (**self).truth()
-    }
-    fn true_state(&self) -> Option<TrueState> {
-        (**self).true_state()
-    }
+/// A pointer to a robot is the robot.
+macro_rules! forward_robot {
+    ($($ptr:ty),*) => {$(
+        impl<R: Robot + ?Sized> Robot for $ptr {
+            fn dt(&self) -> f64 {
+                (**self).dt()
+            }
+            fn time(&self) -> f64 {
+                (**self).time()
+            }
+            fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<()> {
+                (**self).step_joint_command(theta_cmd)
+            }
+            fn camera(&mut self) -> Option<Vec6> {
+                (**self).camera()
+            }
+            fn potentiometers(&self) -> Vec6 {
+                (**self).potentiometers()
+            }
+            fn truth(&self) -> Option<Truth> {
+                (**self).truth()
+            }
+            fn true_state(&self) -> Option<TrueState> {
+                (**self).true_state()
+            }
+        }
+    )*};
 }
 
-impl<R: Robot + ?Sized> Robot for Box<R> {
-    fn dt(&self) -> f64 {
-        (**self).dt()
-    }
-    fn time(&self) -> f64 {
-        (**self).time()
-    }
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<()> {
-        (**self).step_joint_command(theta_cmd)
-    }
-    fn camera(&mut self) -> Option<Vec6> {
-        (**self).camera()
-    }
-    fn potentiometers(&self) -> Vec6 {
-        (**self).potentiometers()
-    }
-    fn truth(&self) -> Option<Truth> {
-        (**self).truth()
-    }
-    fn true_state(&self) -> Option<TrueState> {
-        (**self).true_state()
-    }
-}
+forward_robot!(&mut R, Box<R>);
