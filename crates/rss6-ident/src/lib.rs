@@ -17,6 +17,7 @@ mod calibrate;
 mod closure;
 mod data;
 mod error;
+mod excitation;
 mod generator;
 mod model;
 mod plant;
@@ -34,6 +35,9 @@ pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,
 };
 pub use crate::error::{IdentError, Method, Result};
+pub use crate::excitation::{
+    base_columns, observability_of, Excitation, ExcitationLimits, ExcitationProblem, Violation,
+};
 pub use crate::generator::{
     perturb_external, AnalyticRobot, NoiseModel, TrueRobot, NOMINAL_SENSOR_IN_BASE,
     NOMINAL_TARGET_IN_EFFECTOR,

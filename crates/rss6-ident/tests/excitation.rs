@@ -1,0 +1,138 @@
+//! Exciting trajectories (§5.4): rest at both ends, feasibility checks, identifiable columns, O_in.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rss6_core::{home_pose, KinematicParams, Vec6};
+use rss6_ctrl::Trajectory;
+use rss6_ident::{base_columns, Excitation, ExcitationLimits};
+
+fn random_free(n: usize, scale: [f64; 2], seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let k = Excitation::free_per_axis(n);
+    (0..6 * k)
+        .map(|j| {
+            let s = if j / k < 3 { scale[0] } else { scale[1] };
+            s * rng.random_range(-1.0..1.0)
+        })
+        .collect()
+}
+
+#[test]
+fn an_at_rest_trajectory_starts_and_ends_at_rest_at_its_pose() {
+    let start = Vec6::new(0.002, -0.003, 0.116, 0.01, -0.02, 0.005);
+    let e = Excitation::at_rest(5, 0.1, &start, &random_free(5, [0.01, 0.05], 1)).unwrap();
+    for t in [0.0, e.period()] {
+        let r = e.at(t);
+        assert!(
+            (r.pose - start).amax() < 1e-15,
+            "t = {t}: {}",
+            (r.pose - start).amax()
+        );
+        assert!(r.pose_dot.amax() < 1e-15);
+        assert!(r.pose_ddot.amax() < 1e-14);
+    }
+    // The derivatives are those of the pose (central differences, h = 1e-5 s).
+    let (t, h) = (3.3, 1e-5);
+    let (a, b, c) = (e.at(t - h), e.at(t), e.at(t + h));
+    assert!(((c.pose - a.pose) / (2.0 * h) - b.pose_dot).amax() < 1e-8);
+    assert!(((c.pose_dot - a.pose_dot) / (2.0 * h) - b.pose_ddot).amax() < 1e-7);
+    // After one period the reference holds the start pose at rest.
+    let held = e.sample(e.period() + 1.0);
+    assert_eq!(held.pose_dot, Vec6::zeros());
+    assert!((held.pose - start).amax() < 1e-15);
+    assert!(Excitation::at_rest(1, 0.1, &start, &[]).is_err());
+    assert!(Excitation::at_rest(5, 0.1, &start, &[0.0; 5]).is_err());
+}
+
+#[test]
+fn the_checks_name_the_violated_constraint_and_its_time() {
+    let kp = KinematicParams::nominal();
+    let limits = ExcitationLimits::default();
+    let n = 5;
+    let still = Excitation::at_rest(
+        n,
+        0.1,
+        &home_pose(),
+        &vec![0.0; 6 * Excitation::free_per_axis(n)],
+    )
+    .unwrap();
+    assert_eq!(still.check(&kp, &limits), None);
+    let gentle =
+        Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.0005, 0.002], 2)).unwrap();
+    assert_eq!(gentle.check(&kp, &limits), None);
+    // Large rotations leave the stroke (with its margin) somewhere in the period.
+    let wild = Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.0, 0.5], 3)).unwrap();
+    let v = wild.check(&kp, &limits).expect("must be infeasible");
+    assert!(v.time > 0.0 && v.time < wild.period());
+    assert!(v.excess > 0.0);
+    println!("wild trajectory: {v}");
+    // A tight acceleration limit is named as such.
+    let tight = ExcitationLimits {
+        max_acceleration: Vec6::repeat(1e-6),
+        ..limits
+    };
+    assert_eq!(
+        gentle.check(&kp, &tight).unwrap().constraint,
+        "acceleration"
+    );
+    let slow = ExcitationLimits {
+        max_joint_rate: 1e-6,
+        ..limits
+    };
+    assert_eq!(gentle.check(&kp, &slow).unwrap().constraint, "joint rate");
+}
+
+#[test]
+fn identifiable_columns_and_observability() {
+    let kp = KinematicParams::nominal();
+    let n = 5;
+    let e = Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.0005, 0.002], 4)).unwrap();
+    assert_eq!(e.check(&kp, &ExcitationLimits::default()), None);
+    let h = e.stacked_regressor(&kp, 200).unwrap();
+    let base = base_columns(&h, 1e-8);
+    // Structural rank of the regressor with vertical gravity: 31 of 64 (docs/dynamics.md).
+    println!(
+        "base columns at 1e-8: {}; at the thesis's 1e-3: {}",
+        base.len(),
+        base_columns(&h, 1e-3).len()
+    );
+    assert_eq!(base.len(), 31, "{base:?}");
+    let (o1, c1) = e.observability(&kp, &base, 200).unwrap();
+    // Twice the excitation: larger velocities and accelerations, better conditioned columns.
+    let e2 = Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.001, 0.004], 4)).unwrap();
+    let (o2, c2) = e2.observability(&kp, &base, 200).unwrap();
+    println!("O_in {o1:.4e} -> {o2:.4e}, cond {c1:.3e} -> {c2:.3e}");
+    assert!(o1 > 0.0 && o2 > o1);
+    assert!(c1.is_finite() && c1 >= 1.0);
+}
+
+#[test]
+fn the_objective_prefers_feasible_and_more_exciting_candidates() {
+    let kp = KinematicParams::nominal();
+    let n = 5;
+    let h = Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.0005, 0.002], 4))
+        .unwrap()
+        .stacked_regressor(&kp, 100)
+        .unwrap();
+    let problem = rss6_ident::ExcitationProblem {
+        kp,
+        limits: ExcitationLimits::default(),
+        harmonics: n,
+        f0: 0.1,
+        start: home_pose(),
+        columns: base_columns(&h, 1e-8),
+        samples: 100,
+    };
+    let pop = vec![
+        random_free(n, [0.0005, 0.002], 4),
+        random_free(n, [0.0007, 0.0028], 4),
+        random_free(n, [0.0, 0.5], 3),
+    ];
+    let f = problem.objectives(&pop);
+    assert!(f[0] < 0.0 && f[1] < f[0], "{f:?}");
+    assert!(
+        f[2] > 1.0,
+        "an infeasible candidate scores above every feasible one: {f:?}"
+    );
+}
