@@ -53,6 +53,7 @@ from rss6.errors import (
     CalibrationError,
     ControllerFaultError,
     CorruptLogError,
+    IdentificationError,
     InvalidInputError,
     InvalidParameterError,
     LogError,
@@ -73,7 +74,7 @@ try:  # the rapier plant (rss6-sim) is optional in builds without it
 except ImportError:  # pragma: no cover - depends on the build
     Plant = None  # type: ignore[assignment,misc]
 
-from rss6 import calibrate, logs, servo
+from rss6 import calibrate, identify, logs, servo
 
 __version__ = "0.1.0"
 
@@ -85,6 +86,7 @@ __all__ = [
     "CorruptLogError",
     "Dsmc",
     "DynamicParams",
+    "IdentificationError",
     "InvalidInputError",
     "InvalidParameterError",
     "KalmanFilter",
@@ -117,6 +119,7 @@ __all__ = [
     "friction",
     "gravity",
     "home_pose",
+    "identify",
     "ik",
     "ik_batch",
     "inverse_dynamics",

@@ -13,6 +13,7 @@ __all__ = [
     "CalibrationResult",
     "Dsmc",
     "DynamicParams",
+    "ExcitationProblem",
     "KalmanFilter",
     "Kcsc",
     "KinematicParams",
@@ -26,6 +27,7 @@ __all__ = [
     "compose_poses",
     "coriolis",
     "dynamics_terms",
+    "excitation_at",
     "fk",
     "fk_batch",
     "forward_dynamics",
@@ -469,3 +471,30 @@ def calibration_study(
     stroke: tuple[float, float] | None = None,
     plant: bool = False,
 ) -> list[dict[str, Any]]: ...
+
+class ExcitationProblem:
+    def __init__(
+        self,
+        kp: KinematicParams,
+        *,
+        harmonics: int = 5,
+        f0: float = 0.1,
+        start: ArrayLike | None = None,
+        stroke: tuple[float, float] | None = None,
+        stroke_margin: float = 0.15,
+        max_joint_rate: float = 1.5,
+        samples: int = 200,
+        rank_threshold: float = 1e-8,
+    ) -> None: ...
+    @property
+    def dimension(self) -> int: ...
+    @property
+    def columns(self) -> list[int]: ...
+    @property
+    def start(self) -> _F64: ...
+    def objectives(self, population: ArrayLike) -> _F64: ...
+    def coefficients(self, free: ArrayLike) -> _F64: ...
+    def check(self, coefficients: ArrayLike) -> tuple[str, float, float] | None: ...
+    def observability(self, coefficients: ArrayLike) -> tuple[float, float]: ...
+
+def excitation_at(f0: float, coefficients: ArrayLike, t: float) -> tuple[_F64, _F64, _F64]: ...

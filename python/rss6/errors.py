@@ -12,6 +12,7 @@ __all__ = [
     "CalibrationError",
     "ControllerFaultError",
     "CorruptLogError",
+    "IdentificationError",
     "InvalidInputError",
     "InvalidParameterError",
     "LogError",
@@ -95,6 +96,12 @@ class SimulationError(Rss6Error):
 
 class CalibrationError(Rss6Error):
     """Calibration could not produce a trustworthy answer (``rss6_ident`` errors)."""
+
+
+class IdentificationError(Rss6Error):
+    """Dynamic identification could not produce a trustworthy answer: an infeasible exciting
+    trajectory (the message names the constraint and the time), no camera frames, a parameter that is
+    not identifiable, no convergence."""
 
 
 class LogError(Rss6Error):

@@ -12,6 +12,7 @@ mod convert;
 mod ctrl;
 mod dynamics;
 mod errors;
+mod identify;
 mod kinematics;
 mod params;
 mod plant;
@@ -59,5 +60,7 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
     m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
+    m.add_class::<identify::PyExcitationProblem>()?;
+    m.add_function(wrap_pyfunction!(identify::excitation_at, m)?)?;
     Ok(())
 }
