@@ -73,6 +73,32 @@ pub enum IdentError {
     /// An error from the kinematics core.
     #[error("kinematics: {0}")]
     Core(#[from] CoreError),
+    /// The simulated identification loop failed (the model left its workspace, a stage was singular,
+    /// a command was not finite).
+    #[error("simulation of the identification loop failed at t = {time:.3} s: {message}")]
+    Simulation {
+        /// Time from the start of the run (s).
+        time: f64,
+        /// What failed.
+        message: String,
+    },
+    /// Identification data without camera frames, or frames the model's loop does not produce.
+    #[error("no usable camera frames: {0}")]
+    NoCameraFrames(String),
+    /// Parameters requested for estimation that the data cannot identify.
+    #[error("not identifiable from these data: {}", names.join(", "))]
+    Unidentifiable {
+        /// Names of the unidentifiable parameters.
+        names: Vec<String>,
+    },
+    /// Levenberg–Marquardt stopped without meeting the stopping rules of eq. 5.9.
+    #[error("CLOE did not converge in {iterations} iterations (cost history {cost_history:?})")]
+    NotConverged {
+        /// Iterations run.
+        iterations: usize,
+        /// Cost after each accepted iteration (first: the start).
+        cost_history: Vec<f64>,
+    },
     /// A robot data source failed.
     #[error("robot source: {0}")]
     Source(String),

@@ -14,6 +14,7 @@
 #![allow(non_snake_case)]
 
 mod calibrate;
+mod cloe;
 mod closure;
 mod data;
 mod error;
@@ -30,6 +31,11 @@ pub use crate::calibrate::{
     gauge_directions, implicit, implicit_with_progress, min_configurations, parameter_vector,
     residual_norm_sum, residuals_and_jacobian, rpba, rpba_with_progress, CalibrationOptions,
     CalibrationResult, DroppedConfiguration, JacobianMode, Progress,
+};
+pub use crate::cloe::{
+    cloe, parameter_names as loop_parameter_names, simulate as simulate_loop, table_5_2_truth,
+    CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams, LoopRun,
+    DRIVE_UNIT_TO_NM, N_A, N_PSI,
 };
 pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,

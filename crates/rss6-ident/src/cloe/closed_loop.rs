@@ -1,0 +1,648 @@
+//! The simulated closed loop of Fig. 5.1 as a function of the identification vector A (eq. 5.6), and
+//! its forward sensitivities ∂χ_s/∂A.
+//!
+//! This is a lean copy of what `rss6_exp::ident::run` does on the model twin `rss6_sim::ModelSim`
+//! (the same tick order, the same frame clock, the same held commands, the same arithmetic), kept
+//! here because the sensitivities need the loop's internal state. `tests/cloe_loop.rs` checks that
+//! both give the same χ_s. Per 1 kHz tick:
+//!
+//! 1. if a camera frame is pending, the visual PID (eq. 5.4) turns it and its backward-difference
+//!    rate into U_θ, held until the next frame (sample-and-hold at the camera rate);
+//! 2. the drive's PID (eq. 5.5) tracks U_θ on the held potentiometer angle (sampled every
+//!    `pot_period`, drive convention), torques clamped at ±`torque_limit`;
+//! 3. one RK4 step of the forward dynamics (eq. 6.1–6.4) with the torques held;
+//! 4. the potentiometers and the camera clock advance (capture every `camera_period`, delivered
+//!    `camera_latency` later).
+//!
+//! # Sensitivities
+//!
+//! Every state of the loop carries its derivative with respect to the active columns of A: the
+//! model state (χ, χ̇), the held potentiometer angle, the drive PID's integral and previous error,
+//! the held command, the visual PID's integral and last frame, and the frames waiting in the camera
+//! queue. The recursion is the exact derivative of the discrete loop (RK4 included), so it matches
+//! central differences of [`simulate`] up to their own error. At each RK4 stage
+//!
+//! ```text
+//! dχ̈ = F_χ dχ + F_χ̇ dχ̇ + M̃⁻¹J_θᵀ dτ − M̃⁻¹J_θᵀ Γ(χ, χ̇, χ̈) dΞ
+//! ```
+//!
+//! (the dynamics are linear in Ξ: τ_a = Γ Ξ, eq. 5.1). F_χ and F_χ̇ are central differences of the
+//! forward dynamics with the Coulomb signs frozen at the stage (Coulomb friction enters as a known
+//! torque, so no step can cross sign(θ̇) = 0 and the difference is the derivative almost
+//! everywhere): 24 forward-dynamics calls per stage. In χ̇ the forward dynamics are quadratic, so
+//! that difference is exact whatever the step; in χ the step is 10⁻⁶ (truncation ~10⁻¹²). This is
+//! the dominant cost (see `benches/examples/cloe_cost.rs`); analytic state Jacobians in rss6-core
+//! would remove it. Sign changes of θ̇ inside a step and torque saturation are treated as the
+//! discrete loop treats them: the derivative of sign is 0, of a saturated torque 0.
+
+use crate::error::{IdentError, Result};
+use nalgebra::{DMatrix, Dyn, OMatrix, U6};
+use rss6_core::{
+    forward_dynamics_with_gravity, ik, jacobian_theta, mass_matrix, regressor_with_gravity,
+    DynamicParams, KinematicParams, Mat6, Vec3, Vec6, GRAVITY, LEGS, N_DYN,
+};
+use rss6_ctrl::{CartesianPidGains, PidGains, Trajectory};
+use std::collections::VecDeque;
+
+/// Length of the identification vector A = [Ξ (64); l_p, l_i, l_d] (eq. 5.6).
+pub const N_A: usize = N_DYN + 3;
+
+/// A 6 × p block of sensitivities (rows: a 6-vector's components, columns: active parameters).
+type Sens = OMatrix<f64, U6, Dyn>;
+
+/// Everything about the loop except A: the model's kinematics, the drive's convention, the outer
+/// loop's gains and the timing. Mirrors `rss6_exp::IdentSpec` plus the twin's `SimConfig`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopConfig {
+    /// The model's (calibrated) kinematics: dynamics model, potentiometers and the visual PID's J_θ.
+    pub kp: KinematicParams,
+    /// The drive's joint convention (nominal η, Δθ).
+    pub drive: KinematicParams,
+    /// The outer visual PID's gains (thesis: k_p = 0.3, k_i = 2.4, k_d = 0.001).
+    pub gains: CartesianPidGains,
+    /// Joint-loop period (s), 1e-3.
+    pub dt: f64,
+    /// Drive torque limit (N·m).
+    pub torque_limit: f64,
+    /// Potentiometer sampling period (s), 2e-3.
+    pub pot_period: f64,
+    /// Camera frame period (s), 0.033.
+    pub camera_period: f64,
+    /// Camera latency (s), 0 unless measured.
+    pub camera_latency: f64,
+    /// Gravity in the base frame (m/s²).
+    pub gravity: Vec3,
+    /// The pose the robot rests at when the run starts (m, rad).
+    pub start: Vec6,
+    /// Run length (s).
+    pub duration: f64,
+}
+
+impl LoopConfig {
+    /// The thesis's loop on `kp` from rest at `start` for `duration` s: nominal drive convention,
+    /// thesis outer gains, 1 kHz, 500 Hz potentiometers, 0.033 s frames without latency, 30 N·m.
+    pub fn new(kp: KinematicParams, start: Vec6, duration: f64) -> Self {
+        LoopConfig {
+            kp,
+            drive: KinematicParams::nominal(),
+            gains: CartesianPidGains::thesis(),
+            dt: 1e-3,
+            torque_limit: 30.0,
+            pot_period: 2e-3,
+            camera_period: 0.033,
+            camera_latency: 0.0,
+            gravity: GRAVITY,
+            start,
+            duration,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let pos = [
+            ("dt", self.dt),
+            ("torque_limit", self.torque_limit),
+            ("pot_period", self.pot_period),
+            ("camera_period", self.camera_period),
+            ("duration", self.duration),
+        ];
+        for (name, v) in pos {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(IdentError::InvalidInput(format!(
+                    "{name} must be finite and > 0, got {v}"
+                )));
+            }
+        }
+        if !(self.camera_latency.is_finite() && self.camera_latency >= 0.0) {
+            return Err(IdentError::InvalidInput(format!(
+                "camera latency must be finite and >= 0, got {}",
+                self.camera_latency
+            )));
+        }
+        self.kp.validate()?;
+        self.drive.validate()?;
+        Ok(())
+    }
+}
+
+/// The identification vector A (eq. 5.6): the dynamic parameters Ξ and the drive PID's gains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopParams {
+    /// Ξ: masses, inertias, friction.
+    pub dynamics: DynamicParams,
+    /// l_p, l_i, l_d of the drive's PID (eq. 5.5).
+    pub pid: PidGains,
+}
+
+impl LoopParams {
+    /// A as a 67-vector [Ξ; l_p, l_i, l_d].
+    pub fn to_vector(&self) -> [f64; N_A] {
+        let mut a = [0.0; N_A];
+        a[..N_DYN].copy_from_slice(&self.dynamics.to_vector());
+        a[N_DYN..].copy_from_slice(&self.pid.to_array());
+        a
+    }
+
+    /// The inverse of [`Self::to_vector`].
+    pub fn from_vector(a: &[f64; N_A]) -> Self {
+        let mut xi = [0.0; N_DYN];
+        xi.copy_from_slice(&a[..N_DYN]);
+        LoopParams {
+            dynamics: DynamicParams::from_vector(&xi),
+            pid: PidGains {
+                lp: a[N_DYN],
+                li: a[N_DYN + 1],
+                ld: a[N_DYN + 2],
+            },
+        }
+    }
+}
+
+/// Names of the 67 entries of A, e.g. "platform.m", "wrench3.Iz", "link1.Ix", "fc2", "fv6", "lp".
+pub fn parameter_names() -> Vec<String> {
+    let mut names = Vec::with_capacity(N_A);
+    let body = |names: &mut Vec<String>, b: &str| {
+        for q in ["m", "Ix", "Iy", "Iz"] {
+            names.push(format!("{b}.{q}"));
+        }
+    };
+    body(&mut names, "platform");
+    for i in 1..=LEGS {
+        body(&mut names, &format!("wrench{i}"));
+    }
+    for i in 1..=LEGS {
+        body(&mut names, &format!("link{i}"));
+    }
+    for i in 1..=LEGS {
+        names.push(format!("fc{i}"));
+    }
+    for i in 1..=LEGS {
+        names.push(format!("fv{i}"));
+    }
+    names.extend(["lp", "li", "ld"].map(String::from));
+    names
+}
+
+/// What one simulation of the loop returns: the camera frames the visual PID consumed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopRun {
+    /// Time (s from the start) of the tick at which each frame was consumed.
+    pub t: Vec<f64>,
+    /// χ_s of each frame (m, rad): the model's pose at the frame's capture.
+    pub chi: Vec<Vec6>,
+    /// ∂χ_s/∂A of the requested columns: rows 6k..6k+6 belong to frame k; `None` without
+    /// sensitivities.
+    pub jacobian: Option<DMatrix<f64>>,
+    /// The active columns of A the Jacobian's columns refer to.
+    pub columns: Vec<usize>,
+}
+
+/// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
+/// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
+///
+/// Errors: [`IdentError::Simulation`] when the model leaves its workspace, a stage is singular or a
+/// command is not finite (with the time); [`IdentError::InvalidInput`] for bad configurations or
+/// column indices.
+pub fn simulate<T: Trajectory + ?Sized>(
+    cfg: &LoopConfig,
+    a: &LoopParams,
+    reference: &T,
+    columns: Option<&[usize]>,
+) -> Result<LoopRun> {
+    cfg.validate()?;
+    if let Some(c) = columns {
+        if let Some(bad) = c.iter().find(|&&j| j >= N_A) {
+            return Err(IdentError::InvalidInput(format!(
+                "column {bad} is not an index into A (0..{N_A})"
+            )));
+        }
+    }
+    let mut sim = Lean::new(cfg, a, columns.map(<[usize]>::to_vec))?;
+    sim.run(reference)
+}
+
+/// The loop's state (and its sensitivities when `sens` is set).
+struct Lean<'a> {
+    cfg: &'a LoopConfig,
+    dp: DynamicParams,
+    /// `dp` without Coulomb friction (for the frozen-sign state Jacobians).
+    dp_nc: DynamicParams,
+    pid: PidGains,
+    pot_ticks: u64,
+    // Model state.
+    pose: Vec6,
+    pose_dot: Vec6,
+    theta_meas: Vec6,
+    // Drive PID.
+    integral: [f64; LEGS],
+    prev_error: [f64; LEGS],
+    primed: bool,
+    // Visual PID.
+    bias: Vec6,
+    v_integral: Vec6,
+    command: Vec6,
+    last_frame: Option<(f64, Vec6)>,
+    // Camera.
+    next_capture: f64,
+    pending: VecDeque<(f64, Vec6, Option<Sens>)>,
+    sens: Option<SensState>,
+}
+
+struct SensState {
+    columns: Vec<usize>,
+    /// Scale η_nom/η_model of the potentiometer angle in the drive's convention.
+    pot_scale: Vec6,
+    p: Sens,
+    v: Sens,
+    theta_meas: Sens,
+    integral: Sens,
+    prev_error: Sens,
+    command: Sens,
+    v_integral: Sens,
+    last_frame: Option<Sens>,
+}
+
+impl SensState {
+    fn zeros(columns: Vec<usize>, pot_scale: Vec6) -> Self {
+        let z = || Sens::zeros(columns.len());
+        SensState {
+            p: z(),
+            v: z(),
+            theta_meas: z(),
+            integral: z(),
+            prev_error: z(),
+            command: z(),
+            v_integral: z(),
+            last_frame: None,
+            columns,
+            pot_scale,
+        }
+    }
+}
+
+/// One RK4 stage's acceleration and (optionally) its derivatives.
+struct Stage {
+    a: Vec6,
+    /// F_χ, F_χ̇, M̃⁻¹J_θᵀ, and −M̃⁻¹J_θᵀΓ restricted to the active Ξ columns.
+    jac: Option<(Mat6, Mat6, Mat6, Sens)>,
+}
+
+const EPS_CLOCK: f64 = 1e-9;
+
+impl<'a> Lean<'a> {
+    fn new(cfg: &'a LoopConfig, a: &LoopParams, columns: Option<Vec<usize>>) -> Result<Self> {
+        let theta = ik(&cfg.kp, &cfg.start)?;
+        let mut dp_nc = a.dynamics;
+        dp_nc.coulomb = [0.0; LEGS];
+        let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
+        let theta_meas = pot_angle(cfg, &theta);
+        let pot_scale = Vec6::from_fn(|i, _| cfg.drive.eta[i] / cfg.kp.eta[i]);
+        // The visual PID starts from the drive-convention angle of the first reading.
+        let bias = theta_meas;
+        let s = Lean {
+            cfg,
+            dp: a.dynamics,
+            dp_nc,
+            pid: a.pid,
+            pot_ticks,
+            pose: cfg.start,
+            pose_dot: Vec6::zeros(),
+            theta_meas,
+            integral: [0.0; LEGS],
+            prev_error: [0.0; LEGS],
+            primed: false,
+            bias,
+            v_integral: Vec6::zeros(),
+            command: bias,
+            last_frame: None,
+            next_capture: 0.0,
+            pending: VecDeque::new(),
+            sens: columns.map(|c| SensState::zeros(c, pot_scale)),
+        };
+        // Nothing is captured yet: the frame of t = 0 is taken by the first `camera_tick(0.0)`.
+        Ok(s)
+    }
+
+    fn time(&self, tick: u64) -> f64 {
+        tick as f64 * self.cfg.dt
+    }
+
+    /// Advances the camera clock to `time`: captures, then returns the latest delivered frame.
+    fn camera_tick(&mut self, time: f64) -> Option<(Vec6, Option<Sens>)> {
+        if time + EPS_CLOCK >= self.next_capture {
+            let s = self.sens.as_ref().map(|s| s.p.clone());
+            self.pending
+                .push_back((self.next_capture + self.cfg.camera_latency, self.pose, s));
+            self.next_capture += self.cfg.camera_period;
+        }
+        let mut out = None;
+        while let Some((t_avail, _, _)) = self.pending.front() {
+            if *t_avail <= time + EPS_CLOCK {
+                out = self.pending.pop_front().map(|(_, m, s)| (m, s));
+            } else {
+                break;
+            }
+        }
+        out
+    }
+
+    fn run<T: Trajectory + ?Sized>(&mut self, reference: &T) -> Result<LoopRun> {
+        let cfg = self.cfg;
+        let ticks = (cfg.duration / cfg.dt).round() as u64;
+        let mut out = LoopRun {
+            t: Vec::new(),
+            chi: Vec::new(),
+            jacobian: None,
+            columns: self
+                .sens
+                .as_ref()
+                .map(|s| s.columns.clone())
+                .unwrap_or_default(),
+        };
+        let mut jac_rows: Vec<Sens> = Vec::new();
+        let mut frame = self.camera_tick(0.0);
+        for tick in 0..ticks {
+            let t = self.time(tick);
+            if let Some((chi, s_chi)) = frame.take() {
+                self.visual_pid(t, reference, &chi, s_chi.as_ref())?;
+                out.t.push(t);
+                out.chi.push(chi);
+                if let Some(s) = s_chi {
+                    jac_rows.push(s);
+                }
+            }
+            let tau_sens = self.drive_pid();
+            self.rk4(&tau_sens, t)?;
+            let tick_new = tick + 1;
+            if tick_new % self.pot_ticks == 0 {
+                let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
+                self.theta_meas = pot_angle(cfg, &theta);
+                if let Some(s) = self.sens.as_mut() {
+                    let j =
+                        jacobian_theta(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
+                    let mut m = j * &s.p;
+                    for (i, mut row) in m.row_iter_mut().enumerate() {
+                        row *= s.pot_scale[i];
+                    }
+                    s.theta_meas = m;
+                }
+            }
+            frame = self.camera_tick(self.time(tick_new));
+        }
+        if self.sens.is_some() {
+            let p = out.columns.len();
+            let mut j = DMatrix::zeros(6 * jac_rows.len(), p);
+            for (k, s) in jac_rows.iter().enumerate() {
+                j.view_mut((6 * k, 0), (6, p)).copy_from(s);
+            }
+            out.jacobian = Some(j);
+        }
+        Ok(out)
+    }
+
+    /// Eq. 5.4 at a frame: U_θ = θ_bias + J_θ(χ)[k_p e + k_d ė + k_i ∫e], exactly as
+    /// `rss6_ctrl::VisualPid::step` computes it.
+    fn visual_pid<T: Trajectory + ?Sized>(
+        &mut self,
+        t: f64,
+        reference: &T,
+        chi: &Vec6,
+        s_chi: Option<&Sens>,
+    ) -> Result<()> {
+        let cfg = self.cfg;
+        let r = reference.sample(t);
+        let (rate, h, prev_t) = match self.last_frame {
+            Some((tp, prev)) if t > tp => ((chi - prev) / (t - tp), t - tp, Some(tp)),
+            _ => (Vec6::zeros(), cfg.dt, None),
+        };
+        let j = jacobian_theta(&cfg.kp, chi).map_err(|e| sim_err(t, e))?;
+        let g = &cfg.gains;
+        let e = r.pose - chi;
+        let e_dot = r.pose_dot - rate;
+        let raw = self.v_integral + e * h;
+        let mut integral = raw;
+        for i in 0..6 {
+            integral[i] = integral[i].clamp(-g.integral_limit[i], g.integral_limit[i]);
+        }
+        let u = g.kp.component_mul(&e) + g.kd.component_mul(&e_dot) + g.ki.component_mul(&integral);
+        let theta_d = self.bias + j * u;
+        if !theta_d.iter().all(|x| x.is_finite()) {
+            return Err(IdentError::Simulation {
+                time: t,
+                message: "the visual PID's command is not finite".into(),
+            });
+        }
+        if let (Some(s), Some(s_chi)) = (self.sens.as_mut(), s_chi) {
+            let s_rate = match (&s.last_frame, prev_t) {
+                (Some(prev), Some(tp)) => (s_chi - prev) / (t - tp),
+                _ => Sens::zeros(s.columns.len()),
+            };
+            let mut s_int = &s.v_integral - s_chi * h;
+            for i in 0..6 {
+                if integral[i] != raw[i] {
+                    s_int.row_mut(i).fill(0.0);
+                }
+            }
+            let mut s_u = Sens::zeros(s.columns.len());
+            for i in 0..6 {
+                let row =
+                    -s_chi.row(i) * g.kp[i] - s_rate.row(i) * g.kd[i] + s_int.row(i) * g.ki[i];
+                s_u.set_row(i, &row);
+            }
+            // ∂(J_θ(χ) u)/∂χ by central differences of J_θ (30 Hz only: cheap).
+            let mut dj = Mat6::zeros();
+            let step = 1e-6;
+            for k in 0..6 {
+                let mut cp = *chi;
+                let mut cm = *chi;
+                cp[k] += step;
+                cm[k] -= step;
+                let jp = jacobian_theta(&cfg.kp, &cp).map_err(|e| sim_err(t, e))?;
+                let jm = jacobian_theta(&cfg.kp, &cm).map_err(|e| sim_err(t, e))?;
+                dj.set_column(k, &((jp - jm) * u / (cp[k] - cm[k])));
+            }
+            s.command = j * s_u + dj * s_chi;
+            s.v_integral = s_int;
+            s.last_frame = Some(s_chi.clone());
+        }
+        self.v_integral = integral;
+        self.command = theta_d;
+        self.last_frame = Some((t, *chi));
+        Ok(())
+    }
+
+    /// Eq. 5.5 on the held potentiometer angle, exactly as `rss6_ctrl::JointPid::step`. Returns the
+    /// torque and its sensitivity.
+    fn drive_pid(&mut self) -> (Vec6, Option<Sens>) {
+        let dt = self.cfg.dt;
+        let lim = self.cfg.torque_limit;
+        let gains = self.pid;
+        let mut tau = Vec6::zeros();
+        let mut s_tau = self.sens.as_ref().map(|s| Sens::zeros(s.columns.len()));
+        for i in 0..LEGS {
+            let e = self.command[i] - self.theta_meas[i];
+            let de = if self.primed {
+                (e - self.prev_error[i]) / dt
+            } else {
+                0.0
+            };
+            let integral = self.integral[i] + e * dt;
+            let raw = gains.lp * e + gains.li * integral + gains.ld * de;
+            let out = raw.clamp(-lim, lim);
+            if let (Some(s), Some(st)) = (self.sens.as_mut(), s_tau.as_mut()) {
+                let s_e = s.command.row(i) - s.theta_meas.row(i);
+                let s_de = if self.primed {
+                    (&s_e - s.prev_error.row(i)) / dt
+                } else {
+                    s_e.clone() * 0.0
+                };
+                let s_int = s.integral.row(i) + &s_e * dt;
+                if raw == out {
+                    let mut row = &s_e * gains.lp + &s_int * gains.li + &s_de * gains.ld;
+                    for (c, &col) in s.columns.iter().enumerate() {
+                        match col {
+                            N_DYN => row[c] += e,
+                            x if x == N_DYN + 1 => row[c] += integral,
+                            x if x == N_DYN + 2 => row[c] += de,
+                            _ => {}
+                        }
+                    }
+                    st.set_row(i, &row);
+                    s.integral.set_row(i, &s_int);
+                }
+                s.prev_error.set_row(i, &s_e);
+            }
+            if raw == out {
+                self.integral[i] = integral;
+            }
+            self.prev_error[i] = e;
+            tau[i] = out;
+        }
+        self.primed = true;
+        (tau, s_tau)
+    }
+
+    /// One stage of the forward dynamics, with derivatives if sensitivities are on.
+    fn stage(&self, p: &Vec6, v: &Vec6, tau: &Vec6, t: f64) -> Result<Stage> {
+        let cfg = self.cfg;
+        let g = &cfg.gravity;
+        let a = forward_dynamics_with_gravity(&cfg.kp, &self.dp, p, v, tau, g)
+            .map_err(|e| sim_err(t, e))?;
+        let Some(s) = self.sens.as_ref() else {
+            return Ok(Stage { a, jac: None });
+        };
+        let j_theta = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
+        let theta_dot = j_theta * v;
+        let tau_eff = Vec6::from_fn(|i, _| tau[i] - self.dp.coulomb[i] * sign0(theta_dot[i]));
+        let f = |pp: &Vec6, vv: &Vec6| {
+            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, pp, vv, &tau_eff, g)
+                .map_err(|e| sim_err(t, e))
+        };
+        let mut fp = Mat6::zeros();
+        let mut fv = Mat6::zeros();
+        const HP: f64 = 1e-6;
+        const HV: f64 = 1e-2;
+        for k in 0..6 {
+            let (mut pp, mut pm) = (*p, *p);
+            pp[k] += HP;
+            pm[k] -= HP;
+            fp.set_column(k, &((f(&pp, v)? - f(&pm, v)?) / (pp[k] - pm[k])));
+            let (mut vp, mut vm) = (*v, *v);
+            vp[k] += HV;
+            vm[k] -= HV;
+            fv.set_column(k, &((f(p, &vp)? - f(p, &vm)?) / (vp[k] - vm[k])));
+        }
+        let m = mass_matrix(&cfg.kp, &self.dp, p).map_err(|e| sim_err(t, e))?;
+        let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
+            time: t,
+            message: "the mass matrix is not positive definite".into(),
+        })?;
+        let ft = chol.solve(&j_theta.transpose());
+        let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
+        let mut fxi = Sens::zeros(s.columns.len());
+        for (c, &col) in s.columns.iter().enumerate() {
+            if col < N_DYN {
+                fxi.set_column(c, &(-(ft * gamma.column(col))));
+            }
+        }
+        Ok(Stage {
+            a,
+            jac: Some((fp, fv, ft, fxi)),
+        })
+    }
+
+    /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
+    fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64) -> Result<()> {
+        let dt = self.cfg.dt;
+        let (tau, s_tau) = tau;
+        let (p0, v0) = (self.pose, self.pose_dot);
+        let s1 = self.stage(&p0, &v0, tau, t)?;
+        let a1 = s1.a;
+        let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));
+        let s2 = self.stage(&p2, &v2, tau, t)?;
+        let a2 = s2.a;
+        let (p3, v3) = (p0 + v2 * (0.5 * dt), v0 + a2 * (0.5 * dt));
+        let s3 = self.stage(&p3, &v3, tau, t)?;
+        let a3 = s3.a;
+        let (p4, v4) = (p0 + v3 * dt, v0 + a3 * dt);
+        let s4 = self.stage(&p4, &v4, tau, t)?;
+        let a4 = s4.a;
+        self.pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
+        self.pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);
+        if !(self.pose.iter().chain(self.pose_dot.iter())).all(|x| x.is_finite()) {
+            return Err(IdentError::Simulation {
+                time: t + dt,
+                message: "non-finite model state".into(),
+            });
+        }
+        if let (Some(s), Some(s_tau)) = (self.sens.as_mut(), s_tau) {
+            let da = |st: &Stage, sp: &Sens, sv: &Sens| -> Sens {
+                match &st.jac {
+                    Some((fp, fv, ft, fxi)) => fp * sp + fv * sv + ft * s_tau + fxi,
+                    None => Sens::zeros(sp.ncols()),
+                }
+            };
+            let (sp0, sv0) = (&s.p, &s.v);
+            let da1 = da(&s1, sp0, sv0);
+            let sp2 = sp0 + sv0 * (0.5 * dt);
+            let sv2 = sv0 + &da1 * (0.5 * dt);
+            let da2 = da(&s2, &sp2, &sv2);
+            let sp3 = sp0 + &sv2 * (0.5 * dt);
+            let sv3 = sv0 + &da2 * (0.5 * dt);
+            let da3 = da(&s3, &sp3, &sv3);
+            let sp4 = sp0 + &sv3 * dt;
+            let sv4 = sv0 + &da3 * dt;
+            let da4 = da(&s4, &sp4, &sv4);
+            let new_p = sp0 + (sv0 + &sv2 * 2.0 + &sv3 * 2.0 + &sv4) * (dt / 6.0);
+            let new_v = sv0 + (da1 + da2 * 2.0 + da3 * 2.0 + da4) * (dt / 6.0);
+            s.p = new_p;
+            s.v = new_v;
+        }
+        Ok(())
+    }
+}
+
+/// The drive-convention angle of the noise-free potentiometer reading of θ (eq. 4.2 twice).
+fn pot_angle(cfg: &LoopConfig, theta: &Vec6) -> Vec6 {
+    let (m, d) = (&cfg.kp, &cfg.drive);
+    Vec6::from_fn(|i, _| {
+        let kappa = (theta[i] - m.dtheta[i]) / m.eta[i] + 0.0;
+        d.eta[i] * kappa + d.dtheta[i]
+    })
+}
+
+fn sign0(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+fn sim_err(time: f64, e: rss6_core::CoreError) -> IdentError {
+    IdentError::Simulation {
+        time,
+        message: e.to_string(),
+    }
+}

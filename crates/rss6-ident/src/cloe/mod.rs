@@ -1,0 +1,13 @@
+//! Closed-loop output-error identification (CLOE, thesis §5.3, eq. 5.3–5.9): the simulated loop of
+//! Fig. 5.1 as a function of the identification vector A, its exact forward sensitivities, a
+//! physically consistent parametrisation, and the Levenberg–Marquardt estimator on them.
+
+mod closed_loop;
+mod consistent;
+mod estimator;
+mod truth;
+
+pub use closed_loop::{parameter_names, simulate, LoopConfig, LoopParams, LoopRun, N_A};
+pub use consistent::{Consistent, N_PSI};
+pub use estimator::{cloe, CloeData, CloeOptions, CloeResult};
+pub use truth::{table_5_2_truth, DRIVE_UNIT_TO_NM};
