@@ -194,6 +194,9 @@ pub struct LoopRun {
     pub jacobian: Option<DMatrix<f64>>,
     /// The active columns of A the Jacobian's columns refer to.
     pub columns: Vec<usize>,
+    /// Joint-ticks at which the drive's torque was clamped at ±`torque_limit` (the loop is not
+    /// differentiable where the clamp switches).
+    pub saturated: usize,
 }
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
@@ -357,6 +360,7 @@ impl<'a> Lean<'a> {
                 .as_ref()
                 .map(|s| s.columns.clone())
                 .unwrap_or_default(),
+            saturated: 0,
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
@@ -371,6 +375,11 @@ impl<'a> Lean<'a> {
                 }
             }
             let tau_sens = self.drive_pid();
+            out.saturated += tau_sens
+                .0
+                .iter()
+                .filter(|t| t.abs() >= cfg.torque_limit)
+                .count();
             self.rk4(&tau_sens, t)?;
             let tick_new = tick + 1;
             if tick_new % self.pot_ticks == 0 {

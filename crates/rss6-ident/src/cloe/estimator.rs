@@ -9,9 +9,12 @@
 //! unit-free. Unidentifiable entries stay at the guess (the prior) and are reported by name.
 //!
 //! Stopping rules (eq. 5.9): after an accepted step, converged when the relative change of Φ is at
-//! most `tol_cost` **and** every estimated quantity moved by at most `tol_step` relative; also
-//! converged when no step can lower Φ and the predicted decrease is below `tol_cost`·Φ (the
-//! minimum is reached to rounding). Otherwise, after `max_iterations`, [`IdentError::NotConverged`]
+//! most `tol_cost` **and** every estimated quantity moved by at most `tol_step` relative (or by
+//! less than 1 % of its predicted standard deviation: with noise, poorly identified quantities
+//! drift along flat directions without changing Φ); also
+//! converged when no damping (up to λ = 10¹²) lowers Φ and the residual is orthogonal to every
+//! Jacobian column within `tol_gradient` (or Φ is below 10⁻²⁰ per residual: noise-free data fitted
+//! to rounding). Otherwise [`IdentError::NotConverged`]
 //! with the cost history.
 
 use super::closed_loop::{simulate, LoopConfig, LoopParams, LoopRun};
@@ -53,6 +56,11 @@ pub struct CloeOptions {
     pub poor_std: f64,
     /// Initial LM damping (relative to diag(JᵀJ)).
     pub lambda0: f64,
+    /// Largest change of any log-parameter per iteration (0.5: a factor 1.65).
+    pub max_log_step: f64,
+    /// When no step lowers Φ: converged if every |cos| between the residual and a Jacobian column
+    /// is at most this (first-order optimality), else [`IdentError::NotConverged`].
+    pub tol_gradient: f64,
 }
 
 impl Default for CloeOptions {
@@ -66,6 +74,8 @@ impl Default for CloeOptions {
             parameters: None,
             poor_std: 0.10,
             lambda0: 1e-3,
+            max_log_step: 0.5,
+            tol_gradient: 1e-4,
         }
     }
 }
@@ -93,6 +103,9 @@ pub struct CloeResult {
     pub cost_history: Vec<f64>,
     /// Jacobian evaluations (LM iterations).
     pub iterations: usize,
+    /// Φ/(N − p) at the estimate: ≈ 1 when the residual is the camera noise of `noise`; well
+    /// above 1 means a model discrepancy (or a minimum the non-smooth loop kept LM from leaving).
+    pub reduced_chi2: f64,
     /// Simulations without sensitivities (rejected trial steps included).
     pub simulations: usize,
 }
@@ -198,11 +211,9 @@ pub fn cloe<T: Trajectory + ?Sized>(
         None => base.clone(),
         Some(req) => {
             let mut act = Vec::new();
-            let mut bad = Vec::new();
             for r in req {
                 match names.iter().position(|n| n == r) {
-                    Some(k) if base.contains(&k) => act.push(k),
-                    Some(_) => bad.push(r.clone()),
+                    Some(k) => act.push(k),
                     None => {
                         return Err(IdentError::InvalidInput(format!(
                             "unknown parameter {r:?}; known: {}",
@@ -211,6 +222,12 @@ pub fn cloe<T: Trajectory + ?Sized>(
                     }
                 }
             }
+            // The others stay at the guess, so identifiability is decided among these alone.
+            let ok = base_columns(&g0.select_columns(&act), options.identifiability_threshold);
+            let bad: Vec<String> = (0..act.len())
+                .filter(|k| !ok.contains(k))
+                .map(|k| names[act[k]].clone())
+                .collect();
             if !bad.is_empty() {
                 return Err(IdentError::Unidentifiable { names: bad });
             }
@@ -235,19 +252,25 @@ pub fn cloe<T: Trajectory + ?Sized>(
         let gtg = ga.tr_mul(&ga);
         let gtr = ga.tr_mul(&cur.residual);
         loop {
+            // Marquardt's scaling diag(GᵀG), floored so that nearly flat directions are damped too.
+            let top = (0..active.len()).map(|k| gtg[(k, k)]).fold(0.0, f64::max);
             let mut lhs = gtg.clone();
             for k in 0..active.len() {
-                lhs[(k, k)] += lambda * gtg[(k, k)].max(f64::MIN_POSITIVE);
+                lhs[(k, k)] += lambda * gtg[(k, k)].max(1e-8 * top).max(f64::MIN_POSITIVE);
             }
-            let Some(step) = lhs.clone().cholesky().map(|c| c.solve(&gtr)) else {
+            let Some(mut step) = lhs.clone().cholesky().map(|c| c.solve(&gtr)) else {
                 lambda *= 10.0;
                 if lambda > 1e12 {
                     break 'outer;
                 }
                 continue;
             };
-            // Predicted decrease of the linearised cost.
-            let predicted = 2.0 * step.dot(&gtr) - step.dot(&(&gtg * &step));
+            // A bounded step: no quantity changes by more than a factor e^max_log_step per
+            // iteration (flat directions of a short run would otherwise throw a log-parameter
+            // towards 0 or ∞).
+            for d in step.iter_mut() {
+                *d = d.clamp(-options.max_log_step, options.max_log_step);
+            }
             let mut trial = psi.clone();
             for (k, &j) in active.iter().enumerate() {
                 trial[j] += step[k];
@@ -260,7 +283,19 @@ pub fn cloe<T: Trajectory + ?Sized>(
                     psi = trial;
                     history.push(e.cost);
                     lambda = (lambda / 10.0).max(1e-12);
-                    if rel_cost <= options.tol_cost && rel_step <= options.tol_step {
+                    // tol_2 of eq. 5.9, or a step below 1 % of every predicted σ (poorly
+                    // identified quantities drift along flat directions without any effect).
+                    let sigma_small = {
+                        let dof = (ga.nrows() as f64 - active.len() as f64).max(1.0);
+                        gtg.clone().cholesky().is_some_and(|c| {
+                            let inv = c.inverse();
+                            (0..active.len()).all(|k| {
+                                step[k].abs() <= 1e-2 * (e.cost / dof * inv[(k, k)]).sqrt()
+                            })
+                        })
+                    };
+                    if rel_cost <= options.tol_cost && (rel_step <= options.tol_step || sigma_small)
+                    {
                         cur = evaluate(&psi, true, &mut sims)?;
                         converged = true;
                         break 'outer;
@@ -274,14 +309,12 @@ pub fn cloe<T: Trajectory + ?Sized>(
                     continue 'outer;
                 }
                 _ => {
-                    // No lower cost: the minimum is reached to the precision of Φ when the step
-                    // is already below tol_2, or the model predicts less than tol_1 of Φ.
-                    if rel_step <= options.tol_step || predicted <= options.tol_cost * cur.cost {
-                        converged = true;
-                        break 'outer;
-                    }
                     lambda *= 10.0;
                     if lambda > 1e12 {
+                        // No step lowers Φ: a minimum to the precision of Φ if the residual is
+                        // orthogonal to every column (first-order optimality), else a failure.
+                        converged = optimal(&ga, &cur.residual, options.tol_gradient)
+                            || cur.cost <= 1e-20 * cur.residual.len() as f64;
                         break 'outer;
                     }
                 }
@@ -329,7 +362,20 @@ pub fn cloe<T: Trajectory + ?Sized>(
         rms_after: cur.rms,
         cost_history: history,
         iterations: iterations.min(options.max_iterations),
+        reduced_chi2: sigma2,
         simulations: sims,
+    })
+}
+
+/// max_k |g_kᵀ r| / (‖g_k‖ ‖r‖) ≤ tol: the residual is orthogonal to every column.
+fn optimal(g: &DMatrix<f64>, r: &DVector<f64>, tol: f64) -> bool {
+    let rn = r.norm();
+    if rn == 0.0 {
+        return true;
+    }
+    g.column_iter().all(|c| {
+        let cn = c.norm();
+        cn == 0.0 || (c.dot(r) / (cn * rn)).abs() <= tol
     })
 }
 

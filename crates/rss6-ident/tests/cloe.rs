@@ -1,0 +1,210 @@
+//! CLOE on the twin: noise-free recovery of the base parameters, and convergence with Table 4.1
+//! camera noise from a 30 % spread start.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rss6_core::{home_pose, KinematicParams, Vec6};
+use rss6_ident::{
+    cloe, simulate_loop, table_5_2_truth, CloeData, CloeOptions, Consistent, Excitation,
+    IdentError, LoopConfig, LoopParams, N_A,
+};
+
+fn excitation() -> Excitation {
+    let free = [
+        0.010, -0.004, 0.006, 0.003, -0.008, 0.005, 0.004, -0.002, 0.006, 0.002, -0.005, 0.004,
+        0.04, -0.02, 0.03, 0.01, -0.03, 0.02, 0.02, -0.01, 0.05, 0.01, -0.03, 0.02,
+    ];
+    Excitation::at_rest(3, 0.5, &home_pose(), &free).unwrap()
+}
+
+/// The quantities the 2 s test excitation identifies well (σ ≪ 1 % noise-free analysis): the
+/// platform's second moments, the joint friction and the drive's l_i, l_d.
+fn subset(with_coulomb: bool) -> Vec<String> {
+    let mut s: Vec<String> = ["platform.Sxx", "platform.Syy", "platform.Szz", "li", "ld"]
+        .map(String::from)
+        .to_vec();
+    for i in 1..=6 {
+        s.push(format!("fv{i}"));
+        if with_coulomb {
+            s.push(format!("fc{i}"));
+        }
+    }
+    s
+}
+
+/// The truth with the quantities `names` moved by up to ±`spread` (seeded uniform factors).
+fn spread_guess(truth: &LoopParams, names: &[String], spread: f64, seed: u64) -> LoopParams {
+    let cons = Consistent::new(truth).unwrap();
+    let psi = cons.psi(truth).unwrap();
+    let all = Consistent::names();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let u = rand_distr::Uniform::new(-1.0, 1.0).unwrap();
+    let moved: Vec<f64> = psi
+        .iter()
+        .zip(&all)
+        .map(|(p, n)| {
+            let f: f64 = 1.0 + spread * u.sample(&mut rng);
+            if names.contains(n) {
+                p + f.ln()
+            } else {
+                *p
+            }
+        })
+        .collect();
+    cons.params(&moved)
+}
+
+#[test]
+#[ignore = "≈ 10–20 s in release, over a minute in the debug test profile: cargo test --release -p rss6-ident --test cloe -- --include-ignored"]
+fn noise_free_cloe_recovers_the_truth_where_the_loop_is_differentiable() {
+    // The loop is differentiable (and CLOE converges quadratically) only away from its two
+    // non-smooth events: the drive's torque clamp, which its derivative kick hits at every camera
+    // frame with a 30 N·m limit, and Coulomb sign(θ̇) events. Here the clamp is out of reach and
+    // the Coulomb friction is 10⁻⁶ of Table 5.2's, so the test checks the loop, the gradient and
+    // the parameter mapping to 1e-6 as the issue asks.
+    let mut truth = table_5_2_truth();
+    for f in truth.dynamics.coulomb.iter_mut() {
+        *f *= 1e-6;
+    }
+    let exc = excitation();
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 2.0);
+    cfg.torque_limit = 1e4;
+    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
+    assert_eq!(run.saturated, 0);
+    let data = CloeData {
+        t: run.t.clone(),
+        measured: run.chi.clone(),
+    };
+    let names = subset(false);
+    let guess = spread_guess(&truth, &names, 0.3, 1);
+    let opts = CloeOptions {
+        tol_cost: 1e-12,
+        tol_step: 1e-9,
+        parameters: Some(names.clone()),
+        ..CloeOptions::default()
+    };
+    let res = cloe(&data, &cfg, &exc, &guess, &opts).unwrap();
+    let cons = Consistent::new(&truth).unwrap();
+    let pt = cons.psi(&truth).unwrap();
+    let all = Consistent::names();
+    let worst = names
+        .iter()
+        .map(|n| {
+            let k = all.iter().position(|a| a == n).unwrap();
+            (res.psi[k] - pt[k]).exp_m1().abs()
+        })
+        .fold(0.0, f64::max);
+    println!(
+        "noise-free: {} iterations, {} simulations, cost {:.3e} → {:.3e}, worst relative error {worst:.2e}",
+        res.iterations,
+        res.simulations,
+        res.cost_history[0],
+        res.cost_history.last().unwrap()
+    );
+    // Measured: 1e-10 after 8 iterations (quadratic convergence); the issue's bound.
+    assert!(worst < 1e-6, "{worst}");
+    assert_eq!(N_A, 67);
+}
+
+#[test]
+#[ignore = "≈ 10–20 s in release, over a minute in the debug test profile: cargo test --release -p rss6-ident --test cloe -- --include-ignored"]
+fn with_table_4_1_noise_cloe_converges_to_a_consistent_estimate() {
+    let truth = table_5_2_truth();
+    let exc = excitation();
+    // The differentiable loop (see the noise-free test) with Table 5.2's Coulomb friction as
+    // printed (0.03–0.15 N·m): its sign events stay far below the noise. With the 30 N·m clamp
+    // active, or Coulomb friction 40× larger, LM stalls at a cost several times the noise floor
+    // (the loop is not differentiable there; docs/identification.md).
+    let mut truth = truth;
+    for f in truth.dynamics.coulomb.iter_mut() {
+        *f /= rss6_ident::DRIVE_UNIT_TO_NM;
+    }
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 2.0);
+    cfg.torque_limit = 1e4;
+    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
+    assert_eq!(run.saturated, 0);
+    let (sp, sa) = (0.0096e-3, 0.0261_f64.to_radians());
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let (np, na) = (Normal::new(0.0, sp).unwrap(), Normal::new(0.0, sa).unwrap());
+    let measured: Vec<Vec6> = run
+        .chi
+        .iter()
+        .map(|c| {
+            Vec6::from_fn(|i, _| {
+                c[i] + if i < 3 {
+                    np.sample(&mut rng)
+                } else {
+                    na.sample(&mut rng)
+                }
+            })
+        })
+        .collect();
+    let data = CloeData {
+        t: run.t.clone(),
+        measured,
+    };
+    let names = subset(true);
+    let guess = spread_guess(&truth, &names, 0.3, 2);
+    let opts = CloeOptions {
+        parameters: Some(names.clone()),
+        ..CloeOptions::default()
+    };
+    let res = cloe(&data, &cfg, &exc, &guess, &opts).unwrap();
+    println!(
+        "noisy: {} iterations, reduced χ² {:.3}, rms before {:?}, after {:?}, poorly identified {:?}",
+        res.iterations,
+        res.reduced_chi2,
+        res.rms_before.as_slice(),
+        res.rms_after.as_slice(),
+        res.poorly_identified
+    );
+    // Physically consistent: validates, platform moments meet the triangle inequalities.
+    res.params.dynamics.validate().unwrap();
+    let i = res.params.dynamics.platform.inertia;
+    assert!(i[0] + i[1] >= i[2] && i[1] + i[2] >= i[0] && i[0] + i[2] >= i[1]);
+    // The residual is the noise: RMS per axis within ±25 % of σ (≈ 360 samples per axis).
+    for k in 0..6 {
+        let s = if k < 3 { sp } else { sa };
+        let r = res.rms_after[k] / s;
+        assert!((0.75..1.25).contains(&r), "axis {k}: rms/σ = {r}");
+    }
+    // Every estimate within 4 predicted σ of the truth (σ from the exact Jacobian and the residual
+    // variance).
+    let all = Consistent::names();
+    let cons = Consistent::new(&truth).unwrap();
+    let pt = cons.psi(&truth).unwrap();
+    for (name, s) in res.identified.iter().zip(&res.relative_std) {
+        let k = all.iter().position(|n| n == name).unwrap();
+        let z = (res.psi[k] - pt[k]) / s;
+        println!(
+            "  {name:14} estimate/truth {:.4}  σ {:.2} %  z {z:+.2}",
+            (res.psi[k] - pt[k]).exp(),
+            100.0 * s
+        );
+        assert!(z.abs() < 4.0, "{name}: z = {z}");
+    }
+}
+
+#[test]
+fn requesting_an_unidentifiable_parameter_is_a_typed_error() {
+    let truth = table_5_2_truth();
+    let exc = excitation();
+    let cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.5);
+    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
+    let data = CloeData {
+        t: run.t,
+        measured: run.chi,
+    };
+    let opts = CloeOptions {
+        parameters: Some(vec!["wrench1.m".into(), "wrench1.Iz".into()]),
+        ..CloeOptions::default()
+    };
+    match cloe(&data, &cfg, &exc, &truth, &opts) {
+        Err(IdentError::Unidentifiable { names }) => {
+            assert_eq!(names.len(), 1, "{names:?}");
+        }
+        other => panic!("expected Unidentifiable, got {other:?}"),
+    }
+}
