@@ -34,7 +34,7 @@ pub use crate::calibrate::{
 };
 pub use crate::cloe::{
     cloe, parameter_names as loop_parameter_names, simulate as simulate_loop, table_5_2_truth,
-    CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams, LoopRun,
+    CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams, LoopRun, StateJacobians,
     DRIVE_UNIT_TO_NM, N_A, N_PSI,
 };
 pub use crate::data::{

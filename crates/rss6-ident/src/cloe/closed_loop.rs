@@ -76,6 +76,20 @@ pub struct LoopConfig {
     pub start: Vec6,
     /// Run length (s).
     pub duration: f64,
+    /// Where the sensitivities evaluate the state Jacobians F_χ, F_χ̇.
+    pub state_jacobians: StateJacobians,
+}
+
+/// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StateJacobians {
+    /// At every RK4 stage: the exact derivative of the discrete loop (24 forward-dynamics calls per
+    /// stage).
+    #[default]
+    Exact,
+    /// Once per tick, at the tick's start, for all four stages (4× fewer calls); an approximation
+    /// of the derivative (error measured in `tests/cloe_loop.rs`), for LM iterations.
+    PerTick,
 }
 
 impl LoopConfig {
@@ -94,6 +108,7 @@ impl LoopConfig {
             gravity: GRAVITY,
             start,
             duration,
+            state_jacobians: StateJacobians::Exact,
         }
     }
 
@@ -531,7 +546,14 @@ impl<'a> Lean<'a> {
     }
 
     /// One stage of the forward dynamics, with derivatives if sensitivities are on.
-    fn stage(&self, p: &Vec6, v: &Vec6, tau: &Vec6, t: f64) -> Result<Stage> {
+    fn stage(
+        &self,
+        p: &Vec6,
+        v: &Vec6,
+        tau: &Vec6,
+        t: f64,
+        frozen: Option<(Mat6, Mat6)>,
+    ) -> Result<Stage> {
         let cfg = self.cfg;
         let g = &cfg.gravity;
         let a = forward_dynamics_with_gravity(&cfg.kp, &self.dp, p, v, tau, g)
@@ -546,20 +568,26 @@ impl<'a> Lean<'a> {
             forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, pp, vv, &tau_eff, g)
                 .map_err(|e| sim_err(t, e))
         };
-        let mut fp = Mat6::zeros();
-        let mut fv = Mat6::zeros();
-        const HP: f64 = 1e-6;
-        const HV: f64 = 1e-2;
-        for k in 0..6 {
-            let (mut pp, mut pm) = (*p, *p);
-            pp[k] += HP;
-            pm[k] -= HP;
-            fp.set_column(k, &((f(&pp, v)? - f(&pm, v)?) / (pp[k] - pm[k])));
-            let (mut vp, mut vm) = (*v, *v);
-            vp[k] += HV;
-            vm[k] -= HV;
-            fv.set_column(k, &((f(p, &vp)? - f(p, &vm)?) / (vp[k] - vm[k])));
-        }
+        let (fp, fv) = match frozen {
+            Some(j) => j,
+            None => {
+                let mut fp = Mat6::zeros();
+                let mut fv = Mat6::zeros();
+                const HP: f64 = 1e-6;
+                const HV: f64 = 1e-2;
+                for k in 0..6 {
+                    let (mut pp, mut pm) = (*p, *p);
+                    pp[k] += HP;
+                    pm[k] -= HP;
+                    fp.set_column(k, &((f(&pp, v)? - f(&pm, v)?) / (pp[k] - pm[k])));
+                    let (mut vp, mut vm) = (*v, *v);
+                    vp[k] += HV;
+                    vm[k] -= HV;
+                    fv.set_column(k, &((f(p, &vp)? - f(p, &vm)?) / (vp[k] - vm[k])));
+                }
+                (fp, fv)
+            }
+        };
         let m = mass_matrix(&cfg.kp, &self.dp, p).map_err(|e| sim_err(t, e))?;
         let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
             time: t,
@@ -584,16 +612,21 @@ impl<'a> Lean<'a> {
         let dt = self.cfg.dt;
         let (tau, s_tau) = tau;
         let (p0, v0) = (self.pose, self.pose_dot);
-        let s1 = self.stage(&p0, &v0, tau, t)?;
+        let s1 = self.stage(&p0, &v0, tau, t, None)?;
+        // PerTick: the state Jacobians of stage 1 serve all four stages.
+        let frozen = match (&s1.jac, self.cfg.state_jacobians) {
+            (Some((fp, fv, _, _)), StateJacobians::PerTick) => Some((*fp, *fv)),
+            _ => None,
+        };
         let a1 = s1.a;
         let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));
-        let s2 = self.stage(&p2, &v2, tau, t)?;
+        let s2 = self.stage(&p2, &v2, tau, t, frozen)?;
         let a2 = s2.a;
         let (p3, v3) = (p0 + v2 * (0.5 * dt), v0 + a2 * (0.5 * dt));
-        let s3 = self.stage(&p3, &v3, tau, t)?;
+        let s3 = self.stage(&p3, &v3, tau, t, frozen)?;
         let a3 = s3.a;
         let (p4, v4) = (p0 + v3 * dt, v0 + a3 * dt);
-        let s4 = self.stage(&p4, &v4, tau, t)?;
+        let s4 = self.stage(&p4, &v4, tau, t, frozen)?;
         let a4 = s4.a;
         self.pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
         self.pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);

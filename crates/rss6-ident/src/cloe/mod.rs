@@ -7,7 +7,9 @@ mod consistent;
 mod estimator;
 mod truth;
 
-pub use closed_loop::{parameter_names, simulate, LoopConfig, LoopParams, LoopRun, N_A};
+pub use closed_loop::{
+    parameter_names, simulate, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A,
+};
 pub use consistent::{Consistent, N_PSI};
 pub use estimator::{cloe, CloeData, CloeOptions, CloeResult};
 pub use truth::{table_5_2_truth, DRIVE_UNIT_TO_NM};
