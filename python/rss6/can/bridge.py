@@ -198,6 +198,7 @@ class Bridge:
         self.lost_waits = 0
         self.refused = 0
         self.commands_sent = 0
+        self.syncs_sent = 0
         self.late_cycles = 0
         self.quick_stop_cycle: int | None = None
         self.quick_stop_errors: list[str] = []
@@ -478,8 +479,9 @@ class Bridge:
                 self._last_cmd = counts
         with self._lock:
             seq0 = self.rx_seq.copy()
-        for ch, net in enumerate(self.networks):
-            self._send(net, cob.SYNC, b"", f"SYNC on channel {ch}")
+        synced = [self._send(net, cob.SYNC, b"", f"SYNC on channel {ch}")
+                  for ch, net in enumerate(self.networks)]
+        self.syncs_sent += all(synced)
         if cfg.lockstep and self.cycle % self.hb_cycles == 0:
             self._send_heartbeat()
         if cfg.lockstep and self.cycle % cfg.tpdo_every == 0:
@@ -531,6 +533,7 @@ class Bridge:
         return {
             "cycles": self.cycle,
             "commands_sent": self.commands_sent,
+            "syncs_sent": self.syncs_sent,
             "refused": self.refused,
             "accepted": self.accepted,
             "rejected": dict(self.rejected),

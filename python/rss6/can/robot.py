@@ -87,8 +87,11 @@ class CanRobot:
         """One cycle (see :meth:`Bridge.step`); after a fault, commands are dropped and the drives
         hold their quick-stop positions while time goes on."""
         self.last = self.bridge.step(theta_cmd)
-        if self.sim is not None and not self.sim.wait_tick(self.bridge.cycle, self.tick_timeout):
-            raise Rss6Error(f"the simulated drives did not make tick {self.bridge.cycle}")
+        if self.sim is not None:
+            want = self.bridge.syncs_sent
+            if not self.sim.wait_tick(want, self.tick_timeout):
+                self.bridge._latch(f"the simulated drives missed a SYNC (tick {self.sim.tick} "
+                                   f"of {want})")
 
     def step_joint_commands(self, cmds: ArrayLike) -> dict[str, Any]:
         """N cycles, one command row each; returns what a caller would collect tick by tick:

@@ -59,8 +59,8 @@ class SimDrive:
     """One simulated drive (node ``node_id``, joint ``joint``) of a :class:`SimDrives` group.
 
     Test hooks: :meth:`silence` (stop heartbeat and TPDOs), :meth:`trip` (a drive fault with EMCY).
-    ``quick_stop_tick``: the SYNC count at which the drive entered Quick Stop Active (None if not);
-    ``targets_after_stop``: RPDO1 frames received after the drive left Operation Enabled.
+    ``quick_stop_tick``: the SYNC count at which the drive received a Quick Stop controlword (None
+    if not); ``targets_after_stop``: RPDO1 frames received after that.
     """
 
     def __init__(self, group: SimDrives, node_id: int, joint: int, modes: Sequence[int]):
@@ -91,7 +91,6 @@ class SimDrive:
         self.silenced_tpdo = False
         self.quick_stop_tick: int | None = None
         self.targets_after_stop = 0
-        self.was_enabled = False
         self.bridge_heartbeat_tick: int | None = None
         self.emcy_sent: list[int] = []
         self.sync_count = 0
@@ -156,6 +155,8 @@ class SimDrive:
         if mode in self.modes:
             self.mode = mode
         rising_reset = cw & 0x80 and not self.controlword & 0x80
+        if cw & 0x86 == 0x02 and self.quick_stop_tick is None:
+            self.quick_stop_tick = self.group.tick
         self.controlword = cw
         st = self.state
         disable_voltage = cw & 0x02 == 0
@@ -201,16 +202,13 @@ class SimDrive:
                 self._leave_enabled()
             if new is S.OPERATION_ENABLED:
                 self.hold, self.target, self.pending_target = self.position, None, None
-                self.was_enabled = True
-            if new is S.QUICK_STOP_ACTIVE:
-                self.quick_stop_tick = self.group.tick
             self.state = new
 
     def on_target(self, counts: int) -> None:
         """RPDO1: a target position, applied at the next SYNC (CSP)."""
+        if self.quick_stop_tick is not None:
+            self.targets_after_stop += 1
         if self.state is not S.OPERATION_ENABLED:
-            if self.was_enabled:
-                self.targets_after_stop += 1
             return
         lo, hi = self.limits
         self.pending_target = min(max(counts, lo), hi)
