@@ -59,8 +59,9 @@ class BridgeConfig:
     ``dt``: SYNC period (s). ``tpdo_every``: TPDO1 every n-th SYNC. ``heartbeat_ms``: the drives'
     producer heartbeat (written to 0x1017); ``bridge_heartbeat_ms``: the bridge's own; a heartbeat
     older than ``heartbeat_timeout`` periods is a fault on either side (0x1016 on the drives).
-    ``tpdo_timeout``: cycles without an accepted TPDO1 before a fault (default 2·tpdo_every: one lost
-    TPDO is tolerated). ``v_max`` (rad/s): larger command steps are refused, larger position jumps
+    ``tpdo_timeout``: cycles without an accepted TPDO1 before a fault (default 2·tpdo_every in
+    lockstep: one lost TPDO is tolerated; 5·tpdo_every on the wall clock, where TPDOs arrive a cycle
+    or two after their SYNC and a late cycle ages them too). ``v_max`` (rad/s): larger command steps are refused, larger position jumps
     rejected. ``limits`` (rad): the software position limits (0x607D); commands outside are refused,
     positions beyond ``position_margin`` outside them rejected. ``following_error`` (rad, 0x6065).
     ``bitrate``: the bus bitrate; when given, a configuration above ``max_load`` (worst-case
@@ -145,7 +146,8 @@ class Bridge:
         if cfg.bitrate is not None:
             for load in self.loads:
                 check_bus_load(load, cfg.max_load)
-        self.tpdo_timeout = cfg.tpdo_timeout if cfg.tpdo_timeout is not None else 2 * cfg.tpdo_every
+        default_timeout = (2 if cfg.lockstep else 5) * cfg.tpdo_every
+        self.tpdo_timeout = cfg.tpdo_timeout if cfg.tpdo_timeout is not None else default_timeout
         self.hb_cycles = max(1, round(cfg.bridge_heartbeat_ms * 1e-3 / cfg.dt))
         self.hb_timeout = cfg.heartbeat_timeout * cfg.heartbeat_ms * 1e-3 / cfg.dt
         lo, hi = self.map.to_counts([cfg.limits[0]] * 6), self.map.to_counts([cfg.limits[1]] * 6)
@@ -425,9 +427,10 @@ class Bridge:
             except can.CanError as e:
                 self.quick_stop_errors.append(f"drive {node.id}: {e}")
 
-    def check_command(self, theta_cmd: ArrayLike) -> NDArray[np.int64]:
+    def check_command(self, theta_cmd: ArrayLike, advance: int = 1) -> NDArray[np.int64]:
         """The target counts of ``theta_cmd`` (rad, drive convention), or :class:`InvalidInputError`
-        for NaN/inf, INT32 overflow, a joint outside the limits or a step above v_max·dt."""
+        for NaN/inf, INT32 overflow, a joint outside the limits or a step above v_max·dt (per cycle
+        elapsed: ``advance``)."""
         th = np.asarray(theta_cmd, dtype=np.float64)
         if th.shape != (6,):
             raise InvalidInputError(f"a joint command has shape (6,), got {th.shape}")
@@ -441,7 +444,7 @@ class Bridge:
             )
         ref = self._last_cmd if self._last_cmd is not None else self.positions
         step = np.abs(counts - ref) / np.abs(self.map.counts_per_radian)
-        allowed = self.config.v_max * self.config.dt
+        allowed = self.config.v_max * self.config.dt * max(1, advance)
         if self._last_cmd is None:
             allowed += self.config.noise_bits * float(np.max(np.abs(self.map.to_theta(1) -
                                                                     self.map.to_theta(0))))
@@ -465,7 +468,7 @@ class Bridge:
         cfg = self.config
         if self.fault is None:
             try:
-                counts = self.check_command(theta_cmd)
+                counts = self.check_command(theta_cmd, advance)
             except InvalidInputError as e:
                 self.refused += 1
                 self._latch(f"command refused: {e}")

@@ -51,6 +51,7 @@ __all__ = [
     "pack_control",
     "pack_status",
     "pack_target",
+    "role_filters",
     "split_nodes",
     "state_from_statusword",
     "unpack_control",
@@ -204,6 +205,23 @@ def split_nodes(node_ids: Sequence[int], channels: int) -> list[tuple[int, ...]]
         out.append(tuple(node_ids[i : i + n]))
         i += n
     return out
+
+
+def role_filters(role: str, node_ids: Sequence[int] = DRIVE_IDS) -> list[dict[str, int]]:
+    """python-can ``can_filters`` for one side of the bus: what the ``"drives"`` or the
+    ``"bridge"`` must receive. On ``udp_multicast`` a sender receives its own frames, so each side
+    filters them out (an echoed RPDO would look like a periodic map to canopen)."""
+    if role == "drives":
+        ids = [cob.NMT, cob.SYNC, cob.HEARTBEAT + BRIDGE_NODE_ID]
+        for n in node_ids:
+            ids += [cob.RPDO1 + n, cob.RPDO2 + n, cob.SDO_RX + n]
+    elif role == "bridge":
+        ids = []
+        for n in node_ids:
+            ids += [cob.TPDO1 + n, cob.EMCY + n, cob.HEARTBEAT + n, cob.SDO_TX + n]
+    else:
+        raise InvalidInputError(f"role must be 'drives' or 'bridge', got {role!r}")
+    return [{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in ids]
 
 
 def eds_path() -> Path:
