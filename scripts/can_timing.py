@@ -12,7 +12,6 @@ import argparse
 
 import can
 import numpy as np
-
 import rss6
 import rss6.can as rc
 from rss6.can.realtime import run_wall_clock

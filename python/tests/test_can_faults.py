@@ -10,7 +10,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-
 import rss6
 
 can = pytest.importorskip("can")

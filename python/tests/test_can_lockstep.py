@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 import pytest
-
 import rss6
 import rss6.types
 
@@ -15,7 +14,6 @@ can = pytest.importorskip("can")
 pytest.importorskip("canopen")
 
 import canopen  # noqa: E402
-
 import rss6.can as rcan  # noqa: E402
 from rss6.can import protocol as P  # noqa: E402
 from rss6.can.load import BusLoadError, bus_load, frame_bits  # noqa: E402
@@ -41,7 +39,7 @@ def test_bridge_refuses_an_overloaded_bus_and_accepts_two_channels() -> None:
         with pytest.raises(BusLoadError, match="two channels"):
             rcan.Bridge(buses[0], rcan.BridgeConfig(bitrate=1_000_000))
         b = rcan.Bridge(buses, rcan.BridgeConfig(bitrate=1_000_000))
-        assert [g for g in b.groups] == [(1, 2, 3), (4, 5, 6)]
+        assert list(b.groups) == [(1, 2, 3), (4, 5, 6)]
         assert max(ld.worst_case for ld in b.loads) < 0.55
         slow = rcan.Bridge(buses[0], rcan.BridgeConfig(bitrate=1_000_000, tpdo_every=4))
         assert slow.loads[0].worst_case < rcan.MAX_LOAD
@@ -147,9 +145,10 @@ def test_servo_track_through_the_bridge_equals_the_plant() -> None:
 
 
 def test_enable_reads_the_mode_back() -> None:
-    with pytest.raises(rcan.CanFaultError, match="mode of operation 0"):
-        with rcan.simulated_robot(_plant(), modes=(1,)):
-            pass
+    with pytest.raises(rcan.CanFaultError, match="mode of operation 0"), rcan.simulated_robot(
+        _plant(), modes=(1,)
+    ):
+        pass
 
 
 def test_step_joint_commands_and_the_bus_log(tmp_path) -> None:  # type: ignore[no-untyped-def]

@@ -36,7 +36,7 @@ BRIDGE = textwrap.dedent(
         try:
             robot.reset(None)
             break
-        except (rc.CanFaultError, canopen.SdoError) as e:
+        except (rc.CanFaultError, canopen.SdoCommunicationError) as e:
             if time.monotonic() > end:
                 print(json.dumps({"error": f"no drives: {e}"}))
                 sys.exit(1)

@@ -158,7 +158,10 @@ class Bridge:
         self.noise_counts = cfg.noise_bits * self.map.counts_per_bit
         eds = cfg.eds if cfg.eds is not None else str(eds_path())
         self.networks = [canopen.Network(bus) for bus in self.buses]
+        for net in self.networks:
+            net.NOTIFIER_CYCLE = 0.05  # the notifier thread notices stop() within 50 ms, not 1 s
         self.nodes: list[canopen.RemoteNode] = []
+        self.ids: list[int] = []
         self._net_of: list[canopen.Network] = []
         self._lock = threading.Lock()
         self._arrived = threading.Condition(self._lock)
@@ -173,9 +176,11 @@ class Bridge:
                 net.subscribe(cob.EMCY + nid, self._emcy_handler(j))
                 net.subscribe(cob.HEARTBEAT + nid, self._heartbeat_handler(j))
                 self.nodes.append(node)
+                self.ids.append(nid)
                 self._net_of.append(net)
-        order = sorted(range(6), key=lambda k: list(cfg.node_ids).index(self.nodes[k].id))
+        order = sorted(range(6), key=lambda k: list(cfg.node_ids).index(self.ids[k]))
         self.nodes = [self.nodes[k] for k in order]
+        self.ids = [self.ids[k] for k in order]
         self._net_of = [self._net_of[k] for k in order]
         self.watches: list[_BusWatch] = []
         self.loggers: list[can.Listener] = []
@@ -269,7 +274,7 @@ class Bridge:
                 node.sdo[0x607D][1].raw = int(lo[j])
                 node.sdo[0x607D][2].raw = int(hi[j])
                 node.sdo[0x6065].raw = window
-            except (canopen.SdoError, can.CanError) as e:
+            except (canopen.SdoAbortedError, canopen.SdoCommunicationError, can.CanError) as e:
                 raise CanFaultError(f"drive {node.id}: configuration by SDO failed: {e}") from e
             node.nmt.send_command(0x01)  # NMT start: PDOs on, the drive's SYNC counter restarts
         self._send_heartbeat()
@@ -303,7 +308,7 @@ class Bridge:
         self.enabled = True
 
     def _send_control(self, j: int, cw: int) -> None:
-        self._net_of[j].send_message(cob.RPDO2 + self.nodes[j].id, pack_control(cw, MODE_CSP))
+        self._net_of[j].send_message(cob.RPDO2 + self.ids[j], pack_control(cw, MODE_CSP))
 
     def _send_all(self, cw: int) -> None:
         for j in range(6):
@@ -357,7 +362,7 @@ class Bridge:
         return handler
 
     def _accept_tpdo(self, j: int, data: bytearray) -> None:
-        nid = self.nodes[j].id
+        nid = self.ids[j]
         try:
             sw, pos = unpack_status(data)
         except FrameError:
@@ -383,7 +388,7 @@ class Bridge:
 
     def _emcy_handler(self, j: int) -> Any:
         def handler(can_id: int, data: bytearray, timestamp: float) -> None:
-            nid = self.nodes[j].id
+            nid = self.ids[j]
             if len(data) >= 2:
                 code = int.from_bytes(bytes(data[:2]), "little")
                 if code & 0xFF00 == 0:
@@ -400,7 +405,7 @@ class Bridge:
             with self._lock:
                 self.hb_cycle[j] = self.cycle
             if self.enabled and len(data) >= 1 and data[0] & 0x7F == 0:
-                self._event(f"drive {self.nodes[j].id} rebooted (boot-up message)")
+                self._event(f"drive {self.ids[j]} rebooted (boot-up message)")
 
         return handler
 
@@ -419,13 +424,13 @@ class Bridge:
             return
         self.fault, self.fault_cycle = reason, self.cycle
         self.quick_stop_cycle = self.cycle
-        for j, node in enumerate(self.nodes):
+        for j, nid in enumerate(self.ids):
             try:
                 self._net_of[j].send_message(
-                    cob.RPDO2 + node.id, pack_control(Controlword.QUICK_STOP, MODE_CSP)
+                    cob.RPDO2 + nid, pack_control(Controlword.QUICK_STOP, MODE_CSP)
                 )
             except can.CanError as e:
-                self.quick_stop_errors.append(f"drive {node.id}: {e}")
+                self.quick_stop_errors.append(f"drive {nid}: {e}")
 
     def check_command(self, theta_cmd: ArrayLike, advance: int = 1) -> NDArray[np.int64]:
         """The target counts of ``theta_cmd`` (rad, drive convention), or :class:`InvalidInputError`
@@ -473,9 +478,9 @@ class Bridge:
                 self.refused += 1
                 self._latch(f"command refused: {e}")
         if self.fault is None:
-            for j, node in enumerate(self.nodes):
-                if not self._send(self._net_of[j], cob.RPDO1 + node.id,
-                                  pack_target(int(counts[j])), f"RPDO1 to drive {node.id}"):
+            for j, nid in enumerate(self.ids):
+                if not self._send(self._net_of[j], cob.RPDO1 + nid,
+                                  pack_target(int(counts[j])), f"RPDO1 to drive {nid}"):
                     break
             else:
                 self.commands_sent += 1
@@ -487,7 +492,8 @@ class Bridge:
         self.syncs_sent += all(synced)
         if cfg.lockstep and self.cycle % self.hb_cycles == 0:
             self._send_heartbeat()
-        if cfg.lockstep and self.cycle % cfg.tpdo_every == 0:
+        # the drives count SYNCs, not cycles: a lost SYNC shifts their TPDO1 phase
+        if cfg.lockstep and all(synced) and self.syncs_sent % cfg.tpdo_every == 0:
             live = (self.cycle - self.rx_cycle) <= self.tpdo_timeout
             with self._arrived:
                 ok = self._arrived.wait_for(
@@ -512,14 +518,14 @@ class Bridge:
                 self._latch("heartbeat sender stopped (python-can's periodic task died)")
         if not self.enabled:
             return
-        for j, node in enumerate(self.nodes):
+        for j, nid in enumerate(self.ids):
             age = self.cycle - int(self.rx_cycle[j])
             if age > self.tpdo_timeout:
-                self._latch(f"TPDO1 of drive {node.id} is {age} cycles old "
+                self._latch(f"TPDO1 of drive {nid} is {age} cycles old "
                             f"(limit {self.tpdo_timeout})")
             hb_age = self.cycle - int(self.hb_cycle[j])
             if hb_age > self.hb_timeout:
-                self._latch(f"heartbeat of drive {node.id} lost ({hb_age} cycles, limit "
+                self._latch(f"heartbeat of drive {nid} lost ({hb_age} cycles, limit "
                             f"{self.hb_timeout:g})")
 
     def reading(self) -> Reading:

@@ -80,7 +80,7 @@ EMCY_CODES: dict[int, str] = {
 }
 
 
-class cob:  # noqa: N801 - a namespace of COB-ID bases, named as CiA 301 writes them
+class cob:
     """COB-IDs of the predefined connection set (CiA 301)."""
 
     NMT = 0x000

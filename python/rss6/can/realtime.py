@@ -54,7 +54,7 @@ def run_wall_clock(
     ``spin`` seconds before a deadline are busy-waited for a tighter start."""
     if not (period > 0 and duration > 0):
         raise InvalidInputError("period and duration must be > 0")
-    n = int(round(duration / period))
+    n = round(duration / period)
     starts: list[float] = []
     skipped = late = 0
     t0 = time.perf_counter()

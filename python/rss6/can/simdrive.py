@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import can
@@ -66,10 +66,10 @@ class SimDrive:
     def __init__(self, group: SimDrives, node_id: int, joint: int, modes: Sequence[int]):
         self.group, self.node_id, self.joint = group, node_id, joint
         self.modes = tuple(modes)
-        od = canopen.import_od(str(group.eds), node_id)
+        od: Any = canopen.import_od(str(group.eds), node_id)
         self.node = _DriveNode(node_id, od)
-        self.node.add_read_callback(self._on_read)
-        self.node.add_write_callback(self._on_write)
+        self.node.add_read_callback(self._on_read)  # type: ignore[no-untyped-call]
+        self.node.add_write_callback(self._on_write)  # type: ignore[no-untyped-call]
         self.heartbeat_cycles = max(1, round(int(od[0x1017].default) * 1e-3 / group.dt))
         hb = int(od[0x1016][1].default)
         self.consumer_id, self.consumer_cycles = (hb >> 16) & 0x7F, (hb & 0xFFFF) * 1e-3 / group.dt
@@ -121,7 +121,7 @@ class SimDrive:
         return sw | (SW_FOLLOWING_ERROR_BIT if self.following_error else 0)
 
     def _on_read(self, index: int, subindex: int, od: Any) -> int | None:
-        live = {
+        live: dict[int, Callable[[], int]] = {
             0x6041: self.statusword,
             0x6061: lambda: self.mode,
             0x6064: lambda: self.position,
@@ -227,10 +227,10 @@ class SimDrive:
     def after_tick(self, tick: int, counts: int) -> None:
         """After the robot moved one tick: following error, bridge watchdog, TPDO1, heartbeat."""
         self.position = counts
-        if self.state is S.OPERATION_ENABLED and self.target is not None:
-            if abs(self.target - counts) > self.window:
-                self.following_error = True
-                self.trip(0x8611)
+        if (self.state is S.OPERATION_ENABLED and self.target is not None
+                and abs(self.target - counts) > self.window):
+            self.following_error = True
+            self.trip(0x8611)
         seen = self.bridge_heartbeat_tick
         if (
             seen is not None
@@ -284,6 +284,8 @@ class SimDrives:
         self._lock = threading.Lock()
         self._ticked = threading.Condition(self._lock)
         self.networks = [canopen.Network(bus) for bus in self.buses]
+        for net in self.networks:
+            net.NOTIFIER_CYCLE = 0.05  # the notifier thread notices stop() within 50 ms, not 1 s
         self.drives: list[SimDrive] = []
         self._net_of: dict[int, canopen.Network] = {}
         self._syncs = [0] * len(self.networks)
