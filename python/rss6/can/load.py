@@ -5,16 +5,16 @@ r0, DLC, data, 15-bit CRC, CRC and ACK delimiters, ACK, 7-bit EOF, 3-bit intermi
 adds one bit after five equal bits in the 34 + 8n bits from SOF to the end of the CRC: at worst
 ⌊(34 + 8n − 1)/4⌋ bits. Six drives with RPDO1 (4 bytes) + SYNC at 1 kHz and TPDO1 (6 bytes) at
 500 Hz need 806 kbit/s (80.6 % of 1 Mbit/s) or 970 kbit/s worst-case stuffed (97.0 %), before
-heartbeats (with 10 ms heartbeats: 84.5 % / 101.5 %). :data:`MAX_LOAD` is the limit: the
+heartbeats (with 10 ms heartbeats: 84.5 % / 101.6 %). :data:`MAX_LOAD` is the limit: the
 worst-case (stuffed) load, heartbeats included, must stay at or below 90 %; split the drives over
-two channels (3 drives each: 53.9 %) or lower the rates (TPDO1 every 4th SYNC: 84.3 %).
+two channels (3 drives each: 53.8 %) or lower the rates (TPDO1 every 4th SYNC: 84.3 %).
 
 >>> from rss6.can.load import bus_load
 >>> one = bus_load(6, bitrate=1_000_000, heartbeat_ms=0, bridge_heartbeat_ms=0)
 >>> f"{one.nominal:.1%} {one.worst_case:.1%}"
 '80.6% 97.0%'
 >>> f"{bus_load(6).worst_case:.1%} {bus_load(3).worst_case:.1%}"  # with 10 ms heartbeats
-'101.5% 53.9%'
+'101.6% 53.8%'
 """
 
 from __future__ import annotations

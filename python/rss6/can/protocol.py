@@ -16,8 +16,8 @@ COB-ID     direction   bytes  content                                           
 
 >>> from rss6.can.protocol import CountMap, pack_status, unpack_status
 >>> m = CountMap.nominal()
->>> int(m.to_counts([0.1, 0, 0, 0, 0, 0])[0]), round(m.counts_per_radian[0], 1)
-(33376, 333772.1)
+>>> int(m.to_counts([0.1, 0, 0, 0, 0, 0])[0]), round(float(m.counts_per_radian[0]), 1)
+(33377, 333772.1)
 >>> unpack_status(pack_status(0x0027, -1234))
 (39, -1234)
 """
