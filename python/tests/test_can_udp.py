@@ -59,6 +59,15 @@ BRIDGE = textwrap.dedent(
 )
 
 
+def test_can_sim_cli_runs_on_a_virtual_bus(capsys: pytest.CaptureFixture[str]) -> None:
+    from rss6.cli import main
+
+    assert main(["can-sim", "--channel", "rss6-cli-test", "--seconds", "0.2"]) == 0
+    out = capsys.readouterr().out
+    assert "rss6 can-sim: drives 1, 2, 3, 4, 5, 6 on virtual rss6-cli-test (model)" in out
+    assert "0 ticks" in out and "SWITCH_ON_DISABLED" in out
+
+
 def _namespace_ok() -> bool:
     if shutil.which("unshare") is None or shutil.which("ip") is None:
         return False
