@@ -80,6 +80,19 @@ def test_drive_fault_stops_all_six(emcy: bool, match: str) -> None:
         _assert_stopped(robot, 41, 3, match)
 
 
+def test_fault_reactions_are_deterministic() -> None:
+    """Lockstep covers the fault path too: the same injection gives the same cycles every run."""
+    runs = []
+    for _ in range(2):
+        with rcan.simulated_robot(_plant()) as robot:
+            _run(robot, 41)
+            robot.drives[0].trip(0x8611)
+            _run(robot, 10, start=41)
+            runs.append((robot.bridge.fault_cycle, [d.quick_stop_tick for d in robot.drives],
+                         robot.fence_timeouts))
+    assert runs[0] == runs[1] == (42, [42] * 6, 0)
+
+
 def test_real_following_error_sends_emcy() -> None:
     with rcan.simulated_robot(_plant()) as robot:
         robot.bridge.nodes[3].sdo[0x6065].raw = 1  # a one-count window: any lag trips the drive

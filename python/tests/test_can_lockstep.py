@@ -109,7 +109,7 @@ def test_lockstep_through_the_bus_equals_the_plant(channels: int) -> None:
         assert isinstance(robot, rss6.types.Robot)
         bus_pose, bus_kappa, bus_cam = _closed_loop(robot, n)
         stats = robot.bridge.stats()
-        assert robot.fault is None and stats["lost_waits"] == 0
+        assert robot.fault is None and stats["lost_waits"] == 0 and robot.fence_timeouts == 0
         assert stats["commands_sent"] == n and sum(stats["rejected"].values()) == 0
     direct = _plant()
     direct.reset(rss6.home_pose())

@@ -110,9 +110,11 @@ class _BusWatch(can.Listener):
         self.frames = 0
 
     def on_message_received(self, msg: can.Message) -> None:
-        self.frames += 1
         if msg.is_error_frame:
             self.bridge._event(f"error frame on channel {self.channel}")
+        with self.bridge._arrived:  # after canopen's handlers: the frame is fully processed
+            self.frames += 1
+            self.bridge._arrived.notify_all()
 
     def on_error(self, exc: Exception) -> None:
         self.bridge._event(f"receive error on channel {self.channel}: {exc}")
@@ -299,9 +301,9 @@ class Bridge:
         self._wait_states(DriveState.SWITCHED_ON, timeout)
         self._send_all(Controlword.ENABLE_OPERATION)
         self._wait_states(DriveState.OPERATION_ENABLED, timeout)
+        positions = [int(node.sdo[0x6064].raw) for node in self.nodes]  # no lock held over SDO
         with self._lock:
-            for j, node in enumerate(self.nodes):
-                self.positions[j] = int(node.sdo[0x6064].raw)
+            self.positions[:] = positions
         if not cfg.lockstep:
             self._start_periodic_heartbeat()
         self.enabled = True
@@ -526,6 +528,18 @@ class Bridge:
             if hb_age > self.hb_timeout:
                 self._latch(f"heartbeat of drive {nid} lost ({hb_age} cycles, limit "
                             f"{self.hb_timeout:g})")
+
+    def frames_seen(self) -> int:
+        """Frames the drives sent that this side has processed, all channels (a
+        :class:`FaultyBus` reports what it dropped, held or added)."""
+        seen = sum(w.frames for w in self.watches)
+        return seen + sum(int(getattr(bus, "unseen", lambda: 0)()) for bus in self.buses)
+
+    def wait_frames(self, count: int, timeout: float) -> bool:
+        """Waits until :meth:`frames_seen` reaches ``count`` (the lockstep fence); False on
+        timeout."""
+        with self._arrived:
+            return self._arrived.wait_for(lambda: self.frames_seen() >= count, timeout)
 
     def reading(self) -> Reading:
         """The latest accepted positions, their ages and the latched fault."""

@@ -147,6 +147,13 @@ class FaultyBus(can.BusABC):
             self._ready.extend(out[1:])
             return out[0], True
 
+    def unseen(self) -> int:
+        """Frames read from the wrapped bus that listeners will not see (dropped, held) minus the
+        frames it added (duplicates, error frames): delivered = read − unseen."""
+        with self._lock:
+            extra = self.counts["duplicated"] + self.counts["error_frames"]
+            return self.counts["dropped"] + len(self._held) - extra
+
     def shutdown(self) -> None:
         super().shutdown()
         self.inner.shutdown()

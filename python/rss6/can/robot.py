@@ -50,6 +50,9 @@ class CanRobot:
         self.sim = sim
         self._camera = camera
         self.tick_timeout = tick_timeout
+        self.fence_timeout = 0.1
+        self.fence_timeouts = 0
+        self._frames_offset = 0
         self.last: Reading | None = None
 
     # --- the Robot protocol ---------------------------------------------------------------------
@@ -82,6 +85,9 @@ class CanRobot:
             self.sim.reset(pose)
         self.bridge.enable()
         self.last = self.bridge.reading()
+        if self.sim is not None:
+            self.bridge.wait_frames(self.sim.frames_sent - self._frames_offset, 0.2)
+            self._frames_offset = self.sim.frames_sent - self.bridge.frames_seen()
 
     def step_joint_command(self, theta_cmd: ArrayLike) -> None:
         """One cycle (see :meth:`Bridge.step`); after a fault, commands are dropped and the drives
@@ -92,6 +98,13 @@ class CanRobot:
             if not self.sim.wait_tick(want, self.tick_timeout):
                 self.bridge._latch(f"the simulated drives missed a SYNC (tick {self.sim.tick} "
                                    f"of {want})")
+            # lockstep fence: every frame the drives sent this tick (EMCY, heartbeats, TPDO1) has
+            # been processed by the bridge before the next cycle, so fault reactions are as
+            # deterministic as the data
+            if self.bridge.config.lockstep:
+                self.fence_timeouts += not self.bridge.wait_frames(
+                    self.sim.frames_sent - self._frames_offset, self.fence_timeout
+                )
 
     def step_joint_commands(self, cmds: ArrayLike) -> dict[str, Any]:
         """N cycles, one command row each; returns what a caller would collect tick by tick:

@@ -55,6 +55,22 @@ class _DriveNode(canopen.LocalNode):
         self._write_callbacks.remove(self.nmt.on_write)
 
 
+class _CountingNetwork(canopen.Network):
+    """A canopen network that counts the frames it sent (PDOs, heartbeats, EMCY, SDO answers): the
+    bridge's side waits until it has seen as many, so a lockstep cycle ends with every frame the
+    drives sent in it processed."""
+
+    def __init__(self, bus: can.BusABC):
+        super().__init__(bus)
+        self.sent = 0
+        self._count_lock = threading.Lock()
+
+    def send_message(self, can_id: int, data: bytes, remote: bool = False) -> None:
+        super().send_message(can_id, data, remote)
+        with self._count_lock:
+            self.sent += 1
+
+
 class SimDrive:
     """One simulated drive (node ``node_id``, joint ``joint``) of a :class:`SimDrives` group.
 
@@ -283,7 +299,7 @@ class SimDrives:
         self.errors: list[str] = []
         self._lock = threading.Lock()
         self._ticked = threading.Condition(self._lock)
-        self.networks = [canopen.Network(bus) for bus in self.buses]
+        self.networks = [_CountingNetwork(bus) for bus in self.buses]
         for net in self.networks:
             net.NOTIFIER_CYCLE = 0.05  # the notifier thread notices stop() within 50 ms, not 1 s
         self.drives: list[SimDrive] = []
@@ -413,6 +429,11 @@ class SimDrives:
         """Waits until the robot has made ``tick`` ticks since reset; False on timeout."""
         with self._ticked:
             return self._ticked.wait_for(lambda: self.tick >= tick, timeout)
+
+    @property
+    def frames_sent(self) -> int:
+        """Frames the drives' side has sent since start, all channels."""
+        return sum(net.sent for net in self.networks)
 
     def states(self) -> list[DriveState]:
         """Each drive's 402 state, joint order."""
