@@ -126,6 +126,23 @@ def test_lockstep_through_the_bus_equals_the_plant(channels: int) -> None:
     assert np.max(np.abs(bus_pose - pose_raw)) < 1e-5
 
 
+@pytest.mark.skipif(rss6.Plant is None, reason="this build has no rapier plant")
+def test_lockstep_with_the_rapier_plant() -> None:
+    def make() -> rss6.Plant:
+        return rss6.Plant(rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=2)
+
+    m = rcan.CountMap.nominal()
+    with rcan.simulated_robot(make()) as robot:
+        bus_pose, bus_kappa, bus_cam = _closed_loop(robot, 500)
+        assert robot.fault is None
+    direct = make()
+    direct.reset(rss6.home_pose())
+    pose, kappa, cam = _closed_loop(direct, 500, quantise=m.quantise)
+    assert np.array_equal(bus_pose, pose)
+    assert np.array_equal(bus_cam, cam, equal_nan=True)
+    assert np.max(np.abs(bus_kappa - kappa)) <= 0.5 / m.counts_per_bit
+
+
 def test_servo_track_through_the_bridge_equals_the_plant() -> None:
     """Issue 15's must-show: DSMC, Experiment 1, 10 s through the bridge = on the plant, within
     the count quantisation. Needs the bindings to accept any Robot (the adapter of issue 11)."""
@@ -151,8 +168,9 @@ def test_enable_reads_the_mode_back() -> None:
         pass
 
 
-def test_step_joint_commands_and_the_bus_log(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    log = tmp_path / "bus.asc"
+@pytest.mark.parametrize("suffix", [".asc", ".log"])
+def test_step_joint_commands_and_the_bus_log(tmp_path, suffix: str) -> None:  # type: ignore[no-untyped-def]
+    log = tmp_path / f"bus{suffix}"
     cfg = rcan.BridgeConfig(log=log)
     with rcan.simulated_robot(_plant(), config=cfg) as robot:
         out = robot.step_joint_commands(np.zeros((100, 6)))
