@@ -180,3 +180,15 @@ def test_step_joint_commands_and_the_bus_log(tmp_path, suffix: str) -> None:  # 
     frames = list(can.LogReader(str(log)))
     ids = [f.arbitration_id for f in frames if not f.is_error_frame]
     assert ids.count(0x181) == 50  # TPDO1 of drive 1 every 2nd SYNC
+
+
+def test_enable_without_drives_names_the_failure() -> None:
+    bus = can.Bus(interface="virtual", channel="rss6-no-drives")
+    try:
+        with rcan.Bridge(bus, rcan.BridgeConfig(sdo_timeout=0.05)) as bridge:
+            with pytest.raises(rcan.CanFaultError, match="drive 1: configuration by SDO failed"):
+                bridge.enable()
+            with pytest.raises(rcan.CanFaultError, match="not enabled"):
+                bridge.step(np.zeros(6))
+    finally:
+        bus.shutdown()

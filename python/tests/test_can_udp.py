@@ -24,7 +24,6 @@ BRIDGE = textwrap.dedent(
     """
     import json, sys, time
     import numpy as np
-    import canopen
     import rss6.can as rc
     from rss6.can.simcli import make_bus
 
@@ -36,7 +35,7 @@ BRIDGE = textwrap.dedent(
         try:
             robot.reset(None)
             break
-        except (rc.CanFaultError, canopen.SdoCommunicationError) as e:
+        except rc.CanFaultError as e:
             if time.monotonic() > end:
                 print(json.dumps({"error": f"no drives: {e}"}))
                 sys.exit(1)

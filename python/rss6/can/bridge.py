@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from os import PathLike
@@ -279,6 +280,15 @@ class Bridge:
                 raise CanFaultError(f"drive {node.id}: configuration by SDO failed: {e}") from e
             node.nmt.send_command(0x01)  # NMT start: PDOs on, the drive's SYNC counter restarts
         self._send_heartbeat()
+        try:
+            self._walk_to_enabled(timeout)
+        except (canopen.SdoAbortedError, canopen.SdoCommunicationError) as e:
+            raise CanFaultError(f"enable: an SDO exchange with the drives failed: {e}") from e
+        if not cfg.lockstep:
+            self._start_periodic_heartbeat()
+        self.enabled = True
+
+    def _walk_to_enabled(self, timeout: float) -> None:
         states = self._read_states()
         for j, st in enumerate(states):
             if st is DriveState.FAULT:
@@ -304,9 +314,6 @@ class Bridge:
         positions = [int(node.sdo[0x6064].raw) for node in self.nodes]  # no lock held over SDO
         with self._lock:
             self.positions[:] = positions
-        if not cfg.lockstep:
-            self._start_periodic_heartbeat()
-        self.enabled = True
 
     def _send_control(self, j: int, cw: int) -> None:
         self._net_of[j].send_message(cob.RPDO2 + self.ids[j], pack_control(cw, MODE_CSP))
@@ -319,8 +326,6 @@ class Bridge:
         return [state_from_statusword(int(n.sdo[0x6041].raw)) for n in self.nodes]
 
     def _wait_states(self, target: DriveState, timeout: float) -> None:
-        import time
-
         end = time.monotonic() + timeout
         while True:
             states = self._read_states()
