@@ -43,6 +43,8 @@ def test_bridge_refuses_an_overloaded_bus_and_accepts_two_channels() -> None:
         assert max(ld.worst_case for ld in b.loads) < 0.55
         slow = rcan.Bridge(buses[0], rcan.BridgeConfig(bitrate=1_000_000, tpdo_every=4))
         assert slow.loads[0].worst_case < rcan.MAX_LOAD
+        half = rcan.Bridge(buses[0], rcan.BridgeConfig(bitrate=1_000_000, dt=2e-3))
+        assert half.loads[0].worst_case == pytest.approx(0.5305)
     finally:
         for bus in buses:
             bus.shutdown()
@@ -159,6 +161,20 @@ def test_servo_track_through_the_bridge_equals_the_plant() -> None:
     assert res.true.shape == ref.true.shape
     assert np.max(np.abs(res.true - ref.true)) < 1e-4
     assert np.allclose(res.rmse, ref.rmse, rtol=0.05, atol=2e-5)
+
+
+def test_lower_rates_in_lockstep() -> None:
+    """SYNC at 500 Hz: the plant's tick, the bridge's cycle and the heartbeat counts follow dt."""
+    plant = rss6.ModelSim(rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=1,
+                          dt=2e-3)
+    with pytest.raises(rss6.InvalidInputError, match="SYNC period"), rcan.simulated_robot(
+        plant, config=rcan.BridgeConfig(dt=1e-3)
+    ):
+        pass
+    with rcan.simulated_robot(plant) as robot:
+        robot.step_joint_commands(np.zeros((100, 6)))
+        assert robot.time == pytest.approx(0.2) and robot.fault is None
+        assert robot.drives[0].heartbeat_cycles == 5 and robot.bridge.hb_cycles == 5
 
 
 def test_enable_reads_the_mode_back() -> None:

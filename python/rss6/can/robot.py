@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from rss6.can.bridge import Bridge, BridgeConfig, Reading
 from rss6.can.protocol import CountMap
 from rss6.can.simdrive import SimDrive, SimDrives
-from rss6.errors import Rss6Error
+from rss6.errors import InvalidInputError, Rss6Error
 
 __all__ = ["CanRobot", "simulated_robot"]
 
@@ -202,7 +202,11 @@ def simulated_robot(
         names = list(channel)
     if len(names) != channels:
         raise Rss6Error(f"{channels} channels need {channels} channel names, got {names}")
-    cfg = config if config is not None else BridgeConfig()
+    cfg = config if config is not None else BridgeConfig(dt=float(plant.dt))
+    if abs(cfg.dt - float(plant.dt)) > 1e-12:
+        raise InvalidInputError(
+            f"the SYNC period dt = {cfg.dt} s must equal the plant's tick {plant.dt} s (lockstep)"
+        )
     cmap = cfg.count_map if cfg.count_map is not None else CountMap.nominal()
     buses: list[can.BusABC] = []
     robot: CanRobot | None = None
