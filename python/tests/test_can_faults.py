@@ -90,7 +90,8 @@ def test_fault_reactions_are_deterministic() -> None:
             _run(robot, 10, start=41)
             runs.append((robot.bridge.fault_cycle, [d.quick_stop_tick for d in robot.drives],
                          robot.fence_timeouts))
-    assert runs[0] == runs[1] == (42, [42] * 6, 0)
+    # latched at the start of cycle 42: the quick stop reaches the drives before SYNC 42 (tick 41)
+    assert runs[0] == runs[1] == (42, [41] * 6, 0)
 
 
 def test_real_following_error_sends_emcy() -> None:

@@ -477,6 +477,7 @@ class Bridge:
         self.cycle += advance
         self.late_cycles += advance - 1
         cfg = self.config
+        self._drain_events()  # an EMCY that arrived since the last cycle stops this cycle's command
         if self.fault is None:
             try:
                 counts = self.check_command(theta_cmd, advance)
@@ -509,11 +510,14 @@ class Bridge:
         self._watchdogs()
         return self.reading()
 
-    def _watchdogs(self) -> None:
+    def _drain_events(self) -> None:
         with self._lock:
             events, self.events = self.events, []
         for e in events:
             self._latch(e)
+
+    def _watchdogs(self) -> None:
+        self._drain_events()
         for ch, net in enumerate(self.networks):
             exc = net.notifier.exception if net.notifier is not None else None
             if exc is not None:

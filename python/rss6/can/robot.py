@@ -92,19 +92,22 @@ class CanRobot:
     def step_joint_command(self, theta_cmd: ArrayLike) -> None:
         """One cycle (see :meth:`Bridge.step`); after a fault, commands are dropped and the drives
         hold their quick-stop positions while time goes on."""
+        self._fence()  # anything the drives sent since (e.g. an injected EMCY) is seen first
         self.last = self.bridge.step(theta_cmd)
         if self.sim is not None:
             want = self.bridge.syncs_sent
             if not self.sim.wait_tick(want, self.tick_timeout):
                 self.bridge._latch(f"the simulated drives missed a SYNC (tick {self.sim.tick} "
                                    f"of {want})")
-            # lockstep fence: every frame the drives sent this tick (EMCY, heartbeats, TPDO1) has
-            # been processed by the bridge before the next cycle, so fault reactions are as
-            # deterministic as the data
-            if self.bridge.config.lockstep:
-                self.fence_timeouts += not self.bridge.wait_frames(
-                    self.sim.frames_sent - self._frames_offset, self.fence_timeout
-                )
+            self._fence()
+
+    def _fence(self) -> None:
+        """Lockstep fence: every frame the simulated drives sent (EMCY, heartbeats, TPDO1) has
+        been processed by the bridge, so fault reactions are as deterministic as the data."""
+        if self.sim is not None and self.bridge.config.lockstep:
+            self.fence_timeouts += not self.bridge.wait_frames(
+                self.sim.frames_sent - self._frames_offset, self.fence_timeout
+            )
 
     def step_joint_commands(self, cmds: ArrayLike) -> dict[str, Any]:
         """N cycles, one command row each; returns what a caller would collect tick by tick:
