@@ -251,3 +251,30 @@ def test_dead_periodic_heartbeat_task_is_a_fault() -> None:
         sim.stop()
         fb.shutdown()
         buses[0].shutdown()
+
+
+def test_drives_in_their_own_process_fault_when_the_bridge_dies() -> None:
+    """``wall_clock_watch`` (what ``rss6 can-sim`` uses): once the bridge's heartbeat and SYNC stop,
+    each drive's 0x1016 (25 ms) expires on the wall clock and it faults with EMCY 0x8130."""
+    buses = [can.Bus(interface="virtual", channel="rss6-dead-bridge") for _ in range(2)]
+    plant = _plant()
+    plant.reset(rss6.home_pose())
+    sim = rcan.SimDrives(plant, buses[0], wall_clock_watch=True).start()
+    bridge = rcan.Bridge(buses[1])
+    try:
+        bridge.enable()
+        for k in range(20):
+            bridge.step(_cmd(k))
+        bridge.close()  # the bridge is gone: no heartbeat, no SYNC
+        end = time.monotonic() + 5.0
+        while time.monotonic() < end and not all(
+            d.state is rcan.DriveState.FAULT for d in sim.drives
+        ):
+            time.sleep(0.01)
+        assert all(d.state is rcan.DriveState.FAULT for d in sim.drives)
+        assert all(0x8130 in d.emcy_sent for d in sim.drives)
+    finally:
+        bridge.close()
+        sim.stop()
+        for bus in buses:
+            bus.shutdown()

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     groups = split_nodes(DRIVE_IDS, len(args.channel))
     buses = [make_bus(args.interface, ch, "drives", ids) for ch, ids in zip(args.channel, groups)]
     loggers: list[Any] = []
-    sim = SimDrives(plant, buses, tpdo_every=args.tpdo_every)
+    sim = SimDrives(plant, buses, tpdo_every=args.tpdo_every, wall_clock_watch=True)
     try:
         sim.start()
         if args.log:

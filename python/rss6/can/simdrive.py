@@ -13,8 +13,8 @@ only on SYNC, so heartbeat periods and the consumer timeout are SYNC counts too.
 
 from __future__ import annotations
 
-import logging
 import threading
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -41,7 +41,6 @@ from rss6.errors import InvalidInputError
 
 __all__ = ["SimDrive", "SimDrives"]
 
-log = logging.getLogger(__name__)
 S = DriveState
 
 
@@ -108,6 +107,7 @@ class SimDrive:
         self.quick_stop_tick: int | None = None
         self.targets_after_stop = 0
         self.bridge_heartbeat_tick: int | None = None
+        self.bridge_heartbeat_time: float | None = None
         self.emcy_sent: list[int] = []
         self.sync_count = 0
 
@@ -273,6 +273,9 @@ class SimDrives:
 
     ``count_map``: the drives' counts ↔ radian mapping (default: nominal). ``tpdo_every``: TPDO1
     every n-th SYNC. ``modes``: the modes of operation the drives accept (default CSP only).
+    ``wall_clock_watch``: also watch the bridge's heartbeat on the wall clock (0x1016 in ms), so a
+    bridge that dies with its SYNC faults the drives — for drives in their own process
+    (``rss6 can-sim``); lockstep runs leave it off and count SYNCs only.
     """
 
     def __init__(
@@ -285,6 +288,7 @@ class SimDrives:
         tpdo_every: int = 2,
         modes: Sequence[int] = (MODE_CSP,),
         eds: str | None = None,
+        wall_clock_watch: bool = False,
     ):
         self.plant = plant
         self.buses = [buses] if isinstance(buses, can.BusABC) else list(buses)
@@ -319,6 +323,9 @@ class SimDrives:
             net.subscribe(cob.NMT, self._nmt_handler(ids))
         self.drives.sort(key=lambda d: d.joint)
         self._started = False
+        self.wall_clock_watch = wall_clock_watch
+        self._watch_stop = threading.Event()
+        self._watcher: threading.Thread | None = None
 
     # --- lifecycle ------------------------------------------------------------------------------
     def start(self) -> SimDrives:
@@ -330,11 +337,34 @@ class SimDrives:
             self._publish_positions()
             for d in self.drives:
                 self.send(d, cob.HEARTBEAT + d.node_id, b"\x00")
+            if self.wall_clock_watch:
+                self._watch_stop.clear()
+                self._watcher = threading.Thread(target=self._watch, name="rss6 drives: 0x1016",
+                                                 daemon=True)
+                self._watcher.start()
         return self
+
+    def _watch(self) -> None:
+        """The consumer heartbeat on the wall clock: a drive whose bridge heartbeat (once seen) is
+        older than its 0x1016 time faults with EMCY 0x8130."""
+        while not self._watch_stop.wait(0.005):
+            now = time.monotonic()
+            with self._lock:
+                for d in self.drives:
+                    seen = d.bridge_heartbeat_time
+                    limit = d.consumer_cycles * self.dt
+                    if (seen is not None and limit > 0 and now - seen > limit
+                            and d.state is not DriveState.FAULT):
+                        d.bridge_heartbeat_time = d.bridge_heartbeat_tick = None
+                        d.trip(0x8130)
 
     def stop(self) -> None:
         """Stops the notifiers (the buses stay open: their owner shuts them down)."""
         if self._started:
+            self._watch_stop.set()
+            if self._watcher is not None:
+                self._watcher.join(1.0)
+                self._watcher = None
             for net in self.networks:
                 if net.notifier is not None:
                     net.notifier.stop(1.0)
@@ -376,6 +406,7 @@ class SimDrives:
         def handler(can_id: int, data: bytearray, timestamp: float) -> None:
             if kind == "heartbeat":
                 d.bridge_heartbeat_tick = self.tick
+                d.bridge_heartbeat_time = time.monotonic()
                 return
             if d.node.nmt.state != "OPERATIONAL":
                 return
