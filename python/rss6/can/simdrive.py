@@ -8,7 +8,9 @@ the drives' networks and steps the robot by exactly one tick per SYNC with the s
 before it (lockstep): a run through the bus is as deterministic as the robot itself.
 
 Time on the drives' side is counted in SYNCs (one SYNC = one robot tick = ``dt``): the robot moves
-only on SYNC, so heartbeat periods and the consumer timeout are SYNC counts too.
+only on SYNC, so heartbeat periods and the consumer timeout are SYNC counts too. Drives in their own
+process (``rss6 can-sim``) also watch the bridge's heartbeat on the wall clock, for a bridge that
+dies together with its SYNC.
 """
 
 from __future__ import annotations
