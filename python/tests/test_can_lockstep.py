@@ -190,9 +190,10 @@ def test_step_joint_commands_and_the_bus_log(tmp_path, suffix: str) -> None:  # 
     cfg = rcan.BridgeConfig(log=log)
     with rcan.simulated_robot(_plant(), config=cfg) as robot:
         out = robot.step_joint_commands(np.zeros((100, 6)))
-    assert out["t"][-1] == pytest.approx(0.1) and out["fault"] is None
+    assert out["time"][-1] == pytest.approx(0.1) and out["fault"] is None
     assert out["kappa"].shape == (100, 6) and np.all(out["ages"] <= 1)
-    assert np.sum(np.isfinite(out["camera"][:, 0])) >= 3  # ≈ 30 Hz camera
+    assert out["camera"].shape == (len(out["camera_time"]), 6) and len(out["camera_time"]) >= 3
+    assert np.all(np.isfinite(out["true_pose"]))
     frames = list(can.LogReader(str(log)))
     ids = [f.arbitration_id for f in frames if not f.is_error_frame]
     assert ids.count(0x181) == 50  # TPDO1 of drive 1 every 2nd SYNC

@@ -109,28 +109,42 @@ class CanRobot:
                 self.sim.frames_sent - self._frames_offset, self.fence_timeout
             )
 
-    def step_joint_commands(self, cmds: ArrayLike) -> dict[str, Any]:
-        """N cycles, one command row each; returns what a caller would collect tick by tick:
-        ``t`` (N,), ``kappa`` (N, 6), ``ages`` (N, 6), ``camera`` (N, 6, NaN without a frame),
-        ``true_pose`` (N, 6, simulated only, else NaN) and the ``fault`` at the end."""
-        c = np.asarray(cmds, dtype=np.float64)
+    def step_joint_commands(self, commands: ArrayLike) -> dict[str, Any]:
+        """N cycles, one command row each (N, 6) rad; returns what a caller would collect tick by
+        tick, with the plant's keys: ``time`` (N,) s, ``true_pose`` and ``true_theta`` (N, 6;
+        simulated drives only, else NaN), ``kappa`` (N, 6) bit, ``torque`` (N, 6) N·m,
+        ``camera_time`` (M,) s and ``camera`` (M, 6) ᶜχ_t frames; and the bridge's ``ages``
+        (N, 6) cycles and the ``fault`` at the end (None or the latched reason)."""
+        c = np.asarray(commands, dtype=np.float64)
         if c.ndim != 2 or c.shape[1] != 6:
-            raise Rss6Error(f"commands must have shape (N, 6), got {c.shape}")
+            raise InvalidInputError(f"commands must have shape (N, 6), got {c.shape}")
         n = len(c)
-        out = {k: np.full((n, 6), np.nan) for k in ("kappa", "ages", "camera", "true_pose")}
+        out = {k: np.full((n, 6), np.nan) for k in ("true_pose", "true_theta", "kappa", "torque")}
+        ages = np.zeros((n, 6), dtype=np.int64)
         t = np.empty(n)
+        cam_t: list[float] = []
+        cams: list[F64] = []
         for k in range(n):
             self.step_joint_command(c[k])
             t[k] = self.time
             out["kappa"][k] = self.potentiometers()
-            assert self.last is not None
-            out["ages"][k] = self.last.ages
+            out["torque"][k] = self.torque()
+            ages[k] = self.ages()
             cam = self.camera()
             if cam is not None:
-                out["camera"][k] = cam
+                cam_t.append(t[k])
+                cams.append(cam)
             if self.sim is not None:
-                out["true_pose"][k] = self.sim.plant.true_pose()
-        return {"t": t, **out, "fault": self.fault}
+                out["true_pose"][k] = self.true_pose()
+                out["true_theta"][k] = self.true_theta()
+        return {
+            "time": t,
+            **out,
+            "camera_time": np.asarray(cam_t, dtype=np.float64),
+            "camera": np.asarray(cams, dtype=np.float64).reshape(-1, 6),
+            "ages": ages,
+            "fault": self.fault,
+        }
 
     def camera(self) -> F64 | None:
         """ᶜχ_t from the camera source if it exposed a frame during the last tick, else None."""
@@ -158,6 +172,10 @@ class CanRobot:
     def true_pose(self) -> F64:
         """The true end-effector pose (simulated drives only)."""
         return np.asarray(self._simulated().plant.true_pose(), dtype=np.float64)
+
+    def true_theta(self) -> F64:
+        """The true joint angles (simulated drives only)."""
+        return np.asarray(self._simulated().plant.true_theta(), dtype=np.float64)
 
     def truth(self) -> dict[str, Any]:
         """The simulated robot's truth (simulated drives only)."""
