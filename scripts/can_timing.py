@@ -44,8 +44,10 @@ def main() -> None:
         bridge_bus.shutdown()
     print(stats)
     a = np.asarray(ages)
-    print(f"TPDO1 age (cycles): median {np.median(a):.0f}, p99 {np.percentile(a, 99):.0f}, "
-          f"max {a.max()}")
+    print(
+        f"TPDO1 age (cycles): median {np.median(a):.0f}, p99 {np.percentile(a, 99):.0f}, "
+        f"max {a.max()}"
+    )
     print(f"bridge: {bridge.stats()}")
     print(f"drives: {sim.tick} robot ticks, send errors {sim.tx_errors}")
 

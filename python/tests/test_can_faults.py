@@ -29,8 +29,9 @@ def _cmd(k: int) -> np.ndarray:
     return 0.05 * np.sin(2 * np.pi * 1.0 * k * 1e-3) * np.ones(6)
 
 
-def _run(robot: rcan.CanRobot, n: int, start: int = 0,
-         cmd: Callable[[int], Any] = _cmd) -> list[np.ndarray]:
+def _run(
+    robot: rcan.CanRobot, n: int, start: int = 0, cmd: Callable[[int], Any] = _cmd
+) -> list[np.ndarray]:
     out = []
     for k in range(start, start + n):
         robot.step_joint_command(cmd(k))
@@ -88,8 +89,13 @@ def test_fault_reactions_are_deterministic() -> None:
             _run(robot, 41)
             robot.drives[0].trip(0x8611)
             _run(robot, 10, start=41)
-            runs.append((robot.bridge.fault_cycle, [d.quick_stop_tick for d in robot.drives],
-                         robot.fence_timeouts))
+            runs.append(
+                (
+                    robot.bridge.fault_cycle,
+                    [d.quick_stop_tick for d in robot.drives],
+                    robot.fence_timeouts,
+                )
+            )
     # latched at the start of cycle 42: the quick stop reaches the drives before SYNC 42 (tick 41)
     assert runs[0] == runs[1] == (42, [41] * 6, 0)
 
@@ -171,8 +177,9 @@ def test_single_losses_duplicates_and_delays_are_tolerated() -> None:
         ("value", P.pack_status(0x0237, 60_000), "jump"),
     ],
 )
-def test_corrupted_frames_never_reach_the_controller(how: str, value: bytes | None,
-                                                     kind: str) -> None:
+def test_corrupted_frames_never_reach_the_controller(
+    how: str, value: bytes | None, kind: str
+) -> None:
     faulty: list[rcan.FaultyBus] = []
 
     def wrap(bus: can.BusABC) -> can.BusABC:
@@ -201,8 +208,9 @@ def test_corrupted_frames_never_reach_the_controller(how: str, value: bytes | No
         (lambda c: np.where(np.arange(6) == 0, 1e9, c), "INT32"),
     ],
 )
-def test_bad_commands_are_refused_before_the_bus(bad: Callable[[np.ndarray], np.ndarray],
-                                                 match: str) -> None:
+def test_bad_commands_are_refused_before_the_bus(
+    bad: Callable[[np.ndarray], np.ndarray], match: str
+) -> None:
     with rcan.simulated_robot(_plant()) as robot:
         _run(robot, 30)
         robot.step_joint_command(bad(_cmd(30)))

@@ -165,10 +165,12 @@ def test_servo_track_through_the_bridge_equals_the_plant() -> None:
 
 def test_lower_rates_in_lockstep() -> None:
     """SYNC at 500 Hz: the plant's tick, the bridge's cycle and the heartbeat counts follow dt."""
-    plant = rss6.ModelSim(rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=1,
-                          dt=2e-3)
-    with pytest.raises(rss6.InvalidInputError, match="SYNC period"), rcan.simulated_robot(
-        plant, config=rcan.BridgeConfig(dt=1e-3)
+    plant = rss6.ModelSim(
+        rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=1, dt=2e-3
+    )
+    with (
+        pytest.raises(rss6.InvalidInputError, match="SYNC period"),
+        rcan.simulated_robot(plant, config=rcan.BridgeConfig(dt=1e-3)),
     ):
         pass
     with rcan.simulated_robot(plant) as robot:
@@ -178,8 +180,9 @@ def test_lower_rates_in_lockstep() -> None:
 
 
 def test_enable_reads_the_mode_back() -> None:
-    with pytest.raises(rcan.CanFaultError, match="mode of operation 0"), rcan.simulated_robot(
-        _plant(), modes=(1,)
+    with (
+        pytest.raises(rcan.CanFaultError, match="mode of operation 0"),
+        rcan.simulated_robot(_plant(), modes=(1,)),
     ):
         pass
 

@@ -74,8 +74,10 @@ def _namespace_ok() -> bool:
     return r.returncode == 0
 
 
-@pytest.mark.skipif(not _namespace_ok(), reason="unshare -rn (user + network namespace) not "
-                    "permitted here, or `ip` missing")
+@pytest.mark.skipif(
+    not _namespace_ok(),
+    reason="unshare -rn (user + network namespace) not permitted here, or `ip` missing",
+)
 def test_two_processes_over_udp_multicast(tmp_path: Path) -> None:
     script = tmp_path / "bridge.py"
     script.write_text(BRIDGE)
@@ -93,16 +95,19 @@ def test_two_processes_over_udp_multicast(tmp_path: Path) -> None:
         kill -TERM $SIM; wait $SIM || true
         """
     )
-    r = subprocess.run(["unshare", "-rn", "sh", "-c", shell], capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run(
+        ["unshare", "-rn", "sh", "-c", shell], capture_output=True, text=True, timeout=300
+    )
     assert r.returncode == 0, r.stderr
     text = out.read_text()
     assert text, (tmp_path / "bridge.err").read_text()
     res = json.loads(text.strip().splitlines()[-1])
     assert "error" not in res, res
     lost = res["tpdo_expected"] - res["tpdo_accepted"]
-    print(f"udp_multicast: {res['cycles']} cycles in {res['wall']:.1f} s, TPDO1 lost {lost} of "
-          f"{res['tpdo_expected']}, lost waits {res['lost_waits']}, fault {res['fault']}")
+    print(
+        f"udp_multicast: {res['cycles']} cycles in {res['wall']:.1f} s, TPDO1 lost {lost} of "
+        f"{res['tpdo_expected']}, lost waits {res['lost_waits']}, fault {res['fault']}"
+    )
     assert res["cycles"] == 5000
     if res["fault"] is None:
         assert lost <= res["tpdo_expected"] // 100  # the run completed on a working link

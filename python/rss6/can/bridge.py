@@ -129,20 +129,25 @@ class Bridge:
     (:class:`rss6.can.load.BusLoadError`); ``loads`` holds each channel's :class:`BusLoad`.
     """
 
-    def __init__(self, bus_or_buses: can.BusABC | Sequence[can.BusABC],
-                 config: BridgeConfig | None = None):
+    def __init__(
+        self, bus_or_buses: can.BusABC | Sequence[can.BusABC], config: BridgeConfig | None = None
+    ):
         cfg = config if config is not None else BridgeConfig()
         self.config = cfg
-        self.buses = ([bus_or_buses] if isinstance(bus_or_buses, can.BusABC)
-                      else list(bus_or_buses))
+        self.buses = [bus_or_buses] if isinstance(bus_or_buses, can.BusABC) else list(bus_or_buses)
         if len(cfg.node_ids) != 6:
             raise InvalidInputError("a 6-RSS robot needs six drives")
         self.map = cfg.count_map if cfg.count_map is not None else CountMap.nominal()
         self.groups = split_nodes(cfg.node_ids, len(self.buses))
         self.loads: list[BusLoad] = [
-            bus_load(len(g), bitrate=cfg.bitrate or 1_000_000, sync_hz=1.0 / cfg.dt,
-                     tpdo_every=cfg.tpdo_every, heartbeat_ms=cfg.heartbeat_ms,
-                     bridge_heartbeat_ms=cfg.bridge_heartbeat_ms)
+            bus_load(
+                len(g),
+                bitrate=cfg.bitrate or 1_000_000,
+                sync_hz=1.0 / cfg.dt,
+                tpdo_every=cfg.tpdo_every,
+                heartbeat_ms=cfg.heartbeat_ms,
+                bridge_heartbeat_ms=cfg.bridge_heartbeat_ms,
+            )
             for g in self.groups
         ]
         if cfg.bitrate is not None:
@@ -332,15 +337,19 @@ class Bridge:
             if all(s is target for s in states):
                 return
             if time.monotonic() > end:
-                bad = [(n.id, s.name if s else "?") for n, s in zip(self.nodes, states)
-                       if s is not target]
+                bad = [
+                    (n.id, s.name if s else "?")
+                    for n, s in zip(self.nodes, states)
+                    if s is not target
+                ]
                 raise CanFaultError(f"drives did not reach {target.name}: {bad}")
             time.sleep(0.002)
 
     # --- heartbeats -----------------------------------------------------------------------------
     def _heartbeat_msg(self) -> can.Message:
-        return can.Message(arbitration_id=cob.HEARTBEAT + BRIDGE_NODE_ID, data=b"\x05",
-                           is_extended_id=False)
+        return can.Message(
+            arbitration_id=cob.HEARTBEAT + BRIDGE_NODE_ID, data=b"\x05", is_extended_id=False
+        )
 
     def _send_heartbeat(self) -> None:
         for ch, net in enumerate(self.networks):
@@ -457,8 +466,9 @@ class Bridge:
         step = np.abs(counts - ref) / np.abs(self.map.counts_per_radian)
         allowed = self.config.v_max * self.config.dt * max(1, advance)
         if self._last_cmd is None:
-            allowed += self.config.noise_bits * float(np.max(np.abs(self.map.to_theta(1) -
-                                                                    self.map.to_theta(0))))
+            allowed += self.config.noise_bits * float(
+                np.max(np.abs(self.map.to_theta(1) - self.map.to_theta(0)))
+            )
         big = np.nonzero(step > allowed * (1 + 1e-9))[0]
         if big.size:
             j = int(big[0])
@@ -486,16 +496,22 @@ class Bridge:
                 self._latch(f"command refused: {e}")
         if self.fault is None:
             for j, nid in enumerate(self.ids):
-                if not self._send(self._net_of[j], cob.RPDO1 + nid,
-                                  pack_target(int(counts[j])), f"RPDO1 to drive {nid}"):
+                if not self._send(
+                    self._net_of[j],
+                    cob.RPDO1 + nid,
+                    pack_target(int(counts[j])),
+                    f"RPDO1 to drive {nid}",
+                ):
                     break
             else:
                 self.commands_sent += 1
                 self._last_cmd = counts
         with self._lock:
             seq0 = self.rx_seq.copy()
-        synced = [self._send(net, cob.SYNC, b"", f"SYNC on channel {ch}")
-                  for ch, net in enumerate(self.networks)]
+        synced = [
+            self._send(net, cob.SYNC, b"", f"SYNC on channel {ch}")
+            for ch, net in enumerate(self.networks)
+        ]
         self.syncs_sent += all(synced)
         if cfg.lockstep and self.cycle % self.hb_cycles == 0:
             self._send_heartbeat()
@@ -531,12 +547,12 @@ class Bridge:
         for j, nid in enumerate(self.ids):
             age = self.cycle - int(self.rx_cycle[j])
             if age > self.tpdo_timeout:
-                self._latch(f"TPDO1 of drive {nid} is {age} cycles old "
-                            f"(limit {self.tpdo_timeout})")
+                self._latch(f"TPDO1 of drive {nid} is {age} cycles old (limit {self.tpdo_timeout})")
             hb_age = self.cycle - int(self.hb_cycle[j])
             if hb_age > self.hb_timeout:
-                self._latch(f"heartbeat of drive {nid} lost ({hb_age} cycles, limit "
-                            f"{self.hb_timeout:g})")
+                self._latch(
+                    f"heartbeat of drive {nid} lost ({hb_age} cycles, limit {self.hb_timeout:g})"
+                )
 
     def frames_seen(self) -> int:
         """Frames the drives sent that this side has processed, all channels (a
@@ -555,8 +571,12 @@ class Bridge:
         with self._lock:
             counts = self.positions.copy()
             ages = self.cycle - self.rx_cycle
-        return Reading(self.map.to_kappa(counts), self.map.to_theta(counts),
-                       np.asarray(ages, dtype=np.int64), self.fault)
+        return Reading(
+            self.map.to_kappa(counts),
+            self.map.to_theta(counts),
+            np.asarray(ages, dtype=np.int64),
+            self.fault,
+        )
 
     def stats(self) -> dict[str, Any]:
         """Counters of the run: cycles, commands sent, refused, frames accepted/rejected, lost

@@ -53,8 +53,14 @@ class FaultyBus(can.BusABC):
         self._ready: deque[can.Message] = deque()
         self._lock = threading.Lock()
         self.counts: dict[str, int] = {
-            "dropped": 0, "delayed": 0, "duplicated": 0, "corrupted": 0, "send_failures": 0,
-            "send_dropped": 0, "error_frames": 0, "received": 0,
+            "dropped": 0,
+            "delayed": 0,
+            "duplicated": 0,
+            "corrupted": 0,
+            "send_failures": 0,
+            "send_dropped": 0,
+            "error_frames": 0,
+            "received": 0,
         }
         super().__init__(channel=getattr(bus, "channel_info", "faulty"), **kwargs)
         self.channel_info = f"faulty({getattr(bus, 'channel_info', '?')})"
@@ -77,8 +83,13 @@ class FaultyBus(can.BusABC):
         """Delivers each of the next ``count`` matching frames twice."""
         self._arm("duplicate", count, can_id)
 
-    def corrupt(self, count: int = 1, can_id: int | None = None, how: Corruption = "dlc",
-                value: bytes | None = None) -> None:
+    def corrupt(
+        self,
+        count: int = 1,
+        can_id: int | None = None,
+        how: Corruption = "dlc",
+        value: bytes | None = None,
+    ) -> None:
         """Corrupts the next ``count`` matching received frames: ``"dlc"`` drops the last data byte,
         ``"flip"`` flips the top bit of the last byte, ``"value"`` replaces the data by ``value``."""
         self._arm("corrupt", count, can_id, (how, value))
@@ -160,9 +171,13 @@ class FaultyBus(can.BusABC):
 
 
 def _copy(msg: can.Message) -> can.Message:
-    return can.Message(arbitration_id=msg.arbitration_id, data=bytes(msg.data),
-                       is_extended_id=msg.is_extended_id, timestamp=msg.timestamp,
-                       channel=msg.channel)
+    return can.Message(
+        arbitration_id=msg.arbitration_id,
+        data=bytes(msg.data),
+        is_extended_id=msg.is_extended_id,
+        timestamp=msg.timestamp,
+        channel=msg.channel,
+    )
 
 
 def _corrupted(msg: can.Message, how: str, value: bytes | None) -> can.Message:

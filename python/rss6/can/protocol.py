@@ -121,8 +121,11 @@ class DriveState(enum.Enum):
     def statusword(self) -> int:
         """The statusword of this state (bit 5 "quick stop" is active low, bit 4 voltage on)."""
         sw = int(self.value)
-        if self in (DriveState.READY_TO_SWITCH_ON, DriveState.SWITCHED_ON,
-                    DriveState.OPERATION_ENABLED):
+        if self in (
+            DriveState.READY_TO_SWITCH_ON,
+            DriveState.SWITCHED_ON,
+            DriveState.OPERATION_ENABLED,
+        ):
             sw |= 0x0010
         return sw
 

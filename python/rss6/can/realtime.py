@@ -77,5 +77,12 @@ def run_wall_clock(
         starts.append(now)
         k += 1
     d = np.diff(np.asarray(starts)) if len(starts) > 1 else np.zeros(1)
-    return CycleStats(period, len(starts), skipped, late, float(np.median(d)),
-                      float(np.percentile(d, 99)), float(np.max(d)))
+    return CycleStats(
+        period,
+        len(starts),
+        skipped,
+        late,
+        float(np.median(d)),
+        float(np.percentile(d, 99)),
+        float(np.max(d)),
+    )

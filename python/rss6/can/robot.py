@@ -44,8 +44,14 @@ class CanRobot:
     drives where they stand, ``torque`` is NaN (not on the bus) and the simulation-only members raise.
     """
 
-    def __init__(self, bridge: Bridge, *, camera: Callable[[], Any] | None = None,
-                 sim: SimDrives | None = None, tick_timeout: float = 2.0):
+    def __init__(
+        self,
+        bridge: Bridge,
+        *,
+        camera: Callable[[], Any] | None = None,
+        sim: SimDrives | None = None,
+        tick_timeout: float = 2.0,
+    ):
         self.bridge = bridge
         self.sim = sim
         self._camera = camera
@@ -97,8 +103,9 @@ class CanRobot:
         if self.sim is not None:
             want = self.bridge.syncs_sent
             if not self.sim.wait_tick(want, self.tick_timeout):
-                self.bridge._latch(f"the simulated drives missed a SYNC (tick {self.sim.tick} "
-                                   f"of {want})")
+                self.bridge._latch(
+                    f"the simulated drives missed a SYNC (tick {self.sim.tick} of {want})"
+                )
             self._fence()
 
     def _fence(self) -> None:
@@ -241,8 +248,9 @@ def simulated_robot(
             d_buses.append(drive_bus(d) if drive_bus is not None else d)
             b_buses.append(bridge_bus(b) if bridge_bus is not None else b)
         buses = d_buses + b_buses
-        sim = SimDrives(plant, d_buses, count_map=cmap, tpdo_every=cfg.tpdo_every,
-                        modes=modes).start()
+        sim = SimDrives(
+            plant, d_buses, count_map=cmap, tpdo_every=cfg.tpdo_every, modes=modes
+        ).start()
         bridge = Bridge(b_buses, cfg)
         robot = CanRobot(bridge, camera=plant.camera, sim=sim)
         robot.reset(_rss6.home_pose())

@@ -23,8 +23,9 @@ from rss6.can.protocol import DRIVE_IDS, role_filters, split_nodes
 __all__ = ["add_arguments", "make_bus", "run"]
 
 
-def make_bus(interface: str, channel: str, role: str,
-             node_ids: Sequence[int] = DRIVE_IDS) -> can.BusABC:
+def make_bus(
+    interface: str, channel: str, role: str, node_ids: Sequence[int] = DRIVE_IDS
+) -> can.BusABC:
     """A python-can bus for one side (``"drives"`` or ``"bridge"``) with that side's
     ``can_filters`` (needed on ``udp_multicast``, where senders receive their own frames)."""
     kwargs: dict[str, Any] = {"can_filters": role_filters(role, node_ids)}
@@ -34,17 +35,32 @@ def make_bus(interface: str, channel: str, role: str,
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--interface", default="virtual",
-                   help="python-can interface: virtual, udp_multicast, socketcan, … (default virtual)")
-    p.add_argument("--channel", action="append", required=True,
-                   help="bus channel (repeat for two channels: drives 1-3 on the first, 4-6 on the "
-                   "second), e.g. vcan0 or the IPv4 group 239.74.163.2")
-    p.add_argument("--plant", choices=("model", "rapier"), default="model",
-                   help="the simulated robot: analytic-model twin (default) or rapier plant")
+    p.add_argument(
+        "--interface",
+        default="virtual",
+        help="python-can interface: virtual, udp_multicast, socketcan, … (default virtual)",
+    )
+    p.add_argument(
+        "--channel",
+        action="append",
+        required=True,
+        help="bus channel (repeat for two channels: drives 1-3 on the first, 4-6 on the "
+        "second), e.g. vcan0 or the IPv4 group 239.74.163.2",
+    )
+    p.add_argument(
+        "--plant",
+        choices=("model", "rapier"),
+        default="model",
+        help="the simulated robot: analytic-model twin (default) or rapier plant",
+    )
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument("--tpdo-every", type=int, default=2, help="TPDO1 every n-th SYNC (default 2)")
-    p.add_argument("--seconds", type=float, default=0.0,
-                   help="stop after this many seconds of wall clock (default: run until Ctrl-C)")
+    p.add_argument(
+        "--seconds",
+        type=float,
+        default=0.0,
+        help="stop after this many seconds of wall clock (default: run until Ctrl-C)",
+    )
     p.add_argument("--log", help="also write the drives' side of the bus to this .asc/.log file")
 
 
@@ -73,8 +89,11 @@ def run(args: argparse.Namespace) -> int:
                 assert net.notifier is not None
                 net.notifier.add_listener(logger)
                 loggers.append(logger)
-        print(f"rss6 can-sim: drives {', '.join(map(str, DRIVE_IDS))} on {args.interface} "
-              f"{', '.join(args.channel)} ({args.plant}); Ctrl-C stops", flush=True)
+        print(
+            f"rss6 can-sim: drives {', '.join(map(str, DRIVE_IDS))} on {args.interface} "
+            f"{', '.join(args.channel)} ({args.plant}); Ctrl-C stops",
+            flush=True,
+        )
         end = time.monotonic() + args.seconds if args.seconds > 0 else float("inf")
         stop = threading.Event()
         # SIGTERM stops it as Ctrl-C does (a background job of a script ignores SIGINT)
@@ -84,8 +103,11 @@ def run(args: argparse.Namespace) -> int:
                 stop.wait(min(0.1, max(0.0, end - time.monotonic())))
         except KeyboardInterrupt:
             pass
-        print(f"rss6 can-sim: {sim.tick} ticks, states "
-              f"{[s.name for s in sim.states()]}, send errors {sim.tx_errors}", flush=True)
+        print(
+            f"rss6 can-sim: {sim.tick} ticks, states "
+            f"{[s.name for s in sim.states()]}, send errors {sim.tx_errors}",
+            flush=True,
+        )
         for e in sim.errors[:10]:
             print(f"  {e}")
     finally:

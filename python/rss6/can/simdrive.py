@@ -245,8 +245,11 @@ class SimDrive:
     def after_tick(self, tick: int, counts: int) -> None:
         """After the robot moved one tick: following error, bridge watchdog, TPDO1, heartbeat."""
         self.position = counts
-        if (self.state is S.OPERATION_ENABLED and self.target is not None
-                and abs(self.target - counts) > self.window):
+        if (
+            self.state is S.OPERATION_ENABLED
+            and self.target is not None
+            and abs(self.target - counts) > self.window
+        ):
             self.following_error = True
             self.trip(0x8611)
         seen = self.bridge_heartbeat_tick
@@ -341,8 +344,9 @@ class SimDrives:
                 self.send(d, cob.HEARTBEAT + d.node_id, b"\x00")
             if self.wall_clock_watch:
                 self._watch_stop.clear()
-                self._watcher = threading.Thread(target=self._watch, name="rss6 drives: 0x1016",
-                                                 daemon=True)
+                self._watcher = threading.Thread(
+                    target=self._watch, name="rss6 drives: 0x1016", daemon=True
+                )
                 self._watcher.start()
         return self
 
@@ -355,8 +359,12 @@ class SimDrives:
                 for d in self.drives:
                     seen = d.bridge_heartbeat_time
                     limit = d.consumer_cycles * self.dt
-                    if (seen is not None and limit > 0 and now - seen > limit
-                            and d.state is not DriveState.FAULT):
+                    if (
+                        seen is not None
+                        and limit > 0
+                        and now - seen > limit
+                        and d.state is not DriveState.FAULT
+                    ):
                         d.bridge_heartbeat_time = d.bridge_heartbeat_tick = None
                         d.trip(0x8130)
 
