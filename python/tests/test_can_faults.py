@@ -286,3 +286,20 @@ def test_drives_in_their_own_process_fault_when_the_bridge_dies() -> None:
         sim.stop()
         for bus in buses:
             bus.shutdown()
+
+
+def test_a_drive_that_cannot_send_is_stopped_with_the_others() -> None:
+    """Faults on the drives' side of the bus (a FaultyBus there): drive 3's TPDO1 sends fail."""
+    faulty: list[rcan.FaultyBus] = []
+
+    def wrap(bus: can.BusABC) -> can.BusABC:
+        faulty.append(rcan.FaultyBus(bus))
+        return faulty[-1]
+
+    with rcan.simulated_robot(_plant(), drive_bus=wrap) as robot:
+        _run(robot, 30)
+        faulty[0].fail_sends(count=1000, can_id=0x183)
+        _run(robot, 10, start=30)
+        assert robot.sim is not None and robot.sim.tx_errors >= 2
+        assert robot.fence_timeouts == 0
+        _assert_stopped(robot, 30, 8, "TPDO1 of drive 3")
