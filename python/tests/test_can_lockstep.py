@@ -199,7 +199,8 @@ def test_step_joint_commands_and_the_bus_log(tmp_path, suffix: str) -> None:  # 
     assert np.all(np.isfinite(out["true_pose"]))
     frames = list(can.LogReader(str(log)))
     ids = [f.arbitration_id for f in frames if not f.is_error_frame]
-    assert ids.count(0x181) == 50  # TPDO1 of drive 1 every 2nd SYNC
+    assert ids.count(0x181) == 50  # TPDO1 of drive 1 every 2nd SYNC (received)
+    assert ids.count(0x080) == 100 and ids.count(0x206) == 100  # SYNC, RPDO1 (sent)
 
 
 def test_enable_without_drives_names_the_failure() -> None:

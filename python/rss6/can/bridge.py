@@ -103,6 +103,45 @@ class Reading:
     fault: str | None
 
 
+class _BusLog(can.Listener):
+    """python-can's ``Logger`` for one channel, fed the received frames by the notifier and the
+    sent ones by :class:`_BridgeNetwork` (a bus does not receive its own frames), under a lock."""
+
+    def __init__(self, path: str):
+        self.logger = can.Logger(path)
+        self._lock = threading.Lock()
+
+    def on_message_received(self, msg: can.Message) -> None:
+        with self._lock:
+            self.logger.on_message_received(msg)
+
+    def stop(self) -> None:
+        with self._lock:
+            self.logger.stop()
+
+
+class _BridgeNetwork(canopen.Network):
+    """A canopen network that also logs what it sends (the bus log holds both directions)."""
+
+    def __init__(self, bus: can.BusABC):
+        super().__init__(bus)
+        self.log: _BusLog | None = None
+
+    def send_message(self, can_id: int, data: bytes, remote: bool = False) -> None:
+        super().send_message(can_id, data, remote)
+        if self.log is not None:
+            self.log.on_message_received(
+                can.Message(
+                    timestamp=time.time(),
+                    arbitration_id=can_id,
+                    data=bytes(data),
+                    is_extended_id=can_id > 0x7FF,
+                    is_remote_frame=remote,
+                    is_rx=False,
+                )
+            )
+
+
 class _BusWatch(can.Listener):
     """On a network's notifier: counts frames and turns error frames into bridge faults."""
 
@@ -164,7 +203,7 @@ class Bridge:
         self.jump_counts = cfg.v_max * cfg.dt * cpr
         self.noise_counts = cfg.noise_bits * self.map.counts_per_bit
         eds = cfg.eds if cfg.eds is not None else str(eds_path())
-        self.networks = [canopen.Network(bus) for bus in self.buses]
+        self.networks = [_BridgeNetwork(bus) for bus in self.buses]
         for net in self.networks:
             net.NOTIFIER_CYCLE = 0.05  # the notifier thread notices stop() within 50 ms, not 1 s
         self.nodes: list[canopen.RemoteNode] = []
@@ -190,7 +229,7 @@ class Bridge:
         self.ids = [self.ids[k] for k in order]
         self._net_of = [self._net_of[k] for k in order]
         self.watches: list[_BusWatch] = []
-        self.loggers: list[can.Listener] = []
+        self.loggers: list[_BusLog] = []
         self._periodic: list[Any] = []
         self._connected = False
         self.enabled = False
@@ -233,9 +272,10 @@ class Bridge:
                 if len(self.networks) > 1:
                     stem, dot, ext = path.rpartition(".")
                     path = f"{stem}.ch{ch}.{ext}" if dot else f"{path}.ch{ch}"
-                logger = can.Logger(path)
-                net.notifier.add_listener(logger)
-                self.loggers.append(logger)
+                log = _BusLog(path)
+                net.notifier.add_listener(log)
+                net.log = log
+                self.loggers.append(log)
         self._connected = True
         return self
 
@@ -248,8 +288,10 @@ class Bridge:
             if net.notifier is not None:
                 net.notifier.stop(1.0)
             net.bus = None  # the caller owns the bus
-        for logger in self.loggers:
-            logger.stop()
+        for net in self.networks:
+            net.log = None
+        for log in self.loggers:
+            log.stop()
         self.loggers = []
         self._connected = False
 
