@@ -526,6 +526,8 @@ class Bridge:
         after a late cycle: missed cycles are counted, never caught up)."""
         if not self.enabled:
             raise CanFaultError("the bridge is not enabled: call enable() first")
+        if advance < 1:
+            raise InvalidInputError(f"advance must be >= 1 cycle, got {advance}")
         self.cycle += advance
         self.late_cycles += advance - 1
         cfg = self.config
