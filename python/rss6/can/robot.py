@@ -214,7 +214,9 @@ def simulated_robot(
 ) -> Iterator[CanRobot]:
     """``plant`` (:class:`rss6.Plant` or :class:`rss6.ModelSim`) behind six :class:`SimDrive` on
     ``channels`` buses of ``interface`` in this process, seen through a :class:`Bridge` as a
-    :class:`CanRobot`; the camera is the plant's own. The robot is reset at home and enabled.
+    :class:`CanRobot`; the camera is the plant's own. The robot is reset at home and enabled (one
+    ``plant.reset``: a reset does not reseed the plant's noise, so a run to compare with resets its
+    plant as often).
 
     ``channel``: the bus channel name (or one per channel; default: fresh unique names).
     ``bridge_bus``/``drive_bus``: wrap the bridge's or the drives' bus (e.g. ``FaultyBus``).
