@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 fn camera_step(c: &mut Criterion) {
     let kp = KinematicParams::nominal();
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &home_pose()).unwrap();
     let mut dsmc = Dsmc::new(kp, DynamicParams::nominal(), DsmcGains::tuned()).unwrap();
     let traj = Sinusoid::experiment1();
     let mut k = 0u32;
@@ -29,7 +29,7 @@ fn camera_step(c: &mut Criterion) {
 }
 
 fn converter_tick(c: &mut Criterion) {
-    let mut conv = TorqueToPosition::new(PidGains::nominal(), 1e-3, 30.0).unwrap();
+    let mut conv = TorqueToPosition::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
     let mut guard = CommandGuard::new(CommandLimits::nominal(), &Vec6::zeros()).unwrap();
     let tau = Vec6::new(3.0, -2.0, 4.0, 1.0, -3.5, 2.5);
     let theta = Vec6::repeat(0.01);

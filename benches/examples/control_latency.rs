@@ -28,7 +28,7 @@ fn report(name: &str, ns: &mut [u64]) {
 
 fn main() {
     let kp = KinematicParams::nominal();
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &home_pose()).unwrap();
     let mut dsmc = Dsmc::new(kp, DynamicParams::nominal(), DsmcGains::tuned()).unwrap();
     let traj = Sinusoid::experiment1();
     let refs: Vec<_> = (0..1000).map(|k| traj.sample(k as f64 * 0.033)).collect();
@@ -43,7 +43,7 @@ fn main() {
     }
     report("camera step (KF+DSMC)", &mut ns);
 
-    let mut conv = TorqueToPosition::new(PidGains::nominal(), 1e-3, 30.0).unwrap();
+    let mut conv = TorqueToPosition::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
     let mut guard = CommandGuard::new(CommandLimits::nominal(), &Vec6::zeros()).unwrap();
     let theta = Vec6::repeat(0.01);
     for (k, slot) in ns.iter_mut().enumerate() {
@@ -62,7 +62,7 @@ fn main() {
     // the joint ticks between frames, for the default and the low-noise configuration.
     let frames = N / 33;
     for (name, config, gains) in [
-        ("servo default", ServoConfig::nominal(), DsmcGains::tuned()),
+        ("servo default", ServoConfig::tuned(), DsmcGains::tuned()),
         (
             "servo low-noise",
             ServoConfig::low_noise(),

@@ -16,6 +16,7 @@ mod kinematics;
 mod params;
 mod plant;
 mod servo;
+mod thesis;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
@@ -59,5 +60,6 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
     m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
+    m.add_function(wrap_pyfunction!(thesis::thesis_tables, m)?)?;
     Ok(())
 }

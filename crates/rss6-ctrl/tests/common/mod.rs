@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rss6_core::{
-    ik, rk4_step, CoreError, DynamicParams, KinematicParams, ModelState, Vec6, N_KIN_ERRORS,
+    ik, rk4_step, thesis, CoreError, DynamicParams, KinematicParams, ModelState, Vec6, N_KIN_ERRORS,
 };
 use rss6_ctrl::servo::{run, TickRecord};
 use rss6_ctrl::{
@@ -22,10 +22,10 @@ use rss6_ctrl::{
     Scheme, Servo, ServoConfig, Trajectory,
 };
 
-/// Table 4.1 camera noise (1σ): 0.0096 mm, 0.0261°.
-pub const CAMERA_SIGMA: [f64; 2] = [0.0096e-3, 0.0261 * core::f64::consts::PI / 180.0];
+/// Table 4.1 camera noise (1σ): position (m), angle (rad).
+pub const CAMERA_SIGMA: [f64; 2] = [thesis::POSE_POSITION_NOISE, thesis::POSE_ANGLE_NOISE];
 /// Table 4.1 potentiometer noise (1σ, bits).
-pub const POT_SIGMA: f64 = 0.2233;
+pub const POT_SIGMA: f64 = thesis::KAPPA_NOISE_BITS;
 
 #[derive(Debug, Clone, Copy)]
 pub struct Noise {
@@ -64,7 +64,7 @@ impl ModelPlant {
             kp_true,
             kp_nominal: KinematicParams::nominal(),
             dp,
-            pid: JointPid::new(PidGains::nominal(), 1e-3, 30.0),
+            pid: JointPid::new(PidGains::tuned(), 1e-3, 30.0).unwrap(),
             state: ModelState {
                 pose: *start,
                 pose_dot: Vec6::zeros(),
@@ -161,15 +161,15 @@ impl Plant for ModelPlant {
     }
 }
 
-/// Table 4.2 error sizes drawn once (seeded): positions/lengths 1 mm, η 5e-5 rad/bit, Δθ 0.05 rad.
+/// Table 4.2 error sizes drawn once (seeded).
 pub fn table_4_2_errors(seed: u64) -> [f64; N_KIN_ERRORS] {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut b = [0.0; N_KIN_ERRORS];
     for (k, x) in b.iter_mut().enumerate() {
         let sd = match k {
-            0..=47 => 1e-3,
-            48..=53 => 5e-5,
-            _ => 0.05,
+            0..=47 => thesis::SIGMA_LENGTH,
+            48..=53 => thesis::SIGMA_ETA,
+            _ => thesis::SIGMA_DTHETA,
         };
         *x = Normal::new(0.0, sd).unwrap().sample(&mut rng);
     }
@@ -188,7 +188,9 @@ pub fn scheme(which: Which, theta0: &Vec6, dsmc: DsmcGains) -> Scheme {
     match which {
         Which::Dsmc => Scheme::Dsmc(Dsmc::new(kp, DynamicParams::nominal(), dsmc).unwrap()),
         Which::Kcsc => Scheme::Kcsc(Kcsc::new(kp, CartesianPidGains::thesis(), theta0).unwrap()),
-        Which::Kjsc => Scheme::Kjsc(Kjsc::new(kp, JointSpaceGains::thesis(), theta0).unwrap()),
+        Which::Kjsc => {
+            Scheme::Kjsc(Kjsc::new(kp, JointSpaceGains::from_visual_pid(), theta0).unwrap())
+        }
     }
 }
 
@@ -260,7 +262,7 @@ impl Setup {
             noise,
             seconds,
             seed,
-            config: ServoConfig::nominal(),
+            config: ServoConfig::tuned(),
             dsmc: DsmcGains::tuned(),
             latency_ticks: 0,
             monitor: None,
