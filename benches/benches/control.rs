@@ -3,6 +3,7 @@
 #![allow(missing_docs, clippy::unwrap_used)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use rss6_core::thesis::CONTROL_PERIOD;
 use rss6_core::{home_pose, DynamicParams, KinematicParams, Vec6};
 use rss6_ctrl::{
     CommandGuard, CommandLimits, Dsmc, DsmcGains, KalmanConfig, PidGains, PoseKalman, Sinusoid,
@@ -19,11 +20,13 @@ fn camera_step(c: &mut Criterion) {
     c.bench_function("control/camera_step", |b| {
         b.iter(|| {
             k = k.wrapping_add(1);
-            let t = f64::from(k % 1000) * 0.033;
+            let t = f64::from(k % 1000) * CONTROL_PERIOD;
             let r = traj.sample(t);
             let z = r.pose + Vec6::repeat(1e-5);
-            let est = kf.step(black_box(0.033), Some(black_box(&z))).unwrap();
-            black_box(dsmc.step(&r, &est, 0.033).unwrap())
+            let est = kf
+                .step(black_box(CONTROL_PERIOD), Some(black_box(&z)))
+                .unwrap();
+            black_box(dsmc.step(&r, &est, CONTROL_PERIOD).unwrap())
         })
     });
 }

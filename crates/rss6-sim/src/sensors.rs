@@ -109,7 +109,7 @@ impl CmmConfig {
             cameras: [cam(-0.5 * b, toe), cam(0.5 * b, -toe)],
             reflectors,
             pixel_noise: DEFAULT_PIXEL_NOISE,
-            period: 0.033,
+            period: rss6_core::thesis::CONTROL_PERIOD,
             latency: 0.0,
         }
     }

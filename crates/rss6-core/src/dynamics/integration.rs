@@ -27,7 +27,7 @@ impl ModelState {
 
 /// One classical fourth-order Runge–Kutta step of length `dt` (s) of the forward dynamics with the
 /// actuator torques τ_a (N·m) held constant over the step, g = [`GRAVITY`]. Errors as
-/// [`forward_dynamics`] at any of the four stages (e.g. a stage state leaving the workspace).
+/// [`crate::forward_dynamics`] at any of the four stages (e.g. a stage state leaving the workspace).
 pub fn rk4_step(
     kp: &KinematicParams,
     dp: &DynamicParams,

@@ -26,11 +26,11 @@ pub struct ServoConfig {
     /// Kalman filter tuning.
     pub kalman: KalmanConfig,
     /// Feed the DSMC's model-predicted acceleration ([`crate::DsmcOutput::accel_model`]) to the filter as a
-    /// known input ([`PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
+    /// known input ([`crate::PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
     pub kalman_model_input: bool,
     /// DSMC only: every joint tick send τ_a + H (θ − θ̂) instead of the held τ_a, with θ the latest
     /// potentiometer angles, H the model's joint-space hold stiffness at the start pose
-    /// ([`Dsmc::hold_stiffness`]) and θ̂ the potentiometer angles the robot would read at the estimate χ_m
+    /// ([`crate::Dsmc::hold_stiffness`]) and θ̂ the potentiometer angles the robot would read at the estimate χ_m
     /// the DSMC was evaluated at (IK(χ_m) plus the average of θ − IK(raw frame) over
     /// [`HOLD_OFFSET_TIME`]). On the 6-RSS a held τ_a does not hold the generalized force: under gravity
     /// the platform tilts away at ≈ 14/s between frames, and the model evaluated at a noisy χ_m turns
@@ -39,7 +39,7 @@ pub struct ServoConfig {
     pub hold_compensation: bool,
     /// Also feed the filter the pose rate the potentiometers measured over each camera frame: the
     /// least-squares slope of the joint angles since the previous frame, mapped by J_θ⁻¹ at the estimate
-    /// ([`PoseKalman::update_rate`]). `None` = camera only (the thesis filter); `Some(σ)` with σ the 1σ
+    /// ([`crate::PoseKalman::update_rate`]). `None` = camera only (the thesis filter); `Some(σ)` with σ the 1σ
     /// noise of one potentiometer reading in rad (Table 4.1: 0.2233 bit × η ≈ 1.7e-4 rad). Needs
     /// `kalman.steady_state = false`.
     pub potentiometer_rate: Option<f64>,
