@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6 import _rss6, logs
+from rss6 import thesis as _thesis
 from rss6._rss6 import (
     CalibrationData,
     CalibrationResult,
@@ -66,24 +67,14 @@ MCAP_KIND = "rss6.calibrate.collect"
 
 #: Table 4.2 error standard deviations: lengths/positions (m), η (rad/bit), Δθ (rad), external
 #: position (m) and angle (rad).
-TABLE_4_2 = {
-    "length": 1e-3,
-    "eta": 5e-5,
-    "dtheta": 0.05,
-    "ext_position": 0.5e-3,
-    "ext_angle": 0.017,
-}
+TABLE_4_2 = dict(_thesis.TABLE_4_2)
 
 #: Table 4.5 (thesis, simulation): RMS relative pose errors [x, y, z, α, β, γ] (m, rad).
-THESIS_TABLE_4_5 = {
-    "uncalibrated": [3.4e-3, 3.8e-3, 4.5e-3, 0.0037, 0.0060, 0.0033],
-    "implicit": [3.1e-3, 4.9e-3, 4.2e-3, 9.6e-4, 7.9e-4, 0.0012],
-    "RPBA": [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5],
-}
+THESIS_TABLE_4_5 = {k: list(v) for k, v in _thesis.TABLE_4_5.items()}
 #: Tables 4.3 (implicit) and 4.4 (RPBA): (before, after) of ‖b^c − b^n‖₂ and Σ‖Φ^c − Φ^n‖₂.
 THESIS_TABLES_4_3_4_4 = {
-    "implicit": {"param_error": (3.273, 0.8197), "residual": (0.00109929, 2.94235e-05)},
-    "RPBA": {"param_error": (3.1630, 0.6616), "residual": (0.00542206, 2.38881e-05)},
+    name: {"param_error": t["param_error"], "residual": t["residual"]}
+    for name, t in (("implicit", _thesis.TABLE_4_3), ("RPBA", _thesis.TABLE_4_4))
 }
 
 

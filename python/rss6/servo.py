@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6 import _rss6
+from rss6 import thesis as _thesis
 from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
 from rss6.logs import RunWriter, write_run
 
@@ -45,30 +46,8 @@ AXES = ("x", "y", "z", "alpha", "beta", "gamma")
 #: Thesis Tables 6.1 (Experiment 1) and 6.2 (Experiment 2): {"exp1"|"exp2": {"rmse"|"mae":
 #: {"KJSC"|"KCSC"|"DSMC": [x, y, z (mm), α, β, γ (1e-3 rad)]}}}.
 THESIS_TABLES: dict[str, dict[str, dict[str, list[float]]]] = {
-    "exp1": {
-        "rmse": {
-            "KJSC": [2.8, 3.4, 2.1, 14.8, 14.0, 14.6],
-            "KCSC": [1.1, 1.5, 1.2, 3.2, 3.8, 3.5],
-            "DSMC": [0.44, 1.4, 0.63, 1.1, 2.1, 1.6],
-        },
-        "mae": {
-            "KJSC": [2.5, 2.7, 1.8, 12.5, 12.4, 14.2],
-            "KCSC": [0.97, 1.1, 1.0, 2.8, 3.3, 3.1],
-            "DSMC": [0.36, 0.61, 0.46, 0.92, 1.7, 1.3],
-        },
-    },
-    "exp2": {
-        "rmse": {
-            "KJSC": [3.2, 3.2, 3.1, 13.9, 9.4, 14.5],
-            "KCSC": [1.2, 1.5, 1.9, 4.5, 3.6, 2.9],
-            "DSMC": [0.60, 1.1, 1.3, 3.4, 2.8, 2.5],
-        },
-        "mae": {
-            "KJSC": [2.9, 2.7, 2.6, 11.3, 7.4, 13.7],
-            "KCSC": [0.96, 1.0, 1.3, 3.0, 2.4, 1.8],
-            "DSMC": [0.33, 0.54, 0.57, 1.4, 1.6, 1.0],
-        },
-    },
+    "exp1": _thesis.TABLE_6_1,
+    "exp2": _thesis.TABLE_6_2,
 }
 
 

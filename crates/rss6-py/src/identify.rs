@@ -22,8 +22,7 @@ fn coefficients(obj: &Bound<'_, PyAny>) -> PyResult<[Vec<f64>; 6]> {
 }
 
 fn excitation(f0: f64, coeffs: &Bound<'_, PyAny>) -> PyResult<Excitation> {
-    Excitation::from_coefficients(f0, coefficients(coeffs)?)
-        .map_err(|e| invalid(e.to_string()))
+    Excitation::from_coefficients(f0, coefficients(coeffs)?).map_err(|e| invalid(e.to_string()))
 }
 
 fn out_coefficients<'py>(py: Python<'py>, e: &Excitation) -> Bound<'py, PyArray2<f64>> {
@@ -109,7 +108,9 @@ impl PyExcitationProblem {
                 })
                 .collect();
             let e = Excitation::at_rest(harmonics, f0, &start, &free).map_err(|e| e.to_string())?;
-            let h = e.stacked_regressor(&kp, samples).map_err(|e| e.to_string())?;
+            let h = e
+                .stacked_regressor(&kp, samples)
+                .map_err(|e| e.to_string())?;
             Ok(base_columns(&h, rank_threshold))
         });
         let columns = columns.map_err(invalid)?;
@@ -189,7 +190,11 @@ impl PyExcitationProblem {
     }
 
     /// (O_in, cond) of the trajectory's stacked regressor restricted to the identifiable columns.
-    fn observability(&self, py: Python<'_>, coefficients: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    fn observability(
+        &self,
+        py: Python<'_>,
+        coefficients: &Bound<'_, PyAny>,
+    ) -> PyResult<(f64, f64)> {
         let e = excitation(self.inner.f0, coefficients)?;
         let p = &self.inner;
         py.detach(|| e.observability(&p.kp, &p.columns, p.samples))

@@ -17,6 +17,7 @@ mod kinematics;
 mod params;
 mod plant;
 mod servo;
+mod thesis;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
@@ -62,5 +63,6 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
     m.add_class::<identify::PyExcitationProblem>()?;
     m.add_function(wrap_pyfunction!(identify::excitation_at, m)?)?;
+    m.add_function(wrap_pyfunction!(thesis::thesis_tables, m)?)?;
     Ok(())
 }

@@ -248,7 +248,7 @@ pub(crate) fn run_servo<'py>(
     let mut config = if low_noise {
         ServoConfig::low_noise()
     } else {
-        ServoConfig::nominal()
+        ServoConfig::tuned()
     };
     if let Some((lp, li, ld)) = pid {
         config.pid = PidGains { lp, li, ld };
@@ -312,7 +312,8 @@ pub(crate) fn run_servo<'py>(
                 Kcsc::new(kp_model, CartesianPidGains::thesis(), &theta0).map_err(ctrl_err)?,
             ),
             "kjsc" => Scheme::Kjsc(
-                Kjsc::new(kp_model, JointSpaceGains::thesis(), &theta0).map_err(ctrl_err)?,
+                Kjsc::new(kp_model, JointSpaceGains::from_visual_pid(), &theta0)
+                    .map_err(ctrl_err)?,
             ),
             other => {
                 return Err(invalid(format!(
