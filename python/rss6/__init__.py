@@ -46,7 +46,6 @@ from rss6._rss6 import (
     mass_matrix,
     regressor,
     rk4_step,
-    simulate,
 )
 from rss6.errors import (
     CalibrationError,
@@ -127,5 +126,4 @@ __all__ = [
     "regressor",
     "rk4_step",
     "servo",
-    "simulate",
 ]

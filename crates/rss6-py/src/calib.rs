@@ -76,13 +76,17 @@ pub(crate) struct PyCalibrationData {
 #[pymethods]
 impl PyCalibrationData {
     /// Data from arrays: kappa (m, 6) mean readings (bits), sensor_pose (m, 6) mean ᶜχ_t (a NaN row
-    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional).
+    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional; NaN if
+    /// absent), and the sample counts per row kappa_samples, camera_frames (m,) (optional; default
+    /// 1, and 1 or 0 frames by the NaN rows).
     #[staticmethod]
-    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None))]
+    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None, *, kappa_samples=None, camera_frames=None))]
     fn from_arrays(
         kappa: &Bound<'_, PyAny>,
         sensor_pose: &Bound<'_, PyAny>,
         theta_cmd: Option<&Bound<'_, PyAny>>,
+        kappa_samples: Option<Vec<u32>>,
+        camera_frames: Option<Vec<u32>>,
     ) -> PyResult<Self> {
         let kappa = rows6(kappa, "kappa")?;
         let (dims, data) = array(sensor_pose, "sensor_pose")?;
@@ -99,11 +103,17 @@ impl PyCalibrationData {
         if theta.len() != kappa.len() {
             return Err(shape("theta_cmd must have as many rows as kappa"));
         }
+        for (name, c) in [("kappa_samples", &kappa_samples), ("camera_frames", &camera_frames)] {
+            if c.as_ref().is_some_and(|c| c.len() != kappa.len()) {
+                return Err(shape(format!("{name} must have as many entries as kappa")));
+            }
+        }
         let configurations = kappa
             .iter()
             .zip(data.chunks_exact(6))
             .zip(theta.iter())
-            .map(|((k, s), th)| ConfigurationData {
+            .enumerate()
+            .map(|(i, ((k, s), th))| ConfigurationData {
                 theta_cmd: (*th).into(),
                 kappa: (*k).into(),
                 sensor_pose: if s.iter().any(|x| x.is_nan()) {
@@ -113,8 +123,10 @@ impl PyCalibrationData {
                     p.copy_from_slice(s);
                     Some(p)
                 },
-                kappa_samples: 1,
-                camera_frames: u32::from(!s.iter().any(|x| x.is_nan())),
+                kappa_samples: kappa_samples.as_ref().map_or(1, |c| c[i]),
+                camera_frames: camera_frames
+                    .as_ref()
+                    .map_or(u32::from(!s.iter().any(|x| x.is_nan())), |c| c[i]),
             })
             .collect();
         Ok(PyCalibrationData {
