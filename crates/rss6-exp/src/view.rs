@@ -33,6 +33,8 @@ impl Externals {
 }
 
 /// The joint convention a controller commands in.
+// Built once per run and read every tick: keep the parameters inline rather than boxed.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Convention {
     /// The drive's (nominal η, Δθ): commands go to the drive unchanged. DSMC (its converter mirrors

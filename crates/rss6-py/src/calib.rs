@@ -14,8 +14,8 @@ use rss6_ident::{
 
 use crate::convert::{array, out1, out6, out_rows, out_rows6, rows6, vec6};
 use crate::errors::{core, invalid, make, shape, Attr};
-use crate::params::PyKinematicParams;
 use crate::exp::{create_log, finish_log, Interrupt};
+use crate::params::PyKinematicParams;
 use crate::plant::with_robot;
 
 /// Maps an [`IdentError`] onto its exception class.
@@ -103,7 +103,10 @@ impl PyCalibrationData {
         if theta.len() != kappa.len() {
             return Err(shape("theta_cmd must have as many rows as kappa"));
         }
-        for (name, c) in [("kappa_samples", &kappa_samples), ("camera_frames", &camera_frames)] {
+        for (name, c) in [
+            ("kappa_samples", &kappa_samples),
+            ("camera_frames", &camera_frames),
+        ] {
             if c.as_ref().is_some_and(|c| c.len() != kappa.len()) {
                 return Err(shape(format!("{name} must have as many entries as kappa")));
             }
@@ -379,7 +382,9 @@ pub(crate) fn collect(
         return Err(invalid("thetas must contain at least one configuration"));
     }
     if !(dwell.is_finite() && dwell > 0.0) {
-        return Err(invalid(format!("dwell must be finite and > 0 s, got {dwell}")));
+        return Err(invalid(format!(
+            "dwell must be finite and > 0 s, got {dwell}"
+        )));
     }
     let spec = DwellSpec {
         move_time,

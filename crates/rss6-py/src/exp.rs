@@ -82,11 +82,7 @@ fn describe(py: Python<'_>, e: &PyErr) -> String {
         .name()
         .map(|n| n.to_string())
         .unwrap_or_else(|_| "Exception".into());
-    let text = e
-        .value(py)
-        .str()
-        .map(|s| s.to_string())
-        .unwrap_or_default();
+    let text = e.value(py).str().map(|s| s.to_string()).unwrap_or_default();
     format!("{name}: {text}")
 }
 

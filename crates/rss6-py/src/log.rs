@@ -58,11 +58,12 @@ impl PyLogWriter {
 
 #[pymethods]
 impl PyLogWriter {
-    /// Creates (truncates) `path` and writes the header.
+    /// Creates (truncates) `path` and writes the header; `chunk_size` defaults to 256 KiB.
     #[new]
-    #[pyo3(signature = (path, *, chunk_size=DEFAULT_CHUNK_SIZE, t0=0.0))]
-    fn py_new(path: PathBuf, chunk_size: u64, t0: f64) -> PyResult<Self> {
-        let inner = LogWriter::create(&path, chunk_size, t0).map_err(exp_err)?;
+    #[pyo3(signature = (path, *, chunk_size=None, t0=0.0))]
+    fn py_new(path: PathBuf, chunk_size: Option<u64>, t0: f64) -> PyResult<Self> {
+        let size = chunk_size.unwrap_or(DEFAULT_CHUNK_SIZE);
+        let inner = LogWriter::create(&path, size, t0).map_err(exp_err)?;
         Ok(PyLogWriter {
             inner: Mutex::new(inner),
         })
@@ -87,8 +88,12 @@ impl PyLogWriter {
         }
         let mut g = self.open()?;
         let w: &mut LogWriter = &mut g;
-        py.detach(|| t.iter().zip(&v).try_for_each(|(tk, vk)| w.write(name, *tk, vk)))
-            .map_err(exp_err)
+        py.detach(|| {
+            t.iter()
+                .zip(&v)
+                .try_for_each(|(tk, vk)| w.write(name, *tk, vk))
+        })
+        .map_err(exp_err)
     }
 
     /// Appends samples of several streams `{name: (times (N,), values (N, 6))}` merged in time order
@@ -97,9 +102,9 @@ impl PyLogWriter {
         let mut series: Vec<(String, Vec<f64>, Vec<Vec6>)> = Vec::new();
         for (k, s) in streams.iter() {
             let name: String = k.extract()?;
-            let (t, v): (Bound<'_, PyAny>, Bound<'_, PyAny>) = s.extract().map_err(|_| {
-                invalid(format!("{name}: expected a (times, values) pair"))
-            })?;
+            let (t, v): (Bound<'_, PyAny>, Bound<'_, PyAny>) = s
+                .extract()
+                .map_err(|_| invalid(format!("{name}: expected a (times, values) pair")))?;
             let (t, v) = (times(&t, &name)?, rows6(&v, &name)?);
             if t.len() != v.len() {
                 return Err(shape(format!(
@@ -216,10 +221,7 @@ fn log_err(e: LogError) -> PyErr {
         LogError::Corrupt { path, offset, .. } => make(
             "CorruptLogError",
             msg,
-            vec![
-                ("path", Attr::S(path)),
-                ("offset", Attr::I(offset as i64)),
-            ],
+            vec![("path", Attr::S(path)), ("offset", Attr::I(offset as i64))],
         ),
         LogError::Truncated { path, .. } => make(
             "TruncatedLogError",

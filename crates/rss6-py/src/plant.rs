@@ -147,7 +147,6 @@ fn sim_config(
     Ok(cfg)
 }
 
-
 /// What `step_joint_commands` records: per tick, the state after it; camera frames as they arrive.
 #[derive(Default)]
 struct Ticks {

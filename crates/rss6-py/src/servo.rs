@@ -66,7 +66,8 @@ impl Arrays {
             self.frame_truth.push(truth);
             self.measured.push(z);
             self.estimate.push(r.estimate.map_or(nan, |e| e.pose));
-            self.estimate_dot.push(r.estimate.map_or(nan, |e| e.pose_dot));
+            self.estimate_dot
+                .push(r.estimate.map_or(nan, |e| e.pose_dot));
             self.sliding.push(r.dsmc.map_or(nan, |(_, f)| f));
         }
     }
