@@ -201,7 +201,9 @@ class RunWriter:
         """Appends samples of several streams ``{name: (times (N,), values (N, 6))}``, merged in time
         order (so chunks hold contiguous time ranges)."""
         self._check_open()
-        checked = {name: _check_series(name, s) for name, s in streams.items()}
+        checked: dict[str, tuple[Any, Any]] = {
+            name: _check_series(name, s) for name, s in streams.items()
+        }
         self._w.write_streams(checked)
         self._after_write()
 

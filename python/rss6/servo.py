@@ -265,6 +265,7 @@ def track(
         raise InvalidInputError(
             "trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable"
         )
+
     def on_segment(seg: dict[str, Any]) -> None:
         if progress is not None and len(seg["t"]):
             progress(float(seg["t"][-1]), float(duration))

@@ -218,7 +218,9 @@ def test_failed_collection_keeps_the_finished_dwells(logged, tmp_path):
 
     path = tmp_path / "failed.mcap"
     with pytest.raises(RuntimeError, match="operator abort"):
-        calibrate.collect(rss6.ModelSim(truth, DP, seed=7), thetas[:6], mcap=path, progress=progress, **KW)
+        calibrate.collect(
+            rss6.ModelSim(truth, DP, seed=7), thetas[:6], mcap=path, progress=progress, **KW
+        )
     log = logs.read_log(path, strict=True)
     assert log.metadata["status"] == "failed: RuntimeError: operator abort"
     r = calibrate.read_mcap(path)
@@ -242,8 +244,10 @@ def test_keyboard_interrupt_in_progress_stops_the_collection(tmp_path, mcap):
         calibrate.collect(rss6.ModelSim(NOMINAL, DP), thetas, mcap=path, progress=progress, **KW)
     assert calls == [1]
     if mcap:
-        assert logs.read_log(path, strict=True).metadata["status"].startswith(
-            "failed: KeyboardInterrupt"
+        assert (
+            logs.read_log(path, strict=True)
+            .metadata["status"]
+            .startswith("failed: KeyboardInterrupt")
         )
 
 

@@ -79,7 +79,9 @@ def test_kjsc_theta_cmd_is_in_the_drive_convention():
     nominal = rss6.KinematicParams.nominal()
     late = slice(-200, None)
     true = np.array([rss6.ik(kp, p) for p in r.true[late]])
-    meant = np.array([kp.theta_from_reading(nominal.reading_from_theta(c)) for c in r.theta_cmd[late]])
+    meant = np.array(
+        [kp.theta_from_reading(nominal.reading_from_theta(c)) for c in r.theta_cmd[late]]
+    )
     off_meant = np.abs(true - meant).mean()
     off_raw = np.abs(true - r.theta_cmd[late]).mean()
     assert off_meant < 0.2 * off_raw, (off_meant, off_raw)
@@ -94,7 +96,14 @@ def test_keyboard_interrupt_in_progress_stops_the_run(tmp_path):
 
     path = tmp_path / "ki.mcap"
     with pytest.raises(KeyboardInterrupt):
-        servo.track(rss6.ModelSim(KP, DP, seed=9), "dsmc", "exp1", duration=30.0, progress=progress, mcap=path)
+        servo.track(
+            rss6.ModelSim(KP, DP, seed=9),
+            "dsmc",
+            "exp1",
+            duration=30.0,
+            progress=progress,
+            mcap=path,
+        )
     assert calls == [pytest.approx(0.999)]
     log = rss6.logs.read_log(path, strict=True)
     assert log.metadata["status"].startswith("failed: KeyboardInterrupt")
