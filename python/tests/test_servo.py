@@ -1,4 +1,9 @@
-"""rss6.servo.track: the closed loop in Rust, statistics, MCAP logging."""
+"""rss6.servo.track: the closed loop in Rust, statistics, MCAP logging, stopping a run."""
+
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -152,3 +157,43 @@ def test_low_noise_tuning_is_dsmc_only():
     short = servo.track(plant, "dsmc", "exp1", duration=0.5)
     with pytest.raises(rss6.InvalidInputError, match="frames after 2.0 s"):
         servo.filter_statistics(short)
+
+
+CTRL_C_CHILD = """
+import signal, sys, time
+import numpy as np
+import rss6
+from rss6 import calibrate, logs, servo
+kp, dp = rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal()
+plant = rss6.ModelSim(kp, dp, seed=2)
+print("start", flush=True)
+t = time.perf_counter()
+try:
+    if sys.argv[1] == "track":
+        servo.track(plant, "dsmc", "exp1", duration=3600.0, mcap=sys.argv[2])
+    else:
+        calibrate.collect(plant, np.zeros((2000, 6)), 2.0, mcap=sys.argv[2])
+except KeyboardInterrupt:
+    status = logs.read_log(sys.argv[2], strict=True).metadata["status"]
+    print(f"interrupted after {time.perf_counter() - t:.1f} s: {status}", flush=True)
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGINT"), reason="needs SIGINT")
+@pytest.mark.parametrize("run", ["track", "collect"])
+def test_ctrl_c_stops_a_long_run_without_callbacks(tmp_path, run):
+    # The runs release the GIL; the bindings check for signals at every progress point, so Ctrl-C
+    # (SIGINT) stops an hour-long run with no Python callback, and the log is finished.
+    path = tmp_path / "run.mcap"
+    child = subprocess.Popen(
+        [sys.executable, "-c", CTRL_C_CHILD, run, str(path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout.readline().strip() == "start"
+    time.sleep(1.0)
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=60)
+    assert child.returncode == 0, err[-2000:]
+    assert "interrupted after" in out and "failed: KeyboardInterrupt" in out, out
