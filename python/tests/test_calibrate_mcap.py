@@ -272,3 +272,22 @@ def test_mean_pose_is_safe_near_pi():
     assert np.abs(quat(m) - quat(center)).max() < 5e-4
     with pytest.raises(rss6.ShapeError):
         calibrate.mean_pose(np.zeros((0, 6)))
+
+
+def test_collection_log_is_readable_by_the_mcap_package(logged):
+    import json
+
+    from mcap.reader import make_reader
+
+    thetas, _, returned, path, _ = logged
+    topics, dwells = set(), []
+    with open(path, "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            topics.add((channel.topic, schema.name))
+            if channel.topic == "/rss6/dwell":
+                dwells.append(json.loads(message.data))
+    assert ("/rss6/dwell", "rss6.Dwell") in topics
+    assert ("/rss6/sensor_pose", "foxglove.FrameTransform") in topics
+    assert ("/rss6/kappa", "rss6.JointVector") in topics
+    assert [d["index"] for d in dwells] == list(range(len(thetas)))
+    np.testing.assert_array_equal([d["kappa"] for d in dwells], returned.kappa)
