@@ -429,7 +429,7 @@ pub(crate) fn collect(
             None => dwell::collect(robot, start, &thetas, dwell, &spec, &mut obs),
         })
     })?;
-    let data = finish_log(py, log, data, obs.interrupt.take())?;
+    let data = finish_log(py, log, data, obs.interrupt.take(), &[])?;
     Ok(PyCalibrationData { inner: data })
 }
 

@@ -86,14 +86,15 @@ fn describe(py: Python<'_>, e: &PyErr) -> String {
     format!("{name}: {text}")
 }
 
-/// Ends a run: finishes its log (status "finished", or "failed: …") and returns the run's value, or
-/// the first of: the exception raised inside the run (`raised`), the log's write error, the runner's
-/// error, the error finishing the log.
+/// Ends a run: finishes its log (the metadata `end`, then status "finished", or "failed: …") and
+/// returns the run's value, or the first of: the exception raised inside the run (`raised`), the
+/// log's write error, the runner's error, the error finishing the log.
 pub(crate) fn finish_log<T>(
     py: Python<'_>,
     log: Option<LogObserver>,
     outcome: Result<T, ExpError>,
     raised: Option<PyErr>,
+    end: &[(&str, String)],
 ) -> PyResult<T> {
     let log_error = log
         .as_ref()
@@ -110,7 +111,16 @@ pub(crate) fn finish_log<T>(
                 None => "finished".to_string(),
                 Some(e) => format!("failed: {}", describe(py, e)),
             };
-            py.detach(|| l.writer.finish(Some(&status)))
+            let end: BTreeMap<String, String> = end
+                .iter()
+                .map(|(k, v)| ((*k).to_string(), v.clone()))
+                .collect();
+            py.detach(|| {
+                if !end.is_empty() {
+                    l.writer.add_metadata("rss6", &end)?;
+                }
+                l.writer.finish(Some(&status))
+            })
         }
         None => Ok(()),
     };

@@ -296,16 +296,11 @@ pub(crate) fn run_servo<'py>(
         .ok()
         .and_then(|o| o.first_fault)
         .map(|(t, r)| (t, r.to_string()));
-    if let Some(l) = log.as_mut() {
-        if let Some((t, r)) = &fault {
-            let mut m = std::collections::BTreeMap::new();
-            m.insert("fault".to_string(), format!("t = {t:.3} s: {r}"));
-            // A failure to add it shows in finish_log below.
-            let _ = l.writer.add_metadata("rss6", &m);
-        }
-    }
-    let outcome = finish_log(py, log, outcome, coll.interrupt.take())?;
-    let _ = outcome;
+    let end: Vec<(&str, String)> = fault
+        .iter()
+        .map(|(t, r)| ("fault", format!("t = {t:.3} s: {r}")))
+        .collect();
+    finish_log(py, log, outcome, coll.interrupt.take(), &end)?;
     let a = &coll.arrays;
     let d = a.dict(py, (0, 0))?;
     d.set_item("controller", controller.name())?;
