@@ -10,6 +10,7 @@ mod macros;
 mod calib;
 mod convert;
 mod ctrl;
+mod dwell;
 mod dynamics;
 mod errors;
 mod exp;
@@ -58,7 +59,7 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<calib::PyCalibrationResult>()?;
     m.add_function(wrap_pyfunction!(calib::stroke, m)?)?;
     m.add_function(wrap_pyfunction!(calib::select_configurations, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::collect, m)?)?;
+    m.add_function(wrap_pyfunction!(dwell::collect, m)?)?;
     m.add_function(wrap_pyfunction!(calib::rpba, m)?)?;
     m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
     m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
