@@ -197,3 +197,29 @@ def test_ctrl_c_stops_a_long_run_without_callbacks(tmp_path, run):
     out, err = child.communicate(timeout=60)
     assert child.returncode == 0, err[-2000:]
     assert "interrupted after" in out and "failed: KeyboardInterrupt" in out, out
+
+
+def test_a_plant_in_use_by_a_run_on_another_thread_is_busy_not_deadlocked():
+    import threading
+
+    plant = rss6.ModelSim(KP, DP, seed=10)
+    started, checked = threading.Event(), threading.Event()
+
+    def progress(t, duration):
+        started.set()
+        checked.wait(timeout=30)  # releases the GIL while the main thread looks at the plant
+
+    results = []
+    runner = threading.Thread(
+        target=lambda: results.append(
+            servo.track(plant, "kcsc", "exp1", duration=2.0, progress=progress)
+        )
+    )
+    runner.start()
+    assert started.wait(timeout=60)
+    with pytest.raises(rss6.SimulationError, match="busy"):
+        _ = plant.time
+    checked.set()
+    runner.join(timeout=60)
+    assert len(results) == 1 and len(results[0].time) == 2000
+    assert plant.time == pytest.approx(2.0)

@@ -216,8 +216,17 @@ macro_rules! sim_class {
         }
 
         impl $name {
+            /// The robot. Never waits: a thread that waited here holding the GIL would deadlock a run
+            /// on another thread that needs the GIL for its callbacks.
             pub(crate) fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, $ty>> {
-                self.robot.lock().map_err(|_| sim_err("the simulation panicked earlier and is unusable"))
+                self.robot.try_lock().map_err(|e| match e {
+                    std::sync::TryLockError::WouldBlock => sim_err(
+                        "the plant is busy: another thread is running an experiment on it",
+                    ),
+                    std::sync::TryLockError::Poisoned(_) => {
+                        sim_err("the simulation panicked earlier and is unusable")
+                    }
+                })
             }
         }
 
