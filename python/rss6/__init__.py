@@ -48,7 +48,6 @@ from rss6._rss6 import (
     mass_matrix,
     regressor,
     rk4_step,
-    simulate,
 )
 from rss6.errors import (
     CalibrationError,
@@ -132,5 +131,4 @@ __all__ = [
     "regressor",
     "rk4_step",
     "servo",
-    "simulate",
 ]

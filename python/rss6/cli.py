@@ -394,8 +394,9 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument(
         "--tuning",
         choices=TUNINGS,
-        default="thesis",
-        help="servo tuning: the thesis's (default) or the low-noise DSMC servo (DSMC only)",
+        default="tuned",
+        help="servo tuning: rss6's tuning for Tables 6.1/6.2 (default; the thesis's filter noise) or "
+        "the low-noise DSMC servo (DSMC only)",
     )
     t.add_argument(
         "--true-kinematics", help="TOML file of the robot's true kinematics (default nominal)"

@@ -30,6 +30,13 @@ fn out_coefficients<'py>(py: Python<'py>, e: &Excitation) -> Bound<'py, PyArray2
     PyArray2::from_vec2(py, &rows).unwrap_or_else(|_| PyArray2::zeros(py, [6, 0], false))
 }
 
+/// (χ, χ̇, χ̈) as three (6,) arrays.
+type Sample<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
 /// (χ, χ̇, χ̈) (each (6,)) of the Fourier trajectory (eq. 5.11) with fundamental `f0` (Hz) and
 /// `coefficients` (6, 2n + 1) = per axis [s¹, c¹, …, sⁿ, cⁿ, χ0] at time `t` (s).
 #[pyfunction]
@@ -38,11 +45,7 @@ pub(crate) fn excitation_at<'py>(
     f0: f64,
     coefficients: &Bound<'py, PyAny>,
     t: f64,
-) -> PyResult<(
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-)> {
+) -> PyResult<Sample<'py>> {
     let r = excitation(f0, coefficients)?.at(t);
     Ok((
         out6(py, &r.pose),
