@@ -18,6 +18,7 @@ __all__ = [
     "Kcsc",
     "KinematicParams",
     "Kjsc",
+    "LogWriter",
     "ModelSim",
     "Plant",
     "TorqueToPosition",
@@ -42,14 +43,16 @@ __all__ = [
     "jacobian_ad",
     "jacobian_theta",
     "mass_matrix",
+    "mean_pose",
+    "read_log",
     "regressor",
     "relative_pose_errors_raw",
     "rk4_step",
     "rpba",
     "run_servo",
     "select_configurations",
-    "simulate",
     "stroke",
+    "thesis_tables",
 ]
 
 _F64: TypeAlias = NDArray[np.float64]
@@ -512,9 +515,10 @@ def calibration_study(
     plant: bool = False,
 ) -> list[dict[str, Any]]: ...
 
+@final
 class ExcitationProblem:
-    def __init__(
-        self,
+    def __new__(
+        cls,
         kp: KinematicParams,
         *,
         harmonics: int = 5,
@@ -525,7 +529,7 @@ class ExcitationProblem:
         max_joint_rate: float = 1.5,
         samples: int = 200,
         rank_threshold: float = 1e-8,
-    ) -> None: ...
+    ) -> ExcitationProblem: ...
     @property
     def dimension(self) -> int: ...
     @property

@@ -200,12 +200,12 @@ def read_mcap(path: Path) -> McapCalibration:
     rows = [d for d in dwells if d["defect"] is None]
     total = count if count is not None else max(seen, default=-1) + 1
     dropped += [
-        (l, "not finished: the collection stopped before the end of its dwell" + cut)
-        for l in range(total)
-        if l not in seen
+        (k, "not finished: the collection stopped before the end of its dwell" + cut)
+        for k in range(total)
+        if k not in seen
     ]
     if not rows:
-        reasons = "; ".join(f"{l}: {r}" for l, r in sorted(dropped))
+        reasons = "; ".join(f"{k}: {r}" for k, r in sorted(dropped))
         raise CalibrationError(f"no usable configuration in the log ({reasons})")
     kappa_samples = np.array([d["kappa_samples"] for d in rows], dtype=np.int64)
     camera_frames = np.array([d["camera_frames"] for d in rows], dtype=np.int64)

@@ -429,8 +429,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _can_missing(args: argparse.Namespace) -> int:
-    print("rss6: error: can-sim needs python-can and canopen: pip install 'rss6[can]'",
-          file=sys.stderr)
+    print(
+        "rss6: error: can-sim needs python-can and canopen: pip install 'rss6[can]'",
+        file=sys.stderr,
+    )
     return 1
 
 

@@ -258,7 +258,7 @@ class DemoReport:
     def filter_text(self) -> str:
         """Step 3: the Kalman filter statistics of the DSMC runs."""
         head = (
-            "3. Kalman filter inside the DSMC loop, default (tuned) vs the low-noise servo "
+            "3. Kalman filter inside the DSMC loop, the tuned servo vs the low-noise servo "
             "(std of filter/camera pose error, rms rate error/true rate after 2 s; RMSE vs the true "
             "pose)"
         )

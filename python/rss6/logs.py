@@ -128,7 +128,8 @@ class RunWriter:
         flush_interval: float | None = 1.0,
         fsync: bool = False,
     ) -> None:
-        if not (isinstance(chunk_size, int) and chunk_size > 0):
+        size: object = chunk_size  # checked at run time: callers may pass anything
+        if not (isinstance(size, int) and size > 0):
             raise LogError(f"chunk_size must be a positive integer (bytes), got {chunk_size!r}")
         if flush_interval is not None and not flush_interval >= 0:
             raise LogError(f"flush_interval must be >= 0 s or None, got {flush_interval!r}")
