@@ -2,6 +2,7 @@
 //! only central estimates). Run: `cargo run --release -p rss6-benches --example control_latency`.
 #![allow(clippy::unwrap_used)]
 
+use rss6_core::thesis::CONTROL_PERIOD;
 use rss6_core::{home_pose, ik, DynamicParams, KinematicParams, Vec6};
 use rss6_ctrl::{
     CommandGuard, CommandLimits, Dsmc, DsmcGains, KalmanConfig, PidGains, PoseKalman, Scheme,
@@ -28,22 +29,26 @@ fn report(name: &str, ns: &mut [u64]) {
 
 fn main() {
     let kp = KinematicParams::nominal();
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &home_pose()).unwrap();
     let mut dsmc = Dsmc::new(kp, DynamicParams::nominal(), DsmcGains::tuned()).unwrap();
     let traj = Sinusoid::experiment1();
-    let refs: Vec<_> = (0..1000).map(|k| traj.sample(k as f64 * 0.033)).collect();
+    let refs: Vec<_> = (0..1000)
+        .map(|k| traj.sample(k as f64 * CONTROL_PERIOD))
+        .collect();
     let mut ns = vec![0u64; N];
     for (k, slot) in ns.iter_mut().enumerate() {
         let r = &refs[k % refs.len()];
         let z = r.pose + Vec6::repeat(1e-5);
         let t0 = Instant::now();
-        let est = kf.step(black_box(0.033), Some(black_box(&z))).unwrap();
-        black_box(dsmc.step(r, &est, 0.033).unwrap());
+        let est = kf
+            .step(black_box(CONTROL_PERIOD), Some(black_box(&z)))
+            .unwrap();
+        black_box(dsmc.step(r, &est, CONTROL_PERIOD).unwrap());
         *slot = t0.elapsed().as_nanos() as u64;
     }
     report("camera step (KF+DSMC)", &mut ns);
 
-    let mut conv = TorqueToPosition::new(PidGains::nominal(), 1e-3, 30.0).unwrap();
+    let mut conv = TorqueToPosition::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
     let mut guard = CommandGuard::new(CommandLimits::nominal(), &Vec6::zeros()).unwrap();
     let theta = Vec6::repeat(0.01);
     for (k, slot) in ns.iter_mut().enumerate() {
@@ -62,7 +67,7 @@ fn main() {
     // the joint ticks between frames, for the default and the low-noise configuration.
     let frames = N / 33;
     for (name, config, gains) in [
-        ("servo default", ServoConfig::nominal(), DsmcGains::tuned()),
+        ("servo default", ServoConfig::tuned(), DsmcGains::tuned()),
         (
             "servo low-noise",
             ServoConfig::low_noise(),

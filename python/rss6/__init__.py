@@ -11,7 +11,8 @@ True
 
 Submodules: :mod:`rss6.servo` (tracking experiments), :mod:`rss6.calibrate` (RPBA, implicit),
 :mod:`rss6.logs` (MCAP), :mod:`rss6.plots` (figures), :mod:`rss6.demo` (the demo as data),
-:mod:`rss6.types` (``Literal`` names, the ``Robot`` protocol), :mod:`rss6.cli` (the ``rss6`` command).
+:mod:`rss6.types` (``Literal`` names, the ``Robot`` protocol), :mod:`rss6.cli` (the ``rss6`` command);
+optional :mod:`rss6.can` (the CAN bridge: ``pip install rss6[can]``, imported on demand).
 """
 
 from __future__ import annotations
@@ -47,7 +48,6 @@ from rss6._rss6 import (
     mass_matrix,
     regressor,
     rk4_step,
-    simulate,
 )
 from rss6.errors import (
     CalibrationError,
@@ -131,5 +131,4 @@ __all__ = [
     "regressor",
     "rk4_step",
     "servo",
-    "simulate",
 ]

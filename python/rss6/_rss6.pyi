@@ -18,6 +18,7 @@ __all__ = [
     "Kcsc",
     "KinematicParams",
     "Kjsc",
+    "LogWriter",
     "ModelSim",
     "Plant",
     "TorqueToPosition",
@@ -42,14 +43,16 @@ __all__ = [
     "jacobian_ad",
     "jacobian_theta",
     "mass_matrix",
+    "mean_pose",
+    "read_log",
     "regressor",
     "relative_pose_errors_raw",
     "rk4_step",
     "rpba",
     "run_servo",
     "select_configurations",
-    "simulate",
     "stroke",
+    "thesis_tables",
 ]
 
 _F64: TypeAlias = NDArray[np.float64]
@@ -325,6 +328,7 @@ class _SimBase:
     ) -> Self: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
+    def step_joint_commands(self, commands: ArrayLike) -> dict[str, _F64]: ...
     def true_pose(self) -> _F64: ...
     def true_theta(self) -> _F64: ...
     def loop_closure_error(self) -> float: ...
@@ -344,7 +348,6 @@ class Plant(_SimBase): ...
 @final
 class ModelSim(_SimBase): ...
 
-def simulate(plant: Plant | ModelSim, commands: ArrayLike) -> dict[str, _F64]: ...
 def run_servo(
     plant: Plant | ModelSim,
     controller: str,
@@ -356,22 +359,60 @@ def run_servo(
     sensor_in_base: ArrayLike | None = None,
     target_in_effector: ArrayLike | None = None,
     pid: tuple[float, float, float] | None = None,
-    torque_limit: float = 30.0,
-    steady_state_kalman: bool = False,
+    torque_limit: float | None = None,
+    steady_state_kalman: bool | None = None,
     kalman_r: ArrayLike | None = None,
     kalman_q_jerk: ArrayLike | None = None,
-    camera_latency: float = 0.0,
+    camera_latency: float | None = None,
     on_segment: Callable[[dict[str, Any]], object] | None = None,
     segment: float = 1.0,
-    tuning: str = "thesis",
+    tuning: str = "tuned",
+    mcap: _Path | None = None,
+    trajectory_name: str | None = None,
 ) -> dict[str, Any]: ...
+
+# --- logs -------------------------------------------------------------------------------------
+@final
+class LogWriter:
+    def __new__(
+        cls, path: _Path, *, chunk_size: int | None = None, t0: float = 0.0
+    ) -> LogWriter: ...
+    def write(self, name: str, t: ArrayLike, values: ArrayLike) -> None: ...
+    def write_streams(self, streams: dict[str, tuple[ArrayLike, ArrayLike]]) -> None: ...
+    def write_dwell(
+        self,
+        index: int,
+        window: tuple[float, float],
+        theta_cmd: ArrayLike,
+        kappa: ArrayLike,
+        sensor_pose: ArrayLike | None,
+        kappa_samples: int,
+        camera_frames: int,
+    ) -> None: ...
+    def add_metadata(self, pairs: dict[str, str], name: str = "rss6") -> None: ...
+    def flush(self, sync: bool = False) -> None: ...
+    def finish(self, status: str | None = None) -> None: ...
+    @property
+    def messages(self) -> int: ...
+    @property
+    def finished(self) -> bool: ...
+    @property
+    def path(self) -> str: ...
+
+def read_log(path: _Path) -> dict[str, Any]: ...
+def mean_pose(poses: ArrayLike) -> _F64: ...
 
 # --- calibration ------------------------------------------------------------------------------
 @final
 class CalibrationData:
     @staticmethod
     def from_arrays(
-        kappa: ArrayLike, sensor_pose: ArrayLike, theta_cmd: ArrayLike | None = None
+        kappa: ArrayLike,
+        sensor_pose: ArrayLike,
+        theta_cmd: ArrayLike | None = None,
+        *,
+        kappa_samples: list[int] | ArrayLike | None = None,
+        camera_frames: list[int] | ArrayLike | None = None,
     ) -> CalibrationData: ...
     def __len__(self) -> int: ...
     @property
@@ -431,7 +472,9 @@ def collect(
     *,
     move_time: float = 1.0,
     settle_time: float = 0.5,
+    kappa_rate: float = 500.0,
     progress: Callable[[int, int], Any] | None = None,
+    mcap: _Path | None = None,
 ) -> CalibrationData: ...
 def rpba(
     data: CalibrationData,
@@ -472,9 +515,10 @@ def calibration_study(
     plant: bool = False,
 ) -> list[dict[str, Any]]: ...
 
+@final
 class ExcitationProblem:
-    def __init__(
-        self,
+    def __new__(
+        cls,
         kp: KinematicParams,
         *,
         harmonics: int = 5,
@@ -485,7 +529,7 @@ class ExcitationProblem:
         max_joint_rate: float = 1.5,
         samples: int = 200,
         rank_threshold: float = 1e-8,
-    ) -> None: ...
+    ) -> ExcitationProblem: ...
     @property
     def dimension(self) -> int: ...
     @property
@@ -498,3 +542,4 @@ class ExcitationProblem:
     def observability(self, coefficients: ArrayLike) -> tuple[float, float]: ...
 
 def excitation_at(f0: float, coefficients: ArrayLike, t: float) -> tuple[_F64, _F64, _F64]: ...
+def thesis_tables() -> dict[str, dict[str, Any]]: ...

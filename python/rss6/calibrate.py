@@ -15,8 +15,8 @@ True
 
 from __future__ import annotations
 
-import json
-from collections.abc import Callable, Mapping
+import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any, Union
@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6 import _rss6, logs
+from rss6 import thesis as _thesis
 from rss6._rss6 import (
     CalibrationData,
     CalibrationResult,
@@ -32,7 +33,7 @@ from rss6._rss6 import (
     select_configurations,
     stroke,
 )
-from rss6.errors import CalibrationError, InvalidInputError, LogError, ShapeError
+from rss6.errors import CalibrationError, InvalidInputError, LogError
 
 __all__ = [
     "TABLE_4_2",
@@ -66,24 +67,14 @@ MCAP_KIND = "rss6.calibrate.collect"
 
 #: Table 4.2 error standard deviations: lengths/positions (m), η (rad/bit), Δθ (rad), external
 #: position (m) and angle (rad).
-TABLE_4_2 = {
-    "length": 1e-3,
-    "eta": 5e-5,
-    "dtheta": 0.05,
-    "ext_position": 0.5e-3,
-    "ext_angle": 0.017,
-}
+TABLE_4_2 = dict(_thesis.TABLE_4_2)
 
 #: Table 4.5 (thesis, simulation): RMS relative pose errors [x, y, z, α, β, γ] (m, rad).
-THESIS_TABLE_4_5 = {
-    "uncalibrated": [3.4e-3, 3.8e-3, 4.5e-3, 0.0037, 0.0060, 0.0033],
-    "implicit": [3.1e-3, 4.9e-3, 4.2e-3, 9.6e-4, 7.9e-4, 0.0012],
-    "RPBA": [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5],
-}
+THESIS_TABLE_4_5 = {k: list(v) for k, v in _thesis.TABLE_4_5.items()}
 #: Tables 4.3 (implicit) and 4.4 (RPBA): (before, after) of ‖b^c − b^n‖₂ and Σ‖Φ^c − Φ^n‖₂.
 THESIS_TABLES_4_3_4_4 = {
-    "implicit": {"param_error": (3.273, 0.8197), "residual": (0.00109929, 2.94235e-05)},
-    "RPBA": {"param_error": (3.1630, 0.6616), "residual": (0.00542206, 2.38881e-05)},
+    name: {"param_error": t["param_error"], "residual": t["residual"]}
+    for name, t in (("implicit", _thesis.TABLE_4_3), ("RPBA", _thesis.TABLE_4_4))
 }
 
 
@@ -123,150 +114,36 @@ def collect(
     progress: Callable[[int, int], Any] | None = None,
     mcap: Path | None = None,
 ) -> CalibrationData:
-    """Visits every configuration (row 0 = the initial configuration) on ``plant`` and averages the
-    potentiometers (500 Hz) and the camera (ᶜχ_t) over ``dwell`` s at rest (thesis §4.5: 2 s). The
-    plant should be at rest (e.g. just reset); the first move starts from its current readings.
-    ``progress(done, total)`` is called after each configuration.
+    """Visits every configuration (row 0 = the initial configuration; θ_cmd in the drive's joint
+    convention) on ``plant`` and averages the potentiometers (500 Hz) and the camera (ᶜχ_t) over
+    ``dwell`` s at rest (thesis §4.5: 2 s), with rss6-exp's dwell runner (GIL released): a
+    cosine-blended move over ``move_time`` s, a ``settle_time`` s wait, then the dwell; ᶜχ_t is the
+    :func:`mean_pose` of the dwell's finite frames, NaN without frames. The plant should be at rest
+    (e.g. just reset); the first move starts from its current readings. ``progress(done, total)`` is
+    called after each configuration; if it raises (KeyboardInterrupt included) the collection stops
+    and the exception reaches the caller; Ctrl-C stops it at the same points.
 
-    With ``mcap`` (a path), the raw dwell data are also written to an MCAP log (see
-    :func:`read_mcap`): the plant is then stepped from Python with the same procedure as the compiled
-    collector (cosine-blended move over ``move_time``, ``settle_time`` wait, then ``dwell``), and the
-    returned means are computed like :func:`read_mcap` computes them (quaternion mean of the
-    rotations); a configuration without camera frames gets a NaN sensor pose, as from the compiled
-    collector. Without ``mcap`` the compiled collector runs (GIL released)."""
-    if mcap is None:
-        return _rss6.collect(
-            plant, thetas, dwell, move_time=move_time, settle_time=settle_time, progress=progress
-        )
-    th = _rows6(thetas, "thetas")
-    if len(th) == 0:
-        raise InvalidInputError("thetas must contain at least one configuration")
-    if not np.all(np.isfinite(th)):
-        raise InvalidInputError("thetas must be finite")
-    if not (np.isfinite(dwell) and dwell > 0):
-        raise InvalidInputError(f"dwell must be > 0 s, got {dwell}")
-    if not (np.isfinite(move_time) and move_time > 0 and np.isfinite(settle_time)):
-        raise InvalidInputError("move_time must be > 0 and settle_time >= 0")
-    if settle_time < 0:
-        raise InvalidInputError("move_time must be > 0 and settle_time >= 0")
-    raw: dict[str, tuple[list[float], list[F64]]] = {
-        "kappa": ([], []),
-        "camera_pose": ([], []),
-        "theta_cmd": ([], []),
-    }
-    windows: list[list[float]] = []
-    metadata = {
-        "kind": MCAP_KIND,
-        "configurations": str(len(th)),
-        "dwell": repr(float(dwell)),
-        "move_time": repr(float(move_time)),
-        "settle_time": repr(float(settle_time)),
-        "kappa_rate": repr(KAPPA_RATE),
-        "windows": "[]",
-    }
-    written = dict.fromkeys(raw, 0)
-    # The log is written as the collection goes: after each dwell, its samples (one chunk, flushed)
-    # and then the windows so far, so a killed process leaves every finished dwell readable. If the
-    # collection fails, the writer records the error and finishes the file with the finished dwells.
-    with logs.RunWriter(mcap, metadata) as writer:
-
-        def on_dwell() -> None:
-            new = {
-                name: (
-                    np.asarray(t[written[name] :], dtype=np.float64),
-                    np.asarray(v[written[name] :], dtype=np.float64).reshape(-1, 6),
-                )
-                for name, (t, v) in raw.items()
-            }
-            written.update({name: len(t) for name, (t, _) in raw.items()})
-            writer.write_streams(new)
-            writer.add_metadata({"windows": json.dumps(windows)})
-
-        _step_dwells(plant, th, dwell, move_time, settle_time, progress, raw, windows, on_dwell)
-        writer.add_metadata({"status": "finished"})
-    return _average_dwells(
-        _series(raw), windows, complete=True, drop=False, kappa_rate=KAPPA_RATE
-    ).data
-
-
-def _series(raw: Mapping[str, tuple[list[float], list[F64]]]) -> dict[str, tuple[F64, F64]]:
-    return {
-        name: (np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64).reshape(-1, 6))
-        for name, (t, v) in raw.items()
-    }
-
-
-def _rows6(x: Any, name: str) -> F64:
-    a = np.asarray(x, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != 6:
-        raise ShapeError(f"{name} must have shape (m, 6), got {a.shape}")
-    return a
-
-
-def _step_dwells(
-    plant: Any,
-    thetas: F64,
-    dwell: float,
-    move_time: float,
-    settle_time: float,
-    progress: Callable[[int, int], Any] | None,
-    raw: dict[str, tuple[list[float], list[F64]]],
-    windows: list[list[float]],
-    on_dwell: Callable[[], Any] | None = None,
-) -> None:
-    """Steps ``plant`` through the configurations as rss6-ident's ``Stepped`` source does, appending
-    the raw dwell samples to ``raw`` (kappa, camera_pose, theta_cmd: times, values) and, once a dwell
-    is finished, its window [t0, t1] to ``windows`` (s, plant times of its first and last tick), then
-    calling ``on_dwell()``."""
-    dt = float(plant.dt)
-
-    def ticks(t: float) -> int:
-        return max(round(t / dt), 0)
-
-    every = max(round(1.0 / (KAPPA_RATE * dt)), 1)
-    last = np.asarray(KinematicParams.nominal().theta_from_reading(plant.potentiometers()))
-    kt, kv = raw["kappa"]
-    ct, cv = raw["camera_pose"]
-    tt, tv = raw["theta_cmd"]
-    n_move = max(ticks(move_time), 1)
-    for l, cmd in enumerate(thetas):
-        for k in range(1, n_move + 1):
-            s = 0.5 - 0.5 * np.cos(np.pi * k / n_move)
-            plant.step_joint_command(last + (cmd - last) * s)
-        last = cmd
-        for _ in range(ticks(settle_time)):
-            plant.step_joint_command(cmd)
-        start = None
-        for k in range(max(ticks(dwell), 1)):
-            plant.step_joint_command(cmd)
-            t = float(plant.time)
-            start = t if start is None else start
-            if k % every == 0:
-                kt.append(t)
-                kv.append(np.asarray(plant.potentiometers(), dtype=np.float64))
-                tt.append(t)
-                tv.append(cmd)
-            z = plant.camera()
-            if z is not None:
-                ct.append(t)
-                cv.append(np.asarray(z, dtype=np.float64))
-        windows.append([float(start if start is not None else plant.time), float(plant.time)])
-        if on_dwell is not None:
-            on_dwell()
-        if progress is not None:
-            progress(l + 1, len(thetas))
+    With ``mcap`` (a path), the collection is also logged there as it goes by the Rust writer: every
+    tick's samples and each dwell's means (what this function returns), so :func:`read_mcap` gives
+    back exactly the returned data, and a killed process leaves every finished dwell readable. The
+    returned data are the same with and without ``mcap``."""
+    return _rss6.collect(
+        plant,
+        thetas,
+        dwell,
+        move_time=move_time,
+        settle_time=settle_time,
+        kappa_rate=KAPPA_RATE,
+        progress=progress,
+        mcap=None if mcap is None else os.fspath(mcap),
+    )
 
 
 def mean_pose(poses: Any) -> F64:
-    """Mean of poses (N, 6) [x, y, z, α, β, γ] (m, rad): the mean position and the rotation mean
-    of the quaternions (eigenvector of Σ q qᵀ with the largest eigenvalue; sign- and ±π-safe)."""
-    p = np.atleast_2d(np.asarray(poses, dtype=np.float64))
-    if p.ndim != 2 or p.shape[1] != 6 or len(p) == 0:
-        raise ShapeError(f"poses must have shape (N >= 1, 6), got {p.shape}")
-    q = logs.euler_to_quaternion(p)
-    _, vecs = np.linalg.eigh(q.T @ q)
-    qm = vecs[:, -1]
-    return np.r_[p[:, :3].mean(axis=0), logs.quaternion_to_euler(qm[None, :])[0]]
+    """Mean of poses (N, 6) [x, y, z, α, β, γ] (m, rad): the mean position and the rotation whose
+    quaternion maximises Σ (q · q_k)² (sign- and ±π-safe) — rss6-exp's ``mean_pose``, the mean the
+    calibration dwells use."""
+    return np.asarray(_rss6.mean_pose(np.atleast_2d(np.asarray(poses, dtype=np.float64))))
 
 
 @dataclass(frozen=True)
@@ -275,7 +152,8 @@ class McapCalibration:
 
     ``data`` holds the usable configurations only; ``used[j]`` is the index in the log (order of
     visit, 0 = initial) of ``data``'s row j; ``dropped`` lists ``(index, reason)`` for every
-    configuration left out (missing or non-finite frames, a dwell cut short by truncation).
+    configuration left out (no camera frame, non-finite values, a dwell the log lacks because the
+    collection stopped or the file was cut).
     ``kappa_samples`` and ``camera_frames`` are the counts averaged per used row. ``complete`` is
     False when the log had no end record (a truncated file, read up to its last whole chunk)."""
 
@@ -288,135 +166,20 @@ class McapCalibration:
     metadata: dict[str, str] = field(default_factory=dict)
 
 
-def _segments(theta_t: F64, theta_v: F64) -> list[list[float]]:
-    """Dwell windows from the theta_cmd stream alone (a log without metadata): a new configuration
-    starts where θ_cmd changes or the samples have a gap longer than 10 sample intervals."""
-    if len(theta_t) == 0:
-        return []
-    step = float(np.median(np.diff(theta_t))) if len(theta_t) > 1 else 0.0
-    cuts = [0]
-    for k in range(1, len(theta_t)):
-        if np.any(theta_v[k] != theta_v[k - 1]) or theta_t[k] - theta_t[k - 1] > 10 * step:
-            cuts.append(k)
-    cuts.append(len(theta_t))
-    return [[float(theta_t[a]), float(theta_t[b - 1] + step)] for a, b in zip(cuts, cuts[1:])]
-
-
-def _average_dwells(
-    streams: Mapping[str, Any],
-    windows: list[list[float]] | None,
-    *,
-    complete: bool,
-    drop: bool,
-    kappa_rate: float | None = None,
-    configurations: int | None = None,
-    metadata: dict[str, str] | None = None,
-) -> McapCalibration:
-    """Averages κ and ᶜχ_t over each dwell window (metadata windows, or segments of θ_cmd). With
-    ``kappa_rate`` (metadata), a dwell with fewer κ samples than its window holds is cut short;
-    without it, only a last dwell shorter than the median of the others is."""
-    for name in ("kappa", "theta_cmd"):
-        if name not in streams:
-            raise LogError(f"no /rss6/{name} channel: not a calibration log written by collect()")
-    kt, kv = (np.asarray(a, dtype=np.float64) for a in streams["kappa"])
-    tt, tv = (np.asarray(a, dtype=np.float64) for a in streams["theta_cmd"])
-    ct, cv = (
-        (np.asarray(a, dtype=np.float64) for a in streams["camera_pose"])
-        if "camera_pose" in streams
-        else (np.zeros(0), np.zeros((0, 6)))
-    )
-    if windows is None:
-        windows = _segments(tt, tv)
-    if not windows:
-        raise LogError("the log holds no calibration dwell (empty or cut before the first one)")
-    cut = "" if complete else " (the file is truncated)"
-    tol = 1e-6  # s; stamps are rounded to ns
-    rows: list[tuple[int, F64, F64, F64, int, int]] = []
-    dropped: list[tuple[int, str]] = []
-    for l, (a, b) in enumerate(windows):
-        kin = (kt >= a - tol) & (kt <= b + tol)
-        tin = (tt >= a - tol) & (tt <= b + tol)
-        cin = (ct >= a - tol) & (ct <= b + tol)
-        theta = tv[tin][0] if np.any(tin) else np.full(6, np.nan)
-        ks, cs = kv[kin], cv[cin]
-        finite = cs[np.all(np.isfinite(cs), axis=1)]
-        expected = int(np.floor((b - a) * kappa_rate + 1e-6)) + 1 if kappa_rate else 0
-        reason = None
-        if len(ks) == 0:
-            reason = "no potentiometer sample during the dwell" + cut
-        elif len(ks) < expected:
-            reason = f"dwell cut short: {len(ks)} of {expected} potentiometer samples" + cut
-        elif not np.all(np.isfinite(ks)):
-            reason = "non-finite potentiometer reading"
-        elif len(cs) == 0:
-            reason = "no camera frame during the dwell"
-        elif len(finite) == 0:
-            reason = f"all {len(cs)} camera frames non-finite"
-        pose = mean_pose(finite) if len(finite) else np.full(6, np.nan)
-        kappa = ks.mean(axis=0) if len(ks) else np.full(6, np.nan)
-        if reason is not None:
-            dropped.append((l, reason))
-            if drop:
-                continue
-        rows.append((l, kappa, pose, theta, len(ks), len(finite)))
-    for l in range(len(windows), configurations or 0):
-        dropped.append(
-            (l, "not finished: the collection stopped before the end of its dwell" + cut)
-        )
-    if (
-        drop
-        and not complete
-        and not kappa_rate
-        and len(rows) > 1
-        and rows[-1][0] == len(windows) - 1
-    ):
-        # The last dwell of a truncated log may be cut short: keep it only if it is as long as
-        # the others.
-        n, typical = rows[-1][4], int(np.median([r[4] for r in rows[:-1]]))
-        if n < typical:
-            why = f"dwell cut short: {n} of ~{typical} potentiometer samples" + cut
-            dropped.append((rows[-1][0], why))
-            rows.pop()
-    if not rows:
-        reasons = "; ".join(f"{l}: {r}" for l, r in dropped)
-        raise CalibrationError(f"no usable configuration in the log ({reasons})")
-    data = CalibrationData.from_arrays(
-        np.array([r[1] for r in rows]),
-        np.array([r[2] for r in rows]),
-        np.array([r[3] for r in rows]),
-    )
-    return McapCalibration(
-        data=data,
-        used=[r[0] for r in rows],
-        dropped=sorted(dropped),
-        kappa_samples=np.array([r[4] for r in rows], dtype=np.int64),
-        camera_frames=np.array([r[5] for r in rows], dtype=np.int64),
-        complete=complete,
-        metadata=dict(metadata or {}),
-    )
-
-
 def read_mcap(path: Path) -> McapCalibration:
-    """Reads a calibration log written by ``collect(..., mcap=path)`` (or any
-    :func:`rss6.logs.write_run` log with ``kappa``, ``theta_cmd`` and ``camera_pose`` streams holding
-    only dwell samples), splits it into configurations and averages κ and ᶜχ_t per dwell (mean
-    position, quaternion mean of the rotations: :func:`mean_pose`).
+    """Reads a calibration log written by ``collect(..., mcap=path)``: the means of every finished
+    dwell, as the collector computed them (its ``dwell`` messages, with their index and window), read
+    by the Rust reader (:func:`rss6.logs.read_log`).
 
-    Configurations are split by the metadata's dwell windows, or, in a log without metadata, where
-    θ_cmd changes or its samples pause. A truncated file (no MCAP footer, e.g. the collecting process
-    was killed; ``.complete`` False) is read up to its last whole chunk, as :func:`rss6.logs.read_log`
-    does: a log written by :func:`collect` then holds every dwell finished before the cut, with its
-    window. Configurations with missing
-    or non-finite frames, or whose dwell the truncation cut short, are dropped and listed in
-    ``.dropped`` as ``(index, reason)``. Raises :class:`rss6.LogError` for an unreadable file or one
-    without calibration data (:class:`rss6.CorruptLogError` if it is not MCAP or damaged) and
+    A truncated file (no MCAP footer, e.g. the collecting process was killed; ``.complete`` False) is
+    read up to its last whole chunk: it holds every dwell finished before the cut. Configurations the
+    log lacks (the metadata's ``configurations`` against the dwells present) and those with a defect
+    (no camera frame, non-finite values) are left out and listed in ``.dropped`` as
+    ``(index, reason)``. Raises :class:`rss6.LogError` for an unreadable file or one without
+    calibration data (:class:`rss6.CorruptLogError` if it is not MCAP or damaged) and
     :class:`rss6.CalibrationError` if no configuration is usable."""
     log = logs.read_log(path)
-    complete = log.complete
-    run = log.streams
     md = log.metadata if any(name == "rss6" for name, _ in log.records) else None
-    windows = None
-    rate = None
     count = None
     if md is not None:
         if md.get("kind") != MCAP_KIND:
@@ -425,21 +188,42 @@ def read_mcap(path: Path) -> McapCalibration:
                 f"{md.get('kind')!r}, expected {MCAP_KIND!r})"
             )
         try:
-            windows = [[float(a), float(b)] for a, b in json.loads(md.get("windows", "[]"))]
-            rate = float(md["kappa_rate"])
             count = int(md["configurations"])
-        except (KeyError, TypeError, ValueError) as e:
+        except (KeyError, ValueError) as e:
             raise LogError(f"{path}: bad calibration metadata: {e}") from e
-    if "kappa" not in run and "theta_cmd" not in run:
+    elif not log.dwells:
         raise LogError(f"{path}: no calibration data (empty, corrupt or not written by collect())")
-    return _average_dwells(
-        run,
-        windows,
-        complete=complete,
-        drop=True,
-        kappa_rate=rate,
-        configurations=count,
-        metadata=md,
+    cut = "" if log.complete else " (the file is truncated)"
+    dwells = sorted(log.dwells, key=lambda d: int(d["index"]))
+    seen = {int(d["index"]) for d in dwells}
+    dropped = [(int(d["index"]), str(d["defect"])) for d in dwells if d["defect"] is not None]
+    rows = [d for d in dwells if d["defect"] is None]
+    total = count if count is not None else max(seen, default=-1) + 1
+    dropped += [
+        (k, "not finished: the collection stopped before the end of its dwell" + cut)
+        for k in range(total)
+        if k not in seen
+    ]
+    if not rows:
+        reasons = "; ".join(f"{k}: {r}" for k, r in sorted(dropped))
+        raise CalibrationError(f"no usable configuration in the log ({reasons})")
+    kappa_samples = np.array([d["kappa_samples"] for d in rows], dtype=np.int64)
+    camera_frames = np.array([d["camera_frames"] for d in rows], dtype=np.int64)
+    data = CalibrationData.from_arrays(
+        np.array([d["kappa"] for d in rows]),
+        np.array([d["sensor_pose"] for d in rows]),
+        np.array([d["theta_cmd"] for d in rows]),
+        kappa_samples=kappa_samples.tolist(),
+        camera_frames=camera_frames.tolist(),
+    )
+    return McapCalibration(
+        data=data,
+        used=[int(d["index"]) for d in rows],
+        dropped=sorted(dropped),
+        kappa_samples=kappa_samples,
+        camera_frames=camera_frames,
+        complete=log.complete,
+        metadata=dict(md or {}),
     )
 
 

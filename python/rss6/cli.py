@@ -394,8 +394,9 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument(
         "--tuning",
         choices=TUNINGS,
-        default="thesis",
-        help="servo tuning: the thesis's (default) or the low-noise DSMC servo (DSMC only)",
+        default="tuned",
+        help="servo tuning: rss6's tuning for Tables 6.1/6.2 (default; the thesis's filter noise) or "
+        "the low-noise DSMC servo (DSMC only)",
     )
     t.add_argument(
         "--true-kinematics", help="TOML file of the robot's true kinematics (default nominal)"
@@ -409,7 +410,30 @@ def build_parser() -> argparse.ArgumentParser:
         "--mcap", help="log the run to this MCAP file (as it goes: on disk every simulated second)"
     )
     t.set_defaults(func=cmd_track)
+
+    s = sub.add_parser(
+        "can-sim",
+        help="simulated CiA 402 drives on a CAN bus (needs rss6[can]), for a bridge or your tools",
+        description="Six simulated drives (CSP, the EDS rss6 ships) wrapping a simulated robot on a "
+        "python-can bus: each SYNC steps the robot one tick, TPDO1 every 2nd SYNC, heartbeats, EMCY "
+        "on a following error. See docs/can.md.",
+    )
+    try:
+        from rss6.can import simcli
+    except ImportError:  # python-can / canopen not installed
+        s.set_defaults(func=_can_missing)
+    else:
+        simcli.add_arguments(s)
+        s.set_defaults(func=simcli.run)
     return p
+
+
+def _can_missing(args: argparse.Namespace) -> int:
+    print(
+        "rss6: error: can-sim needs python-can and canopen: pip install 'rss6[can]'",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -171,7 +171,7 @@ class ServoTable:
 class FilterStats:
     """How the Kalman filter inside one DSMC run did (see :func:`rss6.servo.filter_statistics`):
     ``noise`` and ``rate`` ratios (6,), and the RMSE against the true pose ``rmse_true`` (6,) (m,
-    rad). ``servo`` is "thesis" or "low-noise"."""
+    rad). ``servo`` is "tuned" or "low-noise"."""
 
     experiment: TrajectoryName
     servo: str
@@ -258,7 +258,7 @@ class DemoReport:
     def filter_text(self) -> str:
         """Step 3: the Kalman filter statistics of the DSMC runs."""
         head = (
-            "3. Kalman filter inside the DSMC loop, thesis tuning vs the low-noise servo "
+            "3. Kalman filter inside the DSMC loop, the tuned servo vs the low-noise servo "
             "(std of filter/camera pose error, rms rate error/true rate after 2 s; RMSE vs the true "
             "pose)"
         )
@@ -424,14 +424,14 @@ def run(
     durations: dict[TrajectoryName, float] = (
         {"exp1": 6.0, "exp2": 6.0} if quick else {"exp1": 25.0, "exp2": 42.0}
     )
-    to_run: list[tuple[str, TuningName]] = [(c, "thesis") for c in CONTROLLERS]
+    to_run: list[tuple[str, TuningName]] = [(c, "tuned") for c in CONTROLLERS]
     to_run.append(("dsmc", "low_noise"))
     runs: dict[str, dict[str, TrackingResult]] = {}
     with bars(len(TRAJECTORIES) * len(to_run), "servo experiments") as bar:
         for exp in TRAJECTORIES:
             runs[exp] = {}
             for controller, tuning in to_run:
-                suffix = "" if tuning == "thesis" else f"_{tuning}"
+                suffix = "" if tuning == "tuned" else f"_{tuning}"
                 path = out_dir / f"{exp}_{controller}{suffix}.mcap"
                 r = servo.track(
                     robot,
@@ -467,7 +467,7 @@ def run(
     # 3. How well each DSMC servo's Kalman filter did (the true pose is known in simulation).
     filters = []
     for exp in TRAJECTORIES:
-        for label, column in (("thesis", "DSMC"), ("low-noise", "DSMC-LN")):
+        for label, column in (("tuned", "DSMC"), ("low-noise", "DSMC-LN")):
             r = runs[exp][column]
             noise, rate = servo.filter_statistics(r)
             filters.append(FilterStats(exp, label, noise, rate, r.rmse_true))

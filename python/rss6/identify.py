@@ -63,7 +63,9 @@ class Excitation:
         :class:`rss6.IdentificationError` naming the violated constraint and its time."""
         c = np.asarray(coefficients, dtype=np.float64)
         if c.ndim != 2 or c.shape[0] != 6 or c.shape[1] < 5 or c.shape[1] % 2 == 0:
-            raise InvalidInputError(f"coefficients must have shape (6, 2n + 1), n >= 2; got {c.shape}")
+            raise InvalidInputError(
+                f"coefficients must have shape (6, 2n + 1), n >= 2; got {c.shape}"
+            )
         n = (c.shape[1] - 1) // 2
         problem = _rss6.ExcitationProblem(kp, harmonics=n, f0=f0, **limits)
         return _finish(problem, c, f0)
@@ -97,7 +99,7 @@ def excitation(
     progress: Callable[[int, float], Any] | None = None,
     maxiter: int = 60,
     popsize: int = 8,
-    amplitude: tuple[float, float] = (0.004, 0.02),
+    amplitude: tuple[float, float] = (0.001, 0.005),
     **limits: Any,
 ) -> Excitation:
     """An exciting trajectory for ``kp`` maximising O_in (eq. 5.13), by differential evolution.
@@ -109,17 +111,22 @@ def excitation(
     ``stroke_margin``, ``max_joint_rate``, ``samples``). Raises :class:`rss6.IdentificationError` if no
     feasible trajectory was found.
     """
-    from scipy.optimize import differential_evolution
+    from scipy.optimize import Bounds, differential_evolution
 
     problem = _rss6.ExcitationProblem(kp, harmonics=harmonics, f0=f0, **limits)
     d = problem.dimension
     k = d // 6
-    bounds = [(-amplitude[0], amplitude[0]) if j // k < 3 else (-amplitude[1], amplitude[1]) for j in range(d)]
+    half = np.array([amplitude[0] if j // k < 3 else amplitude[1] for j in range(d)])
+    bounds = Bounds(-half, half)
     generation = 0
 
-    def objective(x: F64) -> F64:
+    def scores(x: F64) -> F64:
         # vectorized: x has shape (dimension, S); Rust evaluates the S candidates in parallel.
-        return np.asarray(problem.objectives(np.ascontiguousarray(np.asarray(x).T)), dtype=np.float64)
+        return np.asarray(
+            problem.objectives(np.ascontiguousarray(np.asarray(x).T)), dtype=np.float64
+        )
+
+    objective: Any = scores  # scipy's stubs type the scalar form only
 
     def callback(intermediate_result: Any) -> None:
         nonlocal generation

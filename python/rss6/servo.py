@@ -1,9 +1,9 @@
 """Visual servoing on a simulated robot (thesis §6.5): Experiments 1 and 2 with DSMC, KCSC and KJSC.
 
 The closed loop (Kalman filter + controller at the camera rate, converter and command guard at 1 kHz,
-the plant's drive PID) runs entirely in Rust (:func:`rss6._rss6.run_servo`); this module picks the
-pieces, tabulates Python reference functions, computes the Table 6.1/6.2 statistics and writes the
-optional MCAP log.
+the plant's drive PID) and its optional MCAP log run entirely in Rust (rss6-exp's servo runner, through
+:func:`rss6._rss6.run_servo`); this module names the pieces, tabulates Python reference functions and
+computes the Table 6.1/6.2 statistics.
 
 >>> import rss6
 >>> plant = rss6.ModelSim(rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=1)
@@ -14,7 +14,7 @@ optional MCAP log.
 
 from __future__ import annotations
 
-import contextlib
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from os import PathLike
@@ -24,8 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6 import _rss6
+from rss6 import thesis as _thesis
 from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
-from rss6.logs import RunWriter, write_run
+from rss6.logs import write_run
 
 __all__ = [
     "AXES",
@@ -45,30 +46,8 @@ AXES = ("x", "y", "z", "alpha", "beta", "gamma")
 #: Thesis Tables 6.1 (Experiment 1) and 6.2 (Experiment 2): {"exp1"|"exp2": {"rmse"|"mae":
 #: {"KJSC"|"KCSC"|"DSMC": [x, y, z (mm), α, β, γ (1e-3 rad)]}}}.
 THESIS_TABLES: dict[str, dict[str, dict[str, list[float]]]] = {
-    "exp1": {
-        "rmse": {
-            "KJSC": [2.8, 3.4, 2.1, 14.8, 14.0, 14.6],
-            "KCSC": [1.1, 1.5, 1.2, 3.2, 3.8, 3.5],
-            "DSMC": [0.44, 1.4, 0.63, 1.1, 2.1, 1.6],
-        },
-        "mae": {
-            "KJSC": [2.5, 2.7, 1.8, 12.5, 12.4, 14.2],
-            "KCSC": [0.97, 1.1, 1.0, 2.8, 3.3, 3.1],
-            "DSMC": [0.36, 0.61, 0.46, 0.92, 1.7, 1.3],
-        },
-    },
-    "exp2": {
-        "rmse": {
-            "KJSC": [3.2, 3.2, 3.1, 13.9, 9.4, 14.5],
-            "KCSC": [1.2, 1.5, 1.9, 4.5, 3.6, 2.9],
-            "DSMC": [0.60, 1.1, 1.3, 3.4, 2.8, 2.5],
-        },
-        "mae": {
-            "KJSC": [2.9, 2.7, 2.6, 11.3, 7.4, 13.7],
-            "KCSC": [0.96, 1.0, 1.3, 3.0, 2.4, 1.8],
-            "DSMC": [0.33, 0.54, 0.57, 1.4, 1.6, 1.0],
-        },
-    },
+    "exp1": _thesis.TABLE_6_1,
+    "exp2": _thesis.TABLE_6_2,
 }
 
 
@@ -88,8 +67,10 @@ def named_trajectory(name: str) -> _rss6.Trajectory:
 class TrackingResult:
     """One closed-loop run. Arrays are float64; poses are [x, y, z, α, β, γ] (m, rad).
 
-    Per plant tick (1 kHz): ``time`` (N,), ``desired`` (N, 6), ``true`` (N, 6) true pose,
-    ``theta_cmd`` (N, 6) joint commands (model convention), ``torque`` (N, 6) drive torques.
+    Per plant tick (1 kHz): ``time`` (N,), ``desired`` (N, 6), ``true`` (N, 6) true pose (both at
+    the start of the tick), ``theta_cmd`` (N, 6) the joint commands sent to the drive, in the drive's
+    joint convention (nominal η, Δθ; KJSC's model-convention commands converted), ``torque`` (N, 6)
+    drive torques.
     Per camera frame: ``frame_time`` (M,), ``frame_desired``, ``measured`` (camera pose in the base
     frame), ``frame_true``, ``estimate`` (Kalman χ_m), ``estimate_dot``, ``sliding`` (DSMC's F).
     ``rmse``/``mae`` (6,) compare desired and measured poses at the frames, as the thesis's Tables
@@ -220,7 +201,7 @@ def track(
     reset: bool = True,
     mcap: str | PathLike[str] | None = None,
     progress: Callable[[float, float], Any] | None = None,
-    tuning: str = "thesis",
+    tuning: str = "tuned",
 ) -> TrackingResult:
     """Runs one servo experiment on ``plant`` (:class:`rss6.Plant` or :class:`rss6.ModelSim`).
 
@@ -230,12 +211,15 @@ def track(
     nominal kinematics and Table 5.1 dynamics; pass calibrated kinematics). ``sensor_in_base`` (ᴼχ_C)
     and ``target_in_effector`` (ᴱχ_t) turn camera frames into end-effector poses (default: the plant's
     truth, i.e. a perfectly known camera placement). ``reset`` puts the plant at home first (thesis
-    §6.5.1). ``mcap``: log the run there as it goes — every simulated second the new samples are
-    appended and flushed to the OS (before ``progress`` is called), so a run killed mid-way leaves a
-    log readable up to its last whole second (:func:`rss6.logs.read_log`);
-    metadata: controller, trajectory, duration, then ``status`` ("finished", or "failed: …" if the run
-    raised) and ``fault``. ``progress(t, duration)`` (s) is called every simulated second.
-    ``tuning``: "thesis" (the thesis's Kalman filter and DSMC gains, the default) or "low_noise"
+    §6.5.1). ``mcap``: log the run there as it goes (the Rust writer, :mod:`rss6.logs`) — every
+    simulated second the new samples are flushed to the OS (before ``progress`` is called), so a run
+    killed mid-way leaves a log readable up to its last whole second (:func:`rss6.logs.read_log`);
+    metadata: controller, tuning, trajectory, duration, then ``status`` ("finished", or "failed: …"
+    if the run raised) and ``fault``. ``progress(t, duration)`` (s) is called every simulated second;
+    if it raises (KeyboardInterrupt included) the run stops and the exception reaches the caller, and
+    Ctrl-C stops a run at the same points.
+    ``tuning``: "tuned" (the default: the thesis's Kalman filter, rss6's tuned DSMC gains — the
+    thesis gives none in SI for this robot — and the thesis's KCSC/KJSC gains) or "low_noise"
     (DSMC only: rss6-ctrl's ``ServoConfig::low_noise`` + ``DsmcGains::low_noise`` — hold compensation
     between frames, potentiometer rates in the filter, a smoother filter; its estimate tracks all six
     pose rates, see docs/control.md).
@@ -260,61 +244,26 @@ def track(
         raise InvalidInputError(
             "trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable"
         )
-    writer = (
-        RunWriter(
-            mcap,
-            {
-                "controller": str(controller).upper(),
-                "tuning": str(tuning),
-                "trajectory": name,
-                "duration": repr(float(duration)),
-            },
-        )
-        if mcap is not None
-        else None
-    )
 
     def on_segment(seg: dict[str, Any]) -> None:
-        if writer is not None:
-            writer.write_streams(
-                {
-                    "true_pose": (seg["t"], seg["true"]),
-                    "desired_pose": (seg["t"], seg["desired"]),
-                    "camera_pose": (seg["frame_t"], seg["measured"]),
-                    "estimate_pose": (seg["frame_t"], seg["estimate"]),
-                    "theta_cmd": (seg["t"], seg["theta_cmd"]),
-                    "torque": (seg["t"], seg["torque"]),
-                }
-            )
-            writer.flush()  # each simulated second is on disk before the run goes on
         if progress is not None and len(seg["t"]):
             progress(float(seg["t"][-1]), float(duration))
 
-    try:
-        d = _rss6.run_servo(
-            plant,
-            controller,
-            traj,
-            duration,
-            kp,
-            dp,
-            sensor_in_base=sensor_in_base,
-            target_in_effector=target_in_effector,
-            pid=pid,
-            on_segment=on_segment if (writer is not None or progress is not None) else None,
-            tuning=tuning,
-        )
-        if writer is not None:
-            end = {"status": "finished"}
-            if d["fault"] is not None:
-                end["fault"] = f"t = {d['fault'][0]:.3f} s: {d['fault'][1]}"
-            writer.add_metadata(end)
-            writer.close()
-    except BaseException as e:
-        if writer is not None:
-            with contextlib.suppress(Exception):
-                writer.close(status=f"failed: {type(e).__name__}: {e}")
-        raise
+    d = _rss6.run_servo(
+        plant,
+        controller,
+        traj,
+        duration,
+        kp,
+        dp,
+        sensor_in_base=sensor_in_base,
+        target_in_effector=target_in_effector,
+        pid=pid,
+        on_segment=on_segment if progress is not None else None,
+        tuning=tuning,
+        mcap=None if mcap is None else os.fspath(mcap),
+        trajectory_name=name,
+    )
     res = TrackingResult(
         controller=str(d["controller"]),
         trajectory=name,

@@ -29,10 +29,10 @@ __all__ = [
 #: A servo controller: Kalman-filtered joint-space (eq. 6.42), Cartesian-space (eq. 6.40) or the
 #: dynamic sliding-mode controller (eq. 6.25 + converter).
 ControllerName = Literal["kjsc", "kcsc", "dsmc"]
-#: A servo tuning: "thesis" (the default: the thesis's filter with rss6-ctrl's ``DsmcGains::tuned()``
-#: — issue 11 renames it once the thesis's own gains get a preset) or rss6's low-noise DSMC servo
+#: A servo tuning: "tuned" (the default: rss6's presets ``ServoConfig::tuned`` + ``DsmcGains::tuned``,
+#: used to reproduce Tables 6.1/6.2 — the thesis prints no DSMC gains) or rss6's low-noise DSMC servo
 #: (DSMC only).
-TuningName = Literal["thesis", "low_noise"]
+TuningName = Literal["tuned", "low_noise"]
 #: A named reference: Experiment 1 (sinusoid) or Experiment 2 (Fourier series) of thesis §6.5.
 TrajectoryName = Literal["exp1", "exp2"]
 
@@ -43,7 +43,7 @@ PlantKind = Literal["auto", "rapier", "model"]
 #: Every controller name, in the order the thesis's tables list them.
 CONTROLLERS: tuple[ControllerName, ...] = ("kjsc", "kcsc", "dsmc")
 #: Every tuning name.
-TUNINGS: tuple[TuningName, ...] = ("thesis", "low_noise")
+TUNINGS: tuple[TuningName, ...] = ("tuned", "low_noise")
 #: Every trajectory name.
 TRAJECTORIES: tuple[TrajectoryName, ...] = ("exp1", "exp2")
 

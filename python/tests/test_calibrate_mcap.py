@@ -1,29 +1,20 @@
-"""rss6.calibrate with MCAP logs: collect(..., mcap=path) writes the raw dwells, read_mcap/load_mcap
-segment and average them back (issue 6, "loaded from an MCAP log")."""
-
-import json
+"""rss6.calibrate with MCAP logs: collect(..., mcap=path) logs the collection with the Rust writer
+(every tick and each dwell's means), read_mcap/load_mcap read the means back (issue 6, "loaded from
+an MCAP log"; issue 11: one data path, the same numbers with and without a log)."""
 
 import numpy as np
 import pytest
 import rss6
-from rss6 import calibrate, logs
+from rss6 import _rss6, calibrate, logs
 
 NOMINAL = rss6.KinematicParams.nominal()
 DP = rss6.DynamicParams.nominal()
 KW = {"dwell": 0.4, "move_time": 0.4, "settle_time": 0.3}
 
 
-def windows_of(run):
-    return [tuple(w) for w in json.loads(run["metadata"]["windows"])]
-
-
-def in_window(t, w):
-    return (t >= w[0] - 1e-6) & (t <= w[1] + 1e-6)
-
-
 @pytest.fixture(scope="module")
 def logged(tmp_path_factory):
-    """The same robot (same seed) collected directly (compiled collector) and through an MCAP log."""
+    """The same robot (same seed) collected without and with an MCAP log."""
     truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=7))
     thetas = calibrate.select_configurations(NOMINAL, "rpba", seed=0, candidates=300)
     direct_plant = rss6.ModelSim(truth, DP, seed=7)
@@ -37,47 +28,66 @@ def logged(tmp_path_factory):
         progress=lambda d, t: calls.append((d, t)),
         **KW,
     )
-    assert calls[-1] == (len(thetas), len(thetas))
+    assert calls == [(k + 1, len(thetas)) for k in range(len(thetas))]
     return thetas, direct, returned, path, direct_plant
 
 
-def test_log_has_the_raw_dwell_channels(logged):
-    thetas, _, _, path, _ = logged
-    run = logs.read_run(path)
-    assert {"kappa", "camera_pose", "theta_cmd", "metadata"} <= set(run)
-    w = windows_of(run)
-    assert len(w) == len(thetas)
-    kt = run["kappa"][0]
-    # 500 Hz potentiometer samples inside each 0.4 s dwell, nothing logged during the moves.
-    assert np.allclose(np.diff(kt[in_window(kt, w[0])]), 2e-3)
-    assert sum(in_window(kt, wi).sum() for wi in w) == len(kt) == 200 * len(thetas)
-    np.testing.assert_array_equal(
-        run["theta_cmd"][1][in_window(run["theta_cmd"][0], w[3])][0], thetas[3]
+def test_collect_returns_the_same_data_with_and_without_mcap(logged):
+    # Regression (issue 11): with mcap= the plant used to be stepped from Python and the rotations
+    # averaged differently, so the same plant and seed gave a different sensor_pose.
+    _, direct, returned, _, _ = logged
+    np.testing.assert_array_equal(returned.kappa, direct.kappa)
+    np.testing.assert_array_equal(returned.sensor_pose, direct.sensor_pose)
+    np.testing.assert_array_equal(returned.theta_cmd, direct.theta_cmd)
+    np.testing.assert_array_equal(returned.camera_frames, direct.camera_frames)
+
+
+def in_window(t, w):
+    return (t >= w[0] - 1e-6) & (t <= w[1] + 1e-6)
+
+
+def test_log_holds_every_tick_and_the_dwell_means(logged):
+    thetas, _, returned, path, _ = logged
+    log = logs.read_log(path, strict=True)
+    md = log.metadata
+    assert md["kind"] == calibrate.MCAP_KIND and md["status"] == "finished"
+    assert (int(md["configurations"]), float(md["dwell"]), float(md["kappa_rate"])) == (
+        len(thetas),
+        0.4,
+        500.0,
     )
+    assert {"kappa", "theta_cmd", "sensor_pose", "true_pose", "theta", "torque"} <= set(log.streams)
+    per_config = round((0.4 + 0.3 + 0.4) / 1e-3)
+    assert len(log.streams["kappa"][0]) == per_config * len(thetas)
+    assert [d["index"] for d in log.dwells] == list(range(len(thetas)))
+    kt, kv = log.streams["kappa"]
+    st, sv = log.streams["sensor_pose"]
+    for d, kappa, pose in zip(log.dwells, returned.kappa, returned.sensor_pose):
+        # the logged means are the returned ones, bit for bit
+        np.testing.assert_array_equal(d["kappa"], kappa)
+        np.testing.assert_array_equal(d["sensor_pose"], pose)
+        # and they are the means of the logged ticks: κ every 2 ms of the window (the reading
+        # after each sampled tick), ᶜχ_t over every frame of the window (rss6's one pose mean)
+        a, b = d["window"]
+        assert b - a == pytest.approx(0.399)
+        after = in_window(kt, (a + 1e-3, b))
+        np.testing.assert_allclose(kv[after][::2].mean(0), kappa, rtol=0, atol=1e-9)
+        frames = sv[in_window(st, (a, b))]
+        assert len(frames) == d["camera_frames"]
+        np.testing.assert_allclose(calibrate.mean_pose(frames), pose, rtol=0, atol=1e-12)
 
 
 def test_round_trip_equals_direct_collection(logged):
     thetas, direct, returned, path, _ = logged
     r = calibrate.read_mcap(path)
     assert r.complete and r.dropped == [] and r.used == list(range(len(thetas)))
-    loaded = calibrate.load_mcap(path)
-    assert len(loaded) == len(thetas)
     np.testing.assert_array_equal(r.kappa_samples, 200)
     np.testing.assert_array_equal(r.camera_frames, direct.camera_frames)
-    np.testing.assert_allclose(loaded.theta_cmd, thetas, rtol=0, atol=0)
-    # Same plant, same seed, same stepping: the κ means are the same numbers.
-    np.testing.assert_allclose(loaded.kappa, direct.kappa, rtol=1e-14, atol=0)
-    np.testing.assert_allclose(loaded.sensor_pose[:, :3], direct.sensor_pose[:, :3], atol=1e-12)
-    # Rotations: quaternion mean here, Euler mean (unwrapped) in the compiled collector; the two
-    # differ at second order in the per-frame angle spread σ.
-    run = logs.read_run(path)
-    ct, cv = run["camera_pose"]
-    sigma = max(cv[in_window(ct, w), 3:].std(0).max() for w in windows_of(run))
-    assert 0 < sigma < 1e-2
-    assert np.abs(loaded.sensor_pose[:, 3:] - direct.sensor_pose[:, 3:]).max() < sigma**2
-    # What collect returned is what the file gives back (JSON round trip of floats).
-    np.testing.assert_allclose(loaded.sensor_pose, returned.sensor_pose, rtol=0, atol=1e-14)
-    np.testing.assert_array_equal(loaded.kappa, returned.kappa)
+    loaded = calibrate.load_mcap(path)
+    assert len(loaded) == len(thetas)
+    for name in ("theta_cmd", "kappa", "sensor_pose", "camera_frames"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(returned, name), err_msg=name)
+    np.testing.assert_array_equal(loaded.theta_cmd, thetas)
 
 
 def test_rpba_on_loaded_data_matches_direct(logged):
@@ -87,85 +97,51 @@ def test_rpba_on_loaded_data_matches_direct(logged):
     assert res_loaded.rank == res_direct.rank
     assert res_loaded.unidentifiable == res_direct.unidentifiable
     assert res_loaded.cost_history[-1] < 1e-3 * res_loaded.cost_history[0]
-    np.testing.assert_allclose(res_loaded.errors, res_direct.errors, rtol=0, atol=1e-6)
-    np.testing.assert_allclose(
-        res_loaded.target_in_effector, res_direct.target_in_effector, rtol=0, atol=1e-6
-    )
-    e_direct = calibrate.relative_pose_errors(res_direct, plant, n=40)["rms"]
+    # the same data: the same calibration
+    np.testing.assert_array_equal(res_loaded.errors, res_direct.errors)
+    np.testing.assert_array_equal(res_loaded.target_in_effector, res_direct.target_in_effector)
     e_loaded = calibrate.relative_pose_errors(res_loaded, plant, n=40)["rms"]
-    np.testing.assert_allclose(e_loaded, e_direct, rtol=1e-2)
     uncal = calibrate.relative_pose_errors(None, plant, n=40)["rms"]
     assert np.all(e_loaded < uncal / 10)
 
 
-def rewrite(run, path, metadata=True):
-    streams = {k: v for k, v in run.items() if k != "metadata"}
-    logs.write_run(path, streams, run["metadata"] if metadata else None)
+def write_dwells(path, dwells, configurations):
+    """A calibration log written by hand: metadata, then the given dwells (index, sensor_pose)."""
+    w = _rss6.LogWriter(str(path))
+    w.add_metadata({"kind": calibrate.MCAP_KIND, "configurations": str(configurations)})
+    rng = np.random.default_rng(1)
+    for index, pose in dwells:
+        w.write_dwell(
+            index,
+            (index * 2.0, index * 2.0 + 0.399),
+            rng.normal(0, 0.1, 6),
+            rng.normal(0, 100, 6),
+            pose,
+            200,
+            0 if pose is None else 12,
+        )
+    w.finish("finished")
 
 
-def test_log_without_metadata_is_segmented_by_theta_cmd(logged, tmp_path):
-    _, _, _, path, _ = logged
-    bare = tmp_path / "bare.mcap"
-    rewrite(logs.read_run(path), bare, metadata=False)
-    a, b = calibrate.read_mcap(path), calibrate.read_mcap(bare)
-    assert b.used == a.used and b.dropped == [] and b.complete
-    np.testing.assert_array_equal(b.data.kappa, a.data.kappa)
-    # rewriting re-encodes the angles as quaternions: equal to rounding
-    np.testing.assert_allclose(b.data.sensor_pose, a.data.sensor_pose, rtol=0, atol=1e-13)
-    np.testing.assert_array_equal(b.data.theta_cmd, a.data.theta_cmd)
-
-
-def test_nan_and_missing_frames_are_dropped_and_reported(logged, tmp_path):
-    thetas, _, _, path, _ = logged
-    run = logs.read_run(path)
-    w = windows_of(run)
-    ct, cv = run["camera_pose"]
-    cv = cv.copy()
-    cv[in_window(ct, w[2])] = np.nan  # every frame of configuration 2 is NaN
-    cv[np.flatnonzero(in_window(ct, w[3]))[:3]] = np.nan  # a few NaN frames: still usable
-    keep = ~in_window(ct, w[4])  # configuration 4: no camera frame at all
-    run["camera_pose"] = (ct[keep], cv[keep])
-    kt, kv = run["kappa"]
-    kv = kv.copy()
-    kv[np.flatnonzero(in_window(kt, w[5]))[7]] = np.nan
-    run["kappa"] = (kt, kv)
-    bad = tmp_path / "bad.mcap"
-    rewrite(run, bad)
-
-    clean = calibrate.read_mcap(path)
-    r = calibrate.read_mcap(bad)
-    assert [i for i, _ in r.dropped] == [2, 4, 5]
+def test_defective_and_missing_dwells_are_dropped_and_reported(tmp_path):
+    pose = rss6.home_pose()
+    path = tmp_path / "defects.mcap"
+    write_dwells(path, [(0, pose), (1, pose), (2, None), (4, pose)], configurations=6)
+    r = calibrate.read_mcap(path)
+    assert r.used == [0, 1, 4] and len(r.data) == 3 and r.complete
     reasons = dict(r.dropped)
-    assert "non-finite" in reasons[2] and "camera" in reasons[2]
-    assert "no camera frame" in reasons[4]
-    assert "potentiometer" in reasons[5]
-    assert r.used == [i for i in range(len(thetas)) if i not in (2, 4, 5)]
-    assert len(r.data) == len(thetas) - 3
-    assert np.all(np.isfinite(r.data.sensor_pose)) and np.all(np.isfinite(r.data.kappa))
-    np.testing.assert_array_equal(r.camera_frames[r.used.index(3)], clean.camera_frames[3] - 3)
-    others = [i for i in r.used if i != 3]
-    rows = [r.used.index(i) for i in others]
-    np.testing.assert_array_equal(r.data.kappa[rows], clean.data.kappa[others])
-    np.testing.assert_allclose(
-        r.data.sensor_pose[rows], clean.data.sensor_pose[others], rtol=0, atol=1e-13
-    )
-    np.testing.assert_allclose(
-        r.data.sensor_pose[r.used.index(3)], clean.data.sensor_pose[3], atol=1e-3
-    )
-    # RPBA runs on what is left.
-    res = calibrate.rpba(r.data, NOMINAL)
-    assert res.cost_history[-1] < 1e-3 * res.cost_history[0]
+    assert sorted(reasons) == [2, 3, 5]
+    assert "no camera frame" in reasons[2]
+    assert "not finished" in reasons[3] and "truncated" not in reasons[3]
+    np.testing.assert_array_equal(r.camera_frames, 12)
+    np.testing.assert_array_equal(r.data.camera_frames, 12)
 
 
-def test_no_usable_configuration_is_a_calibration_error(logged, tmp_path):
-    _, _, _, path, _ = logged
-    run = logs.read_run(path)
-    ct, cv = run["camera_pose"]
-    run["camera_pose"] = (ct, np.full_like(cv, np.nan))
-    bad = tmp_path / "allnan.mcap"
-    rewrite(run, bad)
+def test_no_usable_configuration_is_a_calibration_error(tmp_path):
+    path = tmp_path / "none.mcap"
+    write_dwells(path, [(0, None), (1, None)], configurations=2)
     with pytest.raises(rss6.CalibrationError, match="no usable configuration"):
-        calibrate.load_mcap(bad)
+        calibrate.load_mcap(path)
 
 
 def test_truncated_file_is_read_up_to_its_last_whole_chunk(tmp_path):
@@ -232,37 +208,21 @@ def test_collect_with_mcap_rejects_bad_input(tmp_path):
     assert not (tmp_path / "x.mcap").exists()
 
 
-class FailingPlant:
-    """A plant whose simulation fails after ``fail_after`` ticks."""
-
-    def __init__(self, sim, fail_after):
-        self.sim, self.left = sim, fail_after
-        self.dt = sim.dt
-
-    @property
-    def time(self):
-        return self.sim.time
-
-    def step_joint_command(self, cmd):
-        self.left -= 1
-        if self.left < 0:
-            raise rss6.SimulationError("simulated fault")
-        self.sim.step_joint_command(cmd)
-
-    def potentiometers(self):
-        return self.sim.potentiometers()
-
-    def camera(self):
-        return self.sim.camera()
-
-
 def test_failed_collection_keeps_the_finished_dwells(logged, tmp_path):
     thetas, _, returned, _, _ = logged
     truth = rss6.KinematicParams.perturbed(calibrate.draw_errors(seed=7))
-    plant = FailingPlant(rss6.ModelSim(truth, DP, seed=7), fail_after=3 * 1100 + 900)
+
+    def progress(done, total):
+        if done == 3:
+            raise RuntimeError("operator abort")
+
     path = tmp_path / "failed.mcap"
-    with pytest.raises(rss6.SimulationError):
-        calibrate.collect(plant, thetas[:6], mcap=path, **KW)
+    with pytest.raises(RuntimeError, match="operator abort"):
+        calibrate.collect(
+            rss6.ModelSim(truth, DP, seed=7), thetas[:6], mcap=path, progress=progress, **KW
+        )
+    log = logs.read_log(path, strict=True)
+    assert log.metadata["status"] == "failed: RuntimeError: operator abort"
     r = calibrate.read_mcap(path)
     assert r.complete and r.used == [0, 1, 2]
     assert [i for i, _ in r.dropped] == [3, 4, 5]
@@ -270,8 +230,31 @@ def test_failed_collection_keeps_the_finished_dwells(logged, tmp_path):
     np.testing.assert_array_equal(r.data.kappa, returned.kappa[:3])
 
 
+@pytest.mark.parametrize("mcap", [False, True])
+def test_keyboard_interrupt_in_progress_stops_the_collection(tmp_path, mcap):
+    calls = []
+
+    def progress(done, total):
+        calls.append(done)
+        raise KeyboardInterrupt
+
+    thetas = np.zeros((4, 6))
+    path = tmp_path / "ki.mcap" if mcap else None
+    with pytest.raises(KeyboardInterrupt):
+        calibrate.collect(rss6.ModelSim(NOMINAL, DP), thetas, mcap=path, progress=progress, **KW)
+    assert calls == [1]
+    if mcap:
+        assert (
+            logs.read_log(path, strict=True)
+            .metadata["status"]
+            .startswith("failed: KeyboardInterrupt")
+        )
+
+
 def quat(pose):
-    q = logs.euler_to_quaternion(pose)[0]
+    from scipy.spatial.transform import Rotation
+
+    q = Rotation.from_euler("XYZ", pose[3:]).as_quat()
     return q if q[3] >= 0 else -q
 
 
@@ -289,3 +272,22 @@ def test_mean_pose_is_safe_near_pi():
     assert np.abs(quat(m) - quat(center)).max() < 5e-4
     with pytest.raises(rss6.ShapeError):
         calibrate.mean_pose(np.zeros((0, 6)))
+
+
+def test_collection_log_is_readable_by_the_mcap_package(logged):
+    import json
+
+    from mcap.reader import make_reader
+
+    thetas, _, returned, path, _ = logged
+    topics, dwells = set(), []
+    with open(path, "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            topics.add((channel.topic, schema.name))
+            if channel.topic == "/rss6/dwell":
+                dwells.append(json.loads(message.data))
+    assert ("/rss6/dwell", "rss6.Dwell") in topics
+    assert ("/rss6/sensor_pose", "foxglove.FrameTransform") in topics
+    assert ("/rss6/kappa", "rss6.JointVector") in topics
+    assert [d["index"] for d in dwells] == list(range(len(thetas)))
+    np.testing.assert_array_equal([d["kappa"] for d in dwells], returned.kappa)

@@ -23,9 +23,9 @@ def run(*args, timeout=300):
 def test_help_documents_every_subcommand():
     r = run("--help")
     assert r.returncode == 0
-    for sub in ("demo", "calibrate", "track"):
+    for sub in ("demo", "calibrate", "track", "can-sim"):
         assert sub in r.stdout
-    for sub in ("demo", "calibrate", "track"):
+    for sub in ("demo", "calibrate", "track", "can-sim"):
         h = run(sub, "--help")
         assert h.returncode == 0, h.stderr
         assert "usage: rss6 " + sub in h.stdout

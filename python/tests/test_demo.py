@@ -107,7 +107,7 @@ def report(tmp_path, faults=False):
             exp, name, np.full(6, 0.5), np.full(6, 0.25), np.r_[3e-4, 4e-4, 0, 0, 0, 0]
         )
         for exp in ("exp1", "exp2")
-        for name in ("thesis", "low-noise")
+        for name in ("tuned", "low-noise")
     ]
     out = Path(tmp_path)
     files = [out / f"{e}_{c}.mcap" for e in ("exp1", "exp2") for c in ("kjsc", "kcsc")]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 import rss6
 from rss6 import identify
 
@@ -14,9 +13,13 @@ def kp() -> rss6.KinematicParams:
     return rss6.KinematicParams.nominal()
 
 
-def test_an_optimised_excitation_is_feasible_at_rest_and_repeatable(kp: rss6.KinematicParams) -> None:
+def test_an_optimised_excitation_is_feasible_at_rest_and_repeatable(
+    kp: rss6.KinematicParams,
+) -> None:
     seen: list[tuple[int, float]] = []
-    a = identify.excitation(kp, maxiter=4, popsize=5, seed=3, progress=lambda g, o: seen.append((g, o)))
+    a = identify.excitation(
+        kp, maxiter=4, popsize=5, seed=3, progress=lambda g, o: seen.append((g, o))
+    )
     b = identify.excitation(kp, maxiter=4, popsize=5, seed=3)
     assert np.array_equal(a.coefficients, b.coefficients)  # seeded
     assert a.coefficients.shape == (6, 11) and a.duration == pytest.approx(10.0)
@@ -27,7 +30,9 @@ def test_an_optimised_excitation_is_feasible_at_rest_and_repeatable(kp: rss6.Kin
         pose, rate, acc = a.sample(t)
         assert np.allclose(pose, rss6.home_pose(), atol=1e-12)
         assert np.abs(rate).max() < 1e-12 and np.abs(acc).max() < 1e-12
-    assert len(a.columns) == 31  # identifiable columns of Ξ with vertical gravity (docs/dynamics.md)
+    assert (
+        len(a.columns) == 31
+    )  # identifiable columns of Ξ with vertical gravity (docs/dynamics.md)
     assert a.observability > 0 and a.condition >= 1
 
 

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 import rss6
 from rss6 import logs
-from scipy.spatial.transform import Rotation
 
 
 def streams(n=200):
@@ -48,15 +47,33 @@ def test_poses_are_foxglove_frame_transforms(tmp_path):
     assert seen["/rss6/torque"][0] == "rss6.JointVector"
 
 
-def test_quaternion_convention_matches_the_core_rotation():
-    # the logged quaternion (x, y, z, w) is the rotation of the pose: R = Rx(α)·Ry(β)·Rz(γ), scipy's
-    # intrinsic "XYZ"; the core's R is read off compose_poses (p + R e_i for a pure translation e_i)
-    pose = np.array([0.0, 0.0, 0.0, 0.3, -0.2, 0.5])
-    q = logs.euler_to_quaternion(pose)[0]
-    core = np.column_stack([rss6.compose_poses(pose, np.r_[e, 0, 0, 0])[:3] for e in np.eye(3)])
-    np.testing.assert_allclose(Rotation.from_quat(q).as_matrix(), core, atol=1e-14)
-    np.testing.assert_allclose(Rotation.from_euler("XYZ", pose[3:]).as_quat(), q, atol=1e-14)
-    np.testing.assert_allclose(logs.quaternion_to_euler([q])[0], pose[3:], atol=1e-14)
+def test_stream_names_are_the_rust_ones(tmp_path):
+    t = np.arange(2) * 1e-3
+    p = tmp_path / "s.mcap"
+    names = [*logs.POSE_TOPICS, *logs.VECTOR_TOPICS]
+    assert "sensor_pose" in names and "kappa" in names
+    logs.write_run(p, {n: (t, np.tile(rss6.home_pose(), (2, 1))) for n in names})
+    assert set(logs.read_log(p).streams) == set(names)
+
+
+def test_frame_transforms_hold_the_quaternion_of_rx_ry_rz(tmp_path):
+    # R = Rx(α)·Ry(β)·Rz(γ) is scipy's intrinsic "XYZ"; the Rust writer stores its quaternion.
+    from mcap.reader import make_reader
+    from scipy.spatial.transform import Rotation
+
+    poses = streams(7)["true_pose"][1]
+    p = tmp_path / "q.mcap"
+    logs.write_run(p, {"true_pose": (np.arange(7) * 1e-3, poses)})
+    with open(p, "rb") as f:
+        msgs = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages()]
+    q = np.array([[m["rotation"][k] for k in "xyzw"] for m in msgs])
+    want = Rotation.from_euler("XYZ", poses[:, 3:]).as_quat()
+    np.testing.assert_allclose(q * np.sign(q[:, 3:]), want * np.sign(want[:, 3:]), atol=1e-14)
+    np.testing.assert_allclose(
+        Rotation.from_euler("XYZ", poses[0, 3:]).as_matrix()[:, 0],
+        rss6.compose_poses(poses[0] * [0, 0, 0, 1, 1, 1], [1, 0, 0, 0, 0, 0])[:3],
+        atol=1e-14,
+    )
 
 
 def test_truncated_file_is_readable_up_to_its_last_chunk(tmp_path):

@@ -80,22 +80,25 @@ def test_killed_writer_leaves_every_finished_chunk_readable(tmp_path):
     log = logs.read_log(path)
     assert not log.complete and log.truncated and "truncated" in log.truncation
     assert log.metadata == {"controller": "DSMC"}
-    # Everything handed to the OS before the kill is read back: at least the finished chunks.
+    # Everything handed to the OS by the last flush before the kill is read back, and at least
+    # the chunks finished since.
     assert log.readable >= last_synced > 0 and log.chunks >= 3
     t, pose = log.streams["true_pose"]
     tt, torque = log.streams["torque"]
-    n = len(t)
-    # (the child may have written a block or two more while the kill was on its way)
-    assert 0 < n <= 40 * 500 and len(tt) == n and log.messages == 2 * n
-    assert 2 * n >= written - 2 * 500 * 2  # at most the last finished block's tail is missing
+    n, m = len(t), len(tt)
+    # (the child may have written a block or two more while the kill was on its way). Samples are
+    # merged in time order, pose before torque at each stamp; a chunk (of 64 KiB) may end between
+    # the two, so the torque stream may be one sample short, never more.
+    assert 0 < n <= 40 * 500 and m in (n - 1, n) and log.messages == n + m
+    assert n + m >= written - 2 * 500 * 2  # at most the last finished block's tail is missing
     blocks = [block(k) for k in range(n // 500 + 1)]
     want_t = np.concatenate([b[0] for b in blocks])[:n]
     want_pose = np.concatenate([b[1] for b in blocks])[:n]
-    want_torque = np.concatenate([b[2] for b in blocks])[:n]
+    want_torque = np.concatenate([b[2] for b in blocks])[:m]
     # Exact: the stamps to the ns, the six-vectors bit for bit (JSON floats round-trip), the
     # positions bit for bit; angles went through a quaternion.
     np.testing.assert_array_equal(np.round(t * 1e9), np.round(want_t * 1e9))
-    np.testing.assert_array_equal(tt, t)
+    np.testing.assert_array_equal(tt, t[:m])
     np.testing.assert_array_equal(torque, want_torque)
     np.testing.assert_array_equal(pose[:, :3], want_pose[:, :3])
     np.testing.assert_allclose(pose[:, 3:], want_pose[:, 3:], rtol=0, atol=1e-13)
@@ -189,9 +192,7 @@ def test_killed_calibration_collection_keeps_its_finished_dwells(tmp_path):
         mcap=tmp_path / "ref.mcap",
     )
     np.testing.assert_array_equal(r.data.kappa, ref.kappa)
-    np.testing.assert_array_equal(r.data.sensor_pose[:, :3], ref.sensor_pose[:, :3])
-    # (angles: the log holds quaternions, collect averaged the plant's Euler angles)
-    np.testing.assert_allclose(r.data.sensor_pose, ref.sensor_pose, rtol=0, atol=1e-14)
+    np.testing.assert_array_equal(r.data.sensor_pose, ref.sensor_pose)
     # and bit for bit what the completed log of the same dwells gives
     done_log = calibrate.read_mcap(tmp_path / "ref.mcap")
     assert done_log.complete

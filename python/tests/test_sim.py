@@ -93,12 +93,12 @@ def test_sim_bad_input():
 
 
 @pytest.mark.parametrize("cls", SIMS)
-def test_simulate_runs_a_command_sequence(cls):
+def test_step_joint_commands_runs_a_command_sequence(cls):
     sim = cls(KP, DP, seed=3)
     n = 400
     cmds = np.zeros((n, 6))
     cmds[:, 0] = np.linspace(0, 0.05, n)
-    out = rss6.simulate(sim, cmds)
+    out = sim.step_joint_commands(cmds)
     assert out["time"].shape == (n,) and out["time"][-1] == pytest.approx(0.4)
     for k in ("true_pose", "true_theta", "kappa", "torque"):
         assert out[k].shape == (n, 6) and out[k].dtype == np.float64
@@ -109,4 +109,26 @@ def test_simulate_runs_a_command_sequence(cls):
     # joint 1 followed its ramp to 0.05 rad: 0.0491 at the end (seeds 3–5, both simulators)
     assert 0.045 < out["true_theta"][-1, 0] < 0.05
     with pytest.raises(rss6.NonFiniteError):
-        rss6.simulate(sim, np.full((2, 6), np.nan))
+        sim.step_joint_commands(np.full((2, 6), np.nan))
+
+
+@pytest.mark.parametrize("cls", SIMS)
+def test_step_joint_commands_equals_stepping_tick_by_tick(cls):
+    cmds = np.zeros((120, 6))
+    cmds[:, 2] = np.linspace(0, -0.03, 120)
+    batch = cls(KP, DP, seed=5).step_joint_commands(cmds)
+    sim = cls(KP, DP, seed=5)
+    rows: dict[str, list] = {k: [] for k in ("time", "true_pose", "kappa", "torque")}
+    frames = []
+    for c in cmds:
+        sim.step_joint_command(c)
+        rows["time"].append(sim.time)
+        rows["true_pose"].append(sim.true_pose())
+        rows["kappa"].append(sim.potentiometers())
+        rows["torque"].append(sim.torque())
+        z = sim.camera()
+        if z is not None:
+            frames.append(z)
+    for k, v in rows.items():
+        np.testing.assert_array_equal(batch[k], np.array(v), err_msg=k)
+    np.testing.assert_array_equal(batch["camera"], np.array(frames).reshape(-1, 6))

@@ -17,6 +17,7 @@ mod leg_jacobians;
 mod params;
 mod pose;
 mod regressor;
+pub mod thesis;
 mod types;
 mod workspace;
 

@@ -4,7 +4,7 @@
 //! # The nominal geometry
 //!
 //! The thesis does not print the robot's dimensions, so the nominal geometry is derived from the facts
-//! it does state (see `DESIGN.md`):
+//! it does state (docs/kinematics.md, "The nominal geometry"):
 //!
 //! * three motor pairs, pair k centred at azimuth θ0 ∈ {−60°, 180°, 60°}; leg i of a pair sits at
 //!   B_i = R_z(θ0_i)·[0.138, ±0.023, 0] m (base radius 0.138 m, half-spacing 0.023 m tangential);
@@ -25,6 +25,7 @@
 //! The tests in `tests/nominal.rs` check every one of these facts.
 
 use crate::error::{check_finite, CoreError, Result};
+use crate::thesis;
 use crate::types::{Vec3, LEGS};
 use core::f64::consts::PI;
 use libm::{cos, sin};
@@ -125,7 +126,7 @@ impl KinematicParams {
         }
     }
 
-    /// The nominal robot with the 60 error parameters `b` added (order of DESIGN.md / eq. 4.3):
+    /// The nominal robot with the 60 error parameters `b` added (order of docs/architecture.md / eq. 4.3):
     /// ΔA'_1..6 (x, y, z each), ΔB_1..6, Δl_AT,1..6, Δl_TB,1..6, Δη_1..6, Δθ_1..6.
     pub fn perturbed(b: &[f64; N_KIN_ERRORS]) -> Self {
         Self::nominal().with_errors(b)
@@ -216,6 +217,11 @@ impl Body {
             inertia: Vec3::new(ix, iy, iz),
         }
     }
+
+    /// A body from `[m, I_x, I_y, I_z]` (kg, kg·m²), the layout of Table 5.1 ([`crate::thesis`]).
+    pub const fn from_array(x: &[f64; 4]) -> Self {
+        Self::new(x[0], x[1], x[2], x[3])
+    }
 }
 
 /// Dynamic parameters Ξ (eq. 5.1): platform, wrenches, links, joint friction.
@@ -237,15 +243,15 @@ impl DynamicParams {
     /// Table 5.1 (manufacturer values), friction zero.
     pub fn nominal() -> Self {
         DynamicParams {
-            platform: Body::new(24.0, 17.8e-2, 17.8e-2, 35.0e-2),
-            wrenches: [Body::new(68.5e-2, 22.9e-5, 22.9e-5, 60.5e-5); LEGS],
-            links: [Body::new(1.31, 52.3e-5, 52.3e-5, 21.3e-4); LEGS],
+            platform: Body::from_array(&thesis::TABLE_5_1_PLATFORM),
+            wrenches: [Body::from_array(&thesis::TABLE_5_1_WRENCH); LEGS],
+            links: [Body::from_array(&thesis::TABLE_5_1_LINK); LEGS],
             coulomb: [0.0; LEGS],
             viscous: [0.0; LEGS],
         }
     }
 
-    /// Ξ (64) in the order of DESIGN.md: [m, Ix, Iy, Iz] for the platform, wrenches 1..6, links 1..6,
+    /// Ξ (64) in the order of docs/architecture.md: [m, Ix, Iy, Iz] for the platform, wrenches 1..6, links 1..6,
     /// then f_c,1..6, f_v,1..6. No validation: identification explores non-physical values too.
     pub fn from_vector(x: &[f64; N_DYN]) -> Self {
         let body = |k: usize| Body::new(x[4 * k], x[4 * k + 1], x[4 * k + 2], x[4 * k + 3]);

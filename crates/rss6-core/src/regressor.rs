@@ -1,4 +1,4 @@
-//! The dynamic regressor (eq. 5.1): the model is linear in Ξ (64, DESIGN.md order: [m, I_x, I_y, I_z]
+//! The dynamic regressor (eq. 5.1): the model is linear in Ξ (64, docs/architecture.md order: [m, I_x, I_y, I_z]
 //! for the platform, wrenches 1..6, links 1..6, then f_c,1..6, f_v,1..6), so
 //!
 //! ```text

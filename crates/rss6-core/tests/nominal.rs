@@ -1,4 +1,4 @@
-//! One test per fact of the nominal geometry (module docs of `params.rs`, DESIGN.md "Nominal robot").
+//! One test per fact of the nominal geometry (module docs of `params.rs`, docs/kinematics.md "The nominal geometry").
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,

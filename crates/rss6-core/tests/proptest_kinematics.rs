@@ -15,14 +15,14 @@ fn box_pose() -> impl Strategy<Value = Vec6> {
 }
 
 fn table_4_2_errors() -> impl Strategy<Value = [f64; N_KIN_ERRORS]> {
-    // Uniform within ±2σ of Table 4.2 (1 mm, 5e-5 rad/bit, 0.05 rad).
+    // Uniform within ±2σ of Table 4.2.
     proptest::collection::vec(-2.0f64..=2.0, N_KIN_ERRORS).prop_map(|u| {
         let mut b = [0.0; N_KIN_ERRORS];
         for (k, (bk, uk)) in b.iter_mut().zip(u).enumerate() {
             let sigma = match k {
-                0..=47 => 1e-3,
-                48..=53 => 5e-5,
-                _ => 0.05,
+                0..=47 => rss6_core::thesis::SIGMA_LENGTH,
+                48..=53 => rss6_core::thesis::SIGMA_ETA,
+                _ => rss6_core::thesis::SIGMA_DTHETA,
             };
             *bk = sigma * uk;
         }

@@ -13,7 +13,7 @@
 //! rate limit), so the shadow never drifts from the drive even when a command is limited. The request is
 //! clamped to ±`torque_limit` first so the inverse never asks for a saturated PID.
 
-use crate::error::{all_finite, check_dt, CtrlError, FaultReason, Result};
+use crate::error::{all_finite, CtrlError, FaultReason, Result};
 use crate::pid::{JointPid, PidGains};
 use crate::safety::{CommandGuard, Guarded};
 use rss6_core::{Vec6, LEGS};
@@ -32,7 +32,7 @@ pub struct ConverterOutput {
 }
 
 /// The converter of eq. 6.37–6.38 as the exact discrete inverse of [`JointPid`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct TorqueToPosition {
     shadow: JointPid,
 }
@@ -40,27 +40,26 @@ pub struct TorqueToPosition {
 impl TorqueToPosition {
     /// A converter for a drive PID with these gains, period `dt` (s) and torque limit (N·m); the drive's
     /// PID must start from rest at the same time (zero integral, not primed).
+    ///
+    /// Errors: those of [`JointPid::new`], and [`CtrlError::InvalidParameter`] if l_p + l_d = 0 (the
+    /// inverse would divide by l_i Δt alone).
     pub fn new(gains: PidGains, dt: f64, torque_limit: f64) -> Result<Self> {
-        check_dt(dt)?;
-        if !(gains.lp.is_finite() && gains.li.is_finite() && gains.ld.is_finite()) {
-            return Err(CtrlError::NonFinite);
-        }
-        if gains.lp < 0.0 || gains.li < 0.0 || gains.ld < 0.0 || gains.lp + gains.ld <= 0.0 {
-            return Err(CtrlError::InvalidParameter(
-                "PID gains must be >= 0 with l_p + l_d > 0",
-            ));
-        }
-        if torque_limit.is_nan() || torque_limit <= 0.0 {
-            return Err(CtrlError::InvalidParameter("torque limit must be > 0"));
-        }
-        Ok(TorqueToPosition {
-            shadow: JointPid::new(gains, dt, torque_limit),
-        })
+        Self::mirroring(&JointPid::new(gains, dt, torque_limit)?)
     }
 
     /// A converter mirroring an existing drive PID, including its current integral and derivative memory.
-    pub fn mirroring(pid: &JointPid) -> Self {
-        TorqueToPosition { shadow: *pid }
+    ///
+    /// Errors: [`CtrlError::InvalidParameter`] if the PID has l_p + l_d = 0.
+    pub fn mirroring(pid: &JointPid) -> Result<Self> {
+        let g = pid.gains();
+        if g.lp + g.ld <= 0.0 {
+            return Err(CtrlError::InvalidParameter(
+                "PID gains must have l_p + l_d > 0 to be inverted",
+            ));
+        }
+        Ok(TorqueToPosition {
+            shadow: pid.clone(),
+        })
     }
 
     /// The shadow copy of the drive's PID.
@@ -75,15 +74,16 @@ impl TorqueToPosition {
 
     /// The joint-angle error e_k (rad) that makes the shadow PID output `tau` (N·m) this tick.
     pub fn error_for_torque(&self, tau: &Vec6) -> Vec6 {
-        let g = self.shadow.gains;
-        let dt = self.shadow.dt;
-        let lim = self.shadow.torque_limit;
+        let g = *self.shadow.gains();
+        let dt = self.shadow.dt();
+        let lim = self.shadow.torque_limit();
         let integral = self.shadow.integral();
         let prev = self.shadow.prev_error();
         let primed = self.shadow.is_primed();
         let mut e = Vec6::zeros();
         for i in 0..LEGS {
-            // Stay a hair inside the limit so the drive never saturates on an exact request.
+            // Stay a hair inside the limit so the drive never saturates on an exact request. `lim` > 0
+            // (checked by `JointPid::new`), so the clamp cannot panic; the denominators are > 0.
             let t = tau[i].clamp(-lim, lim) * (1.0 - 1e-12);
             let (num, den) = if primed {
                 (
@@ -121,7 +121,7 @@ impl TorqueToPosition {
             command,
             stroke_limited,
             rate_limited,
-        } = guard.apply(&request, self.shadow.dt)?;
+        } = guard.apply(&request, self.shadow.dt())?;
         let tau_expected = self.shadow.step(&command, theta);
         Ok(ConverterOutput {
             theta_cmd: command,

@@ -17,7 +17,9 @@
 use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
-use rss6_core::{dynamics_terms, DynamicParams, KinematicParams, Mat6, Vec6};
+use rss6_core::{
+    dynamics_terms, CoreError, DynamicParams, KinematicParams, Mat6, SingularKind, Vec6,
+};
 
 /// DSMC gains, diagonal per pose axis (x, y, z in SI translational units, α, β, γ in rotational ones).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -89,13 +91,25 @@ impl DsmcGains {
 }
 
 /// Continuous boundary-layer saturation sat(F/ε) = clamp(F/ε, −1, 1) (replaces eq. 6.28, see module docs).
+/// For ε ≤ 0 it is the limit ε → 0⁺, sgn(F) with sgn(0) = 0, so it never returns NaN for finite input.
 ///
 /// ```
 /// assert_eq!(rss6_ctrl::sat(0.01, 0.02), 0.5); // inside the layer: linear
 /// assert_eq!(rss6_ctrl::sat(-3.0, 0.02), -1.0); // outside: sgn
+/// assert_eq!(rss6_ctrl::sat(2e-9, 0.0), 1.0); // no layer: sgn
+/// assert_eq!(rss6_ctrl::sat(0.0, 0.0), 0.0);
 /// ```
 pub fn sat(f: f64, epsilon: f64) -> f64 {
-    (f / epsilon).clamp(-1.0, 1.0)
+    if epsilon > 0.0 {
+        // F/ε is ±∞ at worst for finite F (never NaN), and clamp's bounds are constants.
+        (f / epsilon).clamp(-1.0, 1.0)
+    } else if f > 0.0 {
+        1.0
+    } else if f < 0.0 {
+        -1.0
+    } else {
+        f
+    }
 }
 
 /// One DSMC step's result.
@@ -118,7 +132,7 @@ pub struct DsmcOutput {
 }
 
 /// The DSMC of eq. 6.25. Runs at the camera rate on the Kalman estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Dsmc {
     kp_model: KinematicParams,
     dp_model: DynamicParams,
@@ -176,11 +190,15 @@ impl Dsmc {
     }
 
     /// Actuator torques that hold the model at rest at `pose` against gravity, τ_g = J_θ⁻ᵀ G̃0(χ) (N·m).
+    ///
+    /// Errors: model failures as [`CtrlError::Core`], [`CtrlError::SingularJacobian`] if J_θ cannot be
+    /// factorised, [`CtrlError::NonFinite`] if the solution overflows.
     pub fn holding_torque(&self, pose: &Vec6) -> Result<Vec6> {
         let t = dynamics_terms(&self.kp_model, &self.dp_model, pose, &Vec6::zeros())?;
         match t.j_theta.transpose().lu().solve(&t.g) {
             Some(x) if all_finite(x.as_slice()) => Ok(x),
-            _ => Err(CtrlError::NonFinite),
+            Some(_) => Err(CtrlError::NonFinite),
+            None => Err(CtrlError::SingularJacobian),
         }
     }
 
@@ -193,7 +211,8 @@ impl Dsmc {
     /// (an unstable mode at ≈ 14/s, plus ≈ 560 rad/s² per m of y → α). The servo can cancel this at the
     /// joint rate with τ = τ_a + H (θ − θ_frame) ([`crate::ServoConfig::hold_compensation`]).
     ///
-    /// Errors: model failures (IK, singular J_θ) as [`CtrlError::Core`], [`CtrlError::NonFinite`].
+    /// Errors: model failures (IK, …) as [`CtrlError::Core`], [`CtrlError::SingularJacobian`],
+    /// [`CtrlError::NonFinite`].
     pub fn hold_stiffness(&self, pose: &Vec6) -> Result<Mat6> {
         let mut d = Mat6::zeros();
         for j in 0..6 {
@@ -209,7 +228,8 @@ impl Dsmc {
         // H J_θ = D  ⇔  J_θᵀ Hᵀ = Dᵀ.
         match t.j_theta.transpose().lu().solve(&d.transpose()) {
             Some(ht) if all_finite(ht.as_slice()) => Ok(ht.transpose()),
-            _ => Err(CtrlError::NonFinite),
+            Some(_) => Err(CtrlError::NonFinite),
+            None => Err(CtrlError::SingularJacobian),
         }
     }
 
@@ -241,6 +261,7 @@ impl Dsmc {
         let mut robust = Vec6::zeros();
         let mut inside = true;
         for i in 0..6 {
+            // integral_limit ≥ 0 and finite (`DsmcGains::validate`): the clamp cannot panic.
             integral[i] = integral[i].clamp(-g.integral_limit[i], g.integral_limit[i]);
             robust[i] = g.kr[i] * sat(f[i], g.epsilon[i]);
             inside &= f[i].abs() <= g.epsilon[i];
@@ -248,12 +269,17 @@ impl Dsmc {
         let u = tau_model + g.kp.component_mul(&f) + g.ki.component_mul(&integral) + robust;
         let tau_a = match terms.j_theta.transpose().lu().solve(&u) {
             Some(t) if all_finite(t.as_slice()) => t,
-            _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
+            Some(_) => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
+            None => return Err(self.fault.trip(FaultReason::SingularJacobian)),
         };
         let m_lu = terms.m.lu();
         let accel_model = match m_lu.solve(&(u - terms.c * estimate.pose_dot - terms.g - terms.f)) {
             Some(a) if all_finite(a.as_slice()) => a,
-            _ => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
+            Some(_) => return Err(self.fault.trip(FaultReason::NonFiniteCommand)),
+            None => {
+                let singular = CoreError::Singular(SingularKind::Matrix);
+                return Err(self.fault.trip(FaultReason::Model(singular)));
+            }
         };
         self.integral = integral;
         let out = DsmcOutput {

@@ -24,6 +24,14 @@ pub enum FaultReason {
     },
     /// A model evaluation (IK, Jacobian, dynamics) failed at the measured pose.
     Model(CoreError),
+    /// J_θ = J_ad J_s (eq. 5.3) at the estimate could not be factorised (a type-II or Euler singularity,
+    /// or numerically so): no actuator torque or joint rate can be solved for.
+    SingularJacobian,
+    /// A tick's time stamp lay before the previous tick's (or before the start/reset time).
+    TimeWentBackwards {
+        /// How far back the time stamp jumped (s, > 0).
+        by: f64,
+    },
 }
 
 /// Every way a call into `rss6-ctrl` can fail.
@@ -41,6 +49,8 @@ pub enum CtrlError {
     InvalidParameter(&'static str),
     /// A model evaluation in rss6-core failed.
     Core(CoreError),
+    /// J_θ (eq. 5.3) is singular at the requested pose (calls that do not latch a fault).
+    SingularJacobian,
 }
 
 impl From<CoreError> for CtrlError {
@@ -60,6 +70,10 @@ impl fmt::Display for FaultReason {
                 write!(f, "no camera frame for {age:.3} s (stale camera data)")
             }
             FaultReason::Model(e) => write!(f, "model evaluation failed: {e}"),
+            FaultReason::SingularJacobian => write!(f, "J_theta is singular at the estimated pose"),
+            FaultReason::TimeWentBackwards { by } => {
+                write!(f, "time stamp went backwards by {by:.3e} s")
+            }
         }
     }
 }
@@ -74,6 +88,7 @@ impl fmt::Display for CtrlError {
             }
             CtrlError::InvalidParameter(what) => write!(f, "invalid parameter: {what}"),
             CtrlError::Core(e) => write!(f, "rss6-core: {e}"),
+            CtrlError::SingularJacobian => write!(f, "J_theta is singular at this pose"),
         }
     }
 }

@@ -15,7 +15,7 @@
 
 use crate::error::{all_finite, check_dt, CtrlError, Result};
 use nalgebra::{Matrix3, Vector3};
-use rss6_core::Vec6;
+use rss6_core::{thesis, Vec6};
 
 /// Iteration bound of the steady-state Riccati recursion (converges in a few hundred at 30 Hz).
 pub const RICCATI_MAX_ITERATIONS: u32 = 20_000;
@@ -39,49 +39,50 @@ pub struct KalmanConfig {
 }
 
 impl KalmanConfig {
-    /// Camera noise of Table 4.1 and the *servo* jerk densities (1e-2 m²/s⁵, 3 rad²/s⁵): little lag, so the
-    /// DSMC's 30 Hz velocity loop stays stable; noise reduction is modest (see docs/control.md). Lower
-    /// `q_jerk` smooths more and lags more.
-    pub fn thesis() -> Self {
-        let sp = 0.0096e-3;
-        let sa = 0.0261_f64.to_radians();
+    /// rss6's servo tuning: the camera noise of Table 4.1 ([`rss6_core::thesis`]) and the control period
+    /// of §6.5, with *our* jerk densities (1e-2 m²/s⁵, 3 rad²/s⁵; the thesis tunes Q_c but does not print
+    /// it): little lag, so the DSMC's 30 Hz velocity loop stays stable; noise reduction is modest (see
+    /// docs/control.md). Lower `q_jerk` smooths more and lags more.
+    pub fn tuned() -> Self {
+        let sp = thesis::POSE_POSITION_NOISE;
+        let sa = thesis::POSE_ANGLE_NOISE;
         KalmanConfig {
             q_jerk: Vec6::new(1e-2, 1e-2, 1e-2, 3.0, 3.0, 3.0),
             q_vel: Vec6::zeros(),
             r: Vec6::new(sp * sp, sp * sp, sp * sp, sa * sa, sa * sa, sa * sa),
             p0_std: [1e-3, 1e-2, 1e-1],
-            nominal_dt: 0.033,
+            nominal_dt: thesis::CONTROL_PERIOD,
             steady_state: false,
         }
     }
 
     /// Smoother tuning for a filter that is told the commanded acceleration ([`PoseKalman::set_input`],
-    /// `ServoConfig::kalman_model_input`): q_jerk = 1e-3 m²/s⁵ for x, y, z (10× below [`Self::thesis`]) and
+    /// `ServoConfig::kalman_model_input`): q_jerk = 1e-3 m²/s⁵ for x, y, z (10× below [`Self::tuned`]) and
     /// 1 rad²/s⁵ for α, β, γ (3× below). With the DSMC's model acceleration as input the filter lags only the
     /// model residual, so this tuning keeps the loop stable where the same q without the input does not
     /// (docs/control.md, "Kalman filter in the loop").
     pub fn model_aided() -> Self {
         KalmanConfig {
             q_jerk: Vec6::new(1e-3, 1e-3, 1e-3, 1.0, 1.0, 1.0),
-            ..Self::thesis()
+            ..Self::tuned()
         }
     }
 
     /// Tuning of [`crate::ServoConfig::low_noise`] (model input, hold compensation and potentiometer rate):
-    /// q_jerk = 1e-4 m²/s⁵ for x, y, z (100× below [`Self::thesis`]) and 0.1 rad²/s⁵ for α, β, γ (30×
+    /// q_jerk = 1e-4 m²/s⁵ for x, y, z (100× below [`Self::tuned`]) and 0.1 rad²/s⁵ for α, β, γ (30×
     /// below). Without those servo options this tuning lags too much for the DSMC loop.
     pub fn low_noise() -> Self {
         KalmanConfig {
             q_jerk: Vec6::new(1e-4, 1e-4, 1e-4, 0.1, 0.1, 0.1),
-            ..Self::thesis()
+            ..Self::tuned()
         }
     }
 
-    /// Smoothing tuning for monitoring/logging, not for closing a loop: q_jerk 1e-5 × [`Self::thesis`]
+    /// Smoothing tuning for monitoring/logging, not for closing a loop: q_jerk 1e-5 × [`Self::tuned`]
     /// (1e-7 m²/s⁵, 3e-5 rad²/s⁵). On the Experiment 1 and 2 references with Table 4.1 noise it tracks χ̇
     /// on all six axes (tests/kalman.rs); inside the DSMC loop it destabilises the rotational loop.
     pub fn smoothing() -> Self {
-        let t = Self::thesis();
+        let t = Self::tuned();
         KalmanConfig {
             q_jerk: t.q_jerk * 1e-5,
             ..t
@@ -216,8 +217,9 @@ impl Axis {
     }
 }
 
-/// Six independent third-order Kalman filters, one per pose axis. `Copy`, fixed size, no heap.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Six independent third-order Kalman filters, one per pose axis. Fixed size, no heap; `Clone` (not
+/// `Copy`, so `let f = filter;` cannot silently fork the state).
+#[derive(Debug, Clone, PartialEq)]
 pub struct PoseKalman {
     config: KalmanConfig,
     axes: [Axis; 6],
@@ -339,7 +341,7 @@ impl PoseKalman {
     /// (the camera pose χ̄_E, m and rad) if a frame arrived; `None` = predict only (missing frame).
     ///
     /// Errors (state left untouched): [`CtrlError::InvalidTimeStep`], [`CtrlError::NonFinite`] for a
-    /// NaN/∞ measurement.
+    /// NaN/∞ measurement or if the step would overflow the state or covariance (e.g. a huge `dt`).
     pub fn step(&mut self, dt: f64, measurement: Option<&Vec6>) -> Result<PoseEstimate> {
         check_dt(dt)?;
         if let Some(z) = measurement {
@@ -348,12 +350,17 @@ impl PoseKalman {
             }
         }
         let steady = self.config.steady_state;
-        for (i, ax) in self.axes.iter_mut().enumerate() {
+        let mut axes = self.axes;
+        for (i, ax) in axes.iter_mut().enumerate() {
             ax.predict(dt, !steady);
             if let Some(z) = measurement {
                 ax.update(z[i], steady);
             }
+            if !(all_finite(ax.s.as_slice()) && all_finite(ax.p.as_slice())) {
+                return Err(CtrlError::NonFinite);
+            }
         }
+        self.axes = axes;
         Ok(self.estimate())
     }
 }
@@ -380,9 +387,14 @@ impl PoseKalman {
         if variance.iter().any(|&v| v <= 0.0) {
             return Err(CtrlError::InvalidParameter("rate variance must be > 0"));
         }
-        for (i, ax) in self.axes.iter_mut().enumerate() {
+        let mut axes = self.axes;
+        for (i, ax) in axes.iter_mut().enumerate() {
             ax.update_rate(rate[i], variance[i]);
+            if !(all_finite(ax.s.as_slice()) && all_finite(ax.p.as_slice())) {
+                return Err(CtrlError::NonFinite);
+            }
         }
+        self.axes = axes;
         Ok(self.estimate())
     }
 }

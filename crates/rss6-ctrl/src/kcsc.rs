@@ -11,7 +11,7 @@
 use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kalman::PoseEstimate;
 use crate::trajectory::Reference;
-use rss6_core::{jacobian_theta, KinematicParams, Vec6};
+use rss6_core::{jacobian_theta, thesis, KinematicParams, Vec6};
 
 /// Diagonal gains of a Cartesian PID (eq. 5.4 / 6.40), per pose axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,14 +27,32 @@ pub struct CartesianPidGains {
 }
 
 impl CartesianPidGains {
-    /// The thesis's tuned outer-loop gains (§5.5): k_p = 0.3, k_d = 0.001 s, k_i = 2.4 1/s on every axis.
+    /// The thesis's outer-loop gains (§5.6.2, [`rss6_core::thesis`]): k_p = 0.3, k_d = 0.001 s,
+    /// k_i = 2.4 1/s on every axis. The anti-windup bound 0.1 (m·s, rad·s) is ours (the thesis has none).
     pub fn thesis() -> Self {
         CartesianPidGains {
-            kp: Vec6::repeat(0.3),
-            ki: Vec6::repeat(2.4),
-            kd: Vec6::repeat(0.001),
+            kp: Vec6::repeat(thesis::VISUAL_PID_KP),
+            ki: Vec6::repeat(thesis::VISUAL_PID_KI),
+            kd: Vec6::repeat(thesis::VISUAL_PID_KD),
             integral_limit: Vec6::repeat(0.1),
         }
+    }
+
+    /// Checks that every entry is finite and ≥ 0 (a negative anti-windup bound would make the clamp
+    /// panic).
+    ///
+    /// Errors: [`CtrlError::NonFinite`], [`CtrlError::InvalidParameter`].
+    pub fn validate(&self) -> Result<()> {
+        let all = [self.kp, self.ki, self.kd, self.integral_limit];
+        if !all.iter().all(|v| all_finite(v.as_slice())) {
+            return Err(CtrlError::NonFinite);
+        }
+        if all.iter().any(|v| v.iter().any(|&x| x < 0.0)) {
+            return Err(CtrlError::InvalidParameter(
+                "Cartesian PID gains and integral limit must be >= 0",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -46,7 +64,7 @@ pub struct JointCommand {
 }
 
 /// KCSC, eq. 6.40. Runs at the camera rate on the Kalman estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Kcsc {
     kp_model: KinematicParams,
     gains: CartesianPidGains,
@@ -59,10 +77,13 @@ pub struct Kcsc {
 impl Kcsc {
     /// A KCSC on the nominal (or calibrated) kinematics `kp_model`, starting at command `bias`
     /// (θ(home) = 0 for the nominal robot).
+    ///
+    /// Errors: invalid kinematics as [`CtrlError::Core`], [`CartesianPidGains::validate`]'s errors,
+    /// [`CtrlError::NonFinite`] for a NaN/∞ bias.
     pub fn new(kp_model: KinematicParams, gains: CartesianPidGains, bias: &Vec6) -> Result<Self> {
         kp_model.validate()?;
-        let all = [gains.kp, gains.ki, gains.kd, gains.integral_limit, *bias];
-        if !all.iter().all(|v| all_finite(v.as_slice())) {
+        gains.validate()?;
+        if !all_finite(bias.as_slice()) {
             return Err(CtrlError::NonFinite);
         }
         Ok(Kcsc {
@@ -114,6 +135,7 @@ impl Kcsc {
         let g = &self.gains;
         let mut integral = self.integral + e * dt;
         for i in 0..6 {
+            // integral_limit ≥ 0 (validated in `new`): the clamp cannot panic.
             integral[i] = integral[i].clamp(-g.integral_limit[i], g.integral_limit[i]);
         }
         let u = g.kp.component_mul(&e) + g.kd.component_mul(&e_dot) + g.ki.component_mul(&integral);
@@ -129,7 +151,7 @@ impl Kcsc {
 
 /// The outer visual-servoing PID of closed-loop identification (eq. 5.4): U_θ = J_θ[k_p e + k_d ė +
 /// k_i ∫e], on the raw camera pose (or the simulated pose χ_s) instead of the Kalman estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct VisualPid {
     inner: Kcsc,
 }

@@ -10,7 +10,7 @@
 use crate::error::{all_finite, CtrlError, FaultLatch, FaultReason, Result};
 use crate::kcsc::JointCommand;
 use crate::trajectory::Reference;
-use rss6_core::{ik, jacobian_theta, KinematicParams, Vec6};
+use rss6_core::{ik, jacobian_theta, thesis, KinematicParams, Vec6};
 
 /// Diagonal joint-space PID gains of eq. 6.42 (same for every joint).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,19 +26,38 @@ pub struct JointSpaceGains {
 }
 
 impl JointSpaceGains {
-    /// The same numbers as the Cartesian baseline: k_p = 0.3, k_i = 2.4 1/s, k_d = 0.001 s.
-    pub fn thesis() -> Self {
+    /// The thesis prints no KJSC gains (§6.5); rss6 uses the outer visual PID's numbers of §5.6.2
+    /// ([`rss6_core::thesis::VISUAL_PID_KP`] …: k_p = 0.3, k_i = 2.4 1/s, k_d = 0.001 s) per joint, with
+    /// our anti-windup bound 1 rad·s.
+    pub fn from_visual_pid() -> Self {
         JointSpaceGains {
-            kp: 0.3,
-            ki: 2.4,
-            kd: 0.001,
+            kp: thesis::VISUAL_PID_KP,
+            ki: thesis::VISUAL_PID_KI,
+            kd: thesis::VISUAL_PID_KD,
             integral_limit: 1.0,
         }
+    }
+
+    /// Checks that every entry is finite and ≥ 0 (a negative anti-windup bound would make the clamp
+    /// panic).
+    ///
+    /// Errors: [`CtrlError::NonFinite`], [`CtrlError::InvalidParameter`].
+    pub fn validate(&self) -> Result<()> {
+        let all = [self.kp, self.ki, self.kd, self.integral_limit];
+        if !all_finite(&all) {
+            return Err(CtrlError::NonFinite);
+        }
+        if all.iter().any(|&x| x < 0.0) {
+            return Err(CtrlError::InvalidParameter(
+                "joint-space PID gains and integral limit must be >= 0",
+            ));
+        }
+        Ok(())
     }
 }
 
 /// KJSC, eq. 6.42.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Kjsc {
     kp_model: KinematicParams,
     gains: JointSpaceGains,
@@ -51,11 +70,13 @@ pub struct Kjsc {
 
 impl Kjsc {
     /// A KJSC on kinematics `kp_model`, starting at command `bias` (rad).
+    ///
+    /// Errors: invalid kinematics as [`CtrlError::Core`], [`JointSpaceGains::validate`]'s errors,
+    /// [`CtrlError::NonFinite`] for a NaN/∞ bias.
     pub fn new(kp_model: KinematicParams, gains: JointSpaceGains, bias: &Vec6) -> Result<Self> {
         kp_model.validate()?;
-        if !(all_finite(&[gains.kp, gains.ki, gains.kd, gains.integral_limit])
-            && all_finite(bias.as_slice()))
-        {
+        gains.validate()?;
+        if !all_finite(bias.as_slice()) {
             return Err(CtrlError::NonFinite);
         }
         Ok(Kjsc {
@@ -109,6 +130,7 @@ impl Kjsc {
         let g = &self.gains;
         let e = theta_r - theta;
         let e_dot = theta_r_dot - theta_dot;
+        // lim ≥ 0 (validated in `new`): the clamp cannot panic.
         let lim = g.integral_limit;
         let integral = (self.integral + e * dt).map(|x| x.clamp(-lim, lim));
         let theta_d = self.bias + e * g.kp + e_dot * g.kd + integral * g.ki;

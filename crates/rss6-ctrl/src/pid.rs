@@ -1,12 +1,13 @@
 //! The robot's built-in joint controller: an independent PID per joint (eq. 6.14 / 5.5), run at the
 //! joint-loop rate (1 kHz) on the potentiometer angle.
 //!
-//! Units: the thesis's Table 5.2 gains (l_p = 10, l_i = 12, l_d = 0.1) are in the drive's own command
+//! Units: the thesis's Table 5.2 gains (initial l_p = 10, l_i = 12, l_d = 0.1; identified 10.5, 11.4, 0.164) are in the drive's own command
 //! units, which the thesis does not state; with N·m/rad they would let the 24 kg platform sag by
-//! ≈ 0.3 rad under gravity. rss6 works in SI, so [`PidGains::nominal`] is tuned for the Table 5.1 robot:
+//! ≈ 0.3 rad under gravity. rss6 works in SI, so [`PidGains::tuned`] is tuned for the Table 5.1 robot:
 //! the reflected joint inertia at home is ≈ 0.03 kg·m², and l_p = 400 N·m/rad, l_d = 4 N·m·s/rad give a
 //! ≈ 18 Hz, well-damped joint loop; l_i = 2000 N·m/(rad·s) removes the gravity sag in ≈ 0.2 s.
 
+use crate::error::{check_dt, CtrlError, Result};
 use rss6_core::{Vec6, LEGS};
 
 /// Gains of the built-in joint PID (eq. 6.14), the same for every joint.
@@ -21,8 +22,9 @@ pub struct PidGains {
 }
 
 impl PidGains {
-    /// The default SI gains for the nominal robot (see the module docs).
-    pub const fn nominal() -> Self {
+    /// rss6's SI gains, tuned for the Table 5.1 robot (see the module docs; the thesis's Table 5.2 values
+    /// are in drive units, [`rss6_core::thesis::TABLE_5_2_PID_IDENTIFIED`]).
+    pub const fn tuned() -> Self {
         PidGains {
             lp: 400.0,
             li: 2000.0,
@@ -34,36 +36,80 @@ impl PidGains {
     pub const fn to_array(&self) -> [f64; 3] {
         [self.lp, self.li, self.ld]
     }
+
+    /// Checks that every gain is finite and ≥ 0.
+    ///
+    /// Errors: [`CtrlError::NonFinite`], [`CtrlError::InvalidParameter`].
+    pub fn validate(&self) -> Result<()> {
+        if !(self.lp.is_finite() && self.li.is_finite() && self.ld.is_finite()) {
+            return Err(CtrlError::NonFinite);
+        }
+        if self.lp < 0.0 || self.li < 0.0 || self.ld < 0.0 {
+            return Err(CtrlError::InvalidParameter("PID gains must be >= 0"));
+        }
+        Ok(())
+    }
 }
 
 /// Discrete PID of eq. 6.14 for all six joints: τ = l_p e + l_i Σe·dt + l_d (e − e_prev)/dt,
 /// with e = θ_d − θ. Backward-Euler derivative and rectangle-rule integral, exactly what
 /// [`crate::pid::JointPid::step`] computes; the torque-to-position converter inverts this same law.
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// The output is clamped to ±`torque_limit` (no anti-windup beyond holding the integral while saturated).
+/// Gains, period and limit are fixed at construction ([`JointPid::new`] validates them).
+#[derive(Debug, Clone, PartialEq)]
 pub struct JointPid {
-    /// Gains.
-    pub gains: PidGains,
-    /// Sample time (s), 1e-3 at 1 kHz.
-    pub dt: f64,
-    /// Torque limit per joint (N·m); the output is clamped to ±limit (no anti-windup beyond holding the
-    /// integral while saturated).
-    pub torque_limit: f64,
+    gains: PidGains,
+    dt: f64,
+    torque_limit: f64,
     integral: [f64; LEGS],
     prev_error: [f64; LEGS],
     primed: bool,
 }
 
 impl JointPid {
-    /// A PID at rest (zero integral, no previous error).
-    pub const fn new(gains: PidGains, dt: f64, torque_limit: f64) -> Self {
-        JointPid {
+    /// A PID at rest (zero integral, no previous error) with `gains`, sample time `dt` (s, 1e-3 at
+    /// 1 kHz) and torque limit per joint `torque_limit` (N·m, > 0; +∞ = unlimited).
+    ///
+    /// Errors: [`CtrlError::InvalidTimeStep`] unless `dt` is finite and > 0; [`CtrlError::NonFinite`]
+    /// or [`CtrlError::InvalidParameter`] for a NaN/∞ or negative gain; [`CtrlError::InvalidParameter`]
+    /// for a NaN or non-positive torque limit.
+    ///
+    /// ```
+    /// use rss6_ctrl::{JointPid, PidGains};
+    /// assert!(JointPid::new(PidGains::tuned(), 1e-3, 30.0).is_ok());
+    /// assert!(JointPid::new(PidGains::tuned(), 0.0, 30.0).is_err());
+    /// assert!(JointPid::new(PidGains::tuned(), 1e-3, -1.0).is_err());
+    /// ```
+    pub fn new(gains: PidGains, dt: f64, torque_limit: f64) -> Result<Self> {
+        check_dt(dt)?;
+        gains.validate()?;
+        if torque_limit.is_nan() || torque_limit <= 0.0 {
+            return Err(CtrlError::InvalidParameter("torque limit must be > 0"));
+        }
+        Ok(JointPid {
             gains,
             dt,
             torque_limit,
             integral: [0.0; LEGS],
             prev_error: [0.0; LEGS],
             primed: false,
-        }
+        })
+    }
+
+    /// The gains.
+    pub fn gains(&self) -> &PidGains {
+        &self.gains
+    }
+
+    /// The sample time (s).
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// The torque limit per joint (N·m).
+    pub fn torque_limit(&self) -> f64 {
+        self.torque_limit
     }
 
     /// Clears the integral and derivative memory.
@@ -88,9 +134,11 @@ impl JointPid {
         self.primed
     }
 
-    /// One tick: joint torques (N·m) from the commanded and measured angles (rad).
+    /// One tick: joint torques (N·m) from the commanded and measured angles (rad). NaN inputs give NaN
+    /// torques (the caller checks its inputs); nothing here can panic.
     pub fn step(&mut self, theta_cmd: &Vec6, theta_meas: &Vec6) -> Vec6 {
         let mut tau = Vec6::zeros();
+        let lim = self.torque_limit;
         for i in 0..LEGS {
             let e = theta_cmd[i] - theta_meas[i];
             let de = if self.primed {
@@ -100,7 +148,7 @@ impl JointPid {
             };
             let integral = self.integral[i] + e * self.dt;
             let raw = self.gains.lp * e + self.gains.li * integral + self.gains.ld * de;
-            let lim = self.torque_limit;
+            // `lim` > 0 and not NaN (checked in `new`), so the clamp cannot panic.
             let out = raw.clamp(-lim, lim);
             // Conditional integration: do not wind up while saturated.
             if raw == out {

@@ -55,7 +55,7 @@ pub struct Guarded {
 }
 
 /// Clamps, rate-limits and remembers joint commands.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CommandGuard {
     limits: CommandLimits,
     last: Vec6,

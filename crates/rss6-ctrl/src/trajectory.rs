@@ -2,8 +2,9 @@
 //! finite Fourier series of eq. 5.11 / 6.43 (Experiment 2, §6.5.2).
 //!
 //! Both stay inside the box ±20 mm / ±0.05 rad around the home pose [0, 0, 0.115, 0, 0, 0], which the
-//! nominal geometry keeps free of both singularity types (DESIGN.md). Both start away from home in the
-//! axes the thesis says, so a robot resting at home sees an initial step.
+//! nominal geometry keeps free of both singularity types (docs/kinematics.md, "The singularity-free
+//! box"). Both start away from home in the axes the thesis says, so a robot resting at home sees an
+//! initial step.
 
 use libm::{cos, sin};
 use rss6_core::{home_pose, Vec6};
@@ -73,7 +74,7 @@ impl Sinusoid {
             center: home + Vec6::new(0.0, 0.0, 0.005, 0.0, 0.0, 0.0),
             amplitude: Vec6::new(0.010, 0.008, 0.006, 0.03, 0.03, 0.03),
             phase: Vec6::new(0.0, core::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0),
-            omega: 0.5,
+            omega: rss6_core::thesis::EXPERIMENT1_OMEGA,
         }
     }
 }
@@ -119,7 +120,7 @@ impl Fourier<5> {
     pub fn experiment2() -> Self {
         const POS: [f64; 5] = [4e-3, 3e-3, 2e-3, 1.5e-3, 1e-3];
         const ANG: [f64; 5] = [12e-3, 9e-3, 6e-3, 4.5e-3, 3e-3];
-        let omega0 = 0.15;
+        let omega0 = rss6_core::thesis::EXPERIMENT2_OMEGA0;
         let mut s = [[0.0; 5]; 6];
         let mut c = [[0.0; 5]; 6];
         for (i, (si, ci)) in s.iter_mut().zip(c.iter_mut()).enumerate() {

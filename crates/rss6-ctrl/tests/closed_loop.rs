@@ -154,7 +154,7 @@ fn experiment2_dsmc_beats_kcsc_beats_kjsc() {
 #[test]
 fn theorem1_sliding_variable_enters_the_boundary_layer_and_stays() {
     let configs = [
-        ("default", ServoConfig::nominal(), DsmcGains::tuned()),
+        ("default", ServoConfig::tuned(), DsmcGains::tuned()),
         (
             "low-noise",
             ServoConfig::low_noise(),
@@ -238,7 +238,7 @@ fn experiment1_ordering_on_other_plants() {
         let mut low = setup;
         low.config = ServoConfig::low_noise();
         low.dsmc = DsmcGains::low_noise();
-        low.monitor = Some(KalmanConfig::thesis());
+        low.monitor = Some(KalmanConfig::tuned());
         let l = run_scheme(Which::Dsmc, &traj, &low);
         assert!(l.first_fault.is_none(), "seed {seed}: {:?}", l.first_fault);
         let (whole, late) = kalman_ratios(&l);
@@ -389,9 +389,9 @@ fn low_noise_servo_filter_tracks_all_six_rates() {
         let mut base = perturbed_setup(seconds);
         // The monitor filter is not used; setting it makes run_scheme collect the servo filter's
         // statistics after MONITOR_FROM s.
-        base.monitor = Some(KalmanConfig::thesis());
+        base.monitor = Some(KalmanConfig::tuned());
         let mut low = perturbed_setup(seconds);
-        low.monitor = Some(KalmanConfig::thesis());
+        low.monitor = Some(KalmanConfig::tuned());
         low.config = ServoConfig::low_noise();
         low.dsmc = DsmcGains::low_noise();
         let b = run_scheme(Which::Dsmc, traj, &base);

@@ -18,9 +18,9 @@ fn random_vec(rng: &mut ChaCha8Rng, scale: f64) -> Vec6 {
 
 #[test]
 fn drive_pid_applies_exactly_the_requested_torque() {
-    let gains = PidGains::nominal();
+    let gains = PidGains::tuned();
     let (dt, limit) = (1e-3, 30.0);
-    let mut drive = JointPid::new(gains, dt, limit);
+    let mut drive = JointPid::new(gains, dt, limit).unwrap();
     let mut conv = TorqueToPosition::new(gains, dt, limit).unwrap();
     let wide = CommandLimits {
         min: Vec6::repeat(-10.0),
@@ -51,9 +51,9 @@ fn drive_pid_applies_exactly_the_requested_torque() {
 
 #[test]
 fn shadow_stays_in_sync_when_commands_are_limited() {
-    let gains = PidGains::nominal();
+    let gains = PidGains::tuned();
     let (dt, limit) = (1e-3, 30.0);
-    let mut drive = JointPid::new(gains, dt, limit);
+    let mut drive = JointPid::new(gains, dt, limit).unwrap();
     let mut conv = TorqueToPosition::new(gains, dt, limit).unwrap();
     // Tight rate limit: 0.5 rad/s → 0.5 mrad per tick; a 20 N·m request needs ≈ 5 mrad at once.
     let tight = CommandLimits {

@@ -94,7 +94,7 @@ fn run_filter(config: KalmanConfig, seed: u64) -> ([f64; 6], [f64; 6], [f64; 6],
 fn filter_lowers_noise_and_tracks_velocity() {
     // The servo tuning (little lag, used in the loop) and a smoothing tuning with 1000× less process
     // noise. Thresholds per group [translation, rotation]: pose-noise ratio and velocity-error ratio.
-    let servo = KalmanConfig::thesis();
+    let servo = KalmanConfig::tuned();
     let smooth = KalmanConfig {
         q_jerk: servo.q_jerk * 1e-3,
         ..servo
@@ -130,7 +130,7 @@ fn filter_lowers_noise_and_tracks_velocity() {
 
 #[test]
 fn predict_only_extrapolates_constant_acceleration() {
-    let config = KalmanConfig::thesis();
+    let config = KalmanConfig::tuned();
     let mut kf = PoseKalman::new(config, &Vec6::zeros()).unwrap();
     let traj = |t: f64| Vec6::repeat(0.001 + 0.002 * t + 0.5 * 0.003 * t * t);
     let mut t = 0.0;
@@ -156,7 +156,7 @@ fn predict_only_extrapolates_constant_acceleration() {
 
 #[test]
 fn steady_state_gain_is_the_limit_of_the_riccati_recursion() {
-    let config = KalmanConfig::thesis();
+    let config = KalmanConfig::tuned();
     let kf = PoseKalman::new(config, &Vec6::zeros()).unwrap();
     let k_ss = kf.steady_state_gains();
     // Run the covariance filter long enough and read its gain from the estimate response to a unit
@@ -182,7 +182,7 @@ fn steady_state_gain_is_the_limit_of_the_riccati_recursion() {
 
 #[test]
 fn nan_measurement_is_refused_and_state_kept() {
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &Vec6::repeat(0.1)).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &Vec6::repeat(0.1)).unwrap();
     let before = kf.estimate();
     let mut z = Vec6::repeat(0.1);
     z[4] = f64::NAN;
@@ -242,7 +242,7 @@ fn smoothing_tuning_tracks_all_six_rates_on_experiments_1_and_2() {
         [("Exp. 1", &e1, 30.0), ("Exp. 2", &e2, 45.0)];
     for (name, traj, seconds) in trajs {
         for (cname, config) in [
-            ("thesis", KalmanConfig::thesis()),
+            ("thesis", KalmanConfig::tuned()),
             ("model_aided", KalmanConfig::model_aided()),
             ("smoothing", KalmanConfig::smoothing()),
         ] {
@@ -303,11 +303,11 @@ fn known_input_removes_the_lag_of_a_smooth_filter() {
 /// input is refused with the state untouched; steady-state filters have no covariance to update.
 #[test]
 fn rate_measurement_updates_the_velocity() {
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &home_pose()).unwrap();
     for _ in 0..30 {
         kf.step(0.033, Some(&home_pose())).unwrap();
     }
-    let before = kf;
+    let before = kf.clone();
     let v = Vec6::new(0.01, -0.02, 0.005, 0.03, -0.01, 0.02);
     let est = kf.update_rate(&v, &Vec6::repeat(1e-12)).unwrap();
     assert_eq!(est.pose, before.estimate().pose, "the pose is the camera's");
@@ -317,11 +317,11 @@ fn rate_measurement_updates_the_velocity() {
         est.pose_dot
     );
     // An uninformative measurement changes little.
-    let mut kf2 = before;
+    let mut kf2 = before.clone();
     let est2 = kf2.update_rate(&v, &Vec6::repeat(1e6)).unwrap();
     assert!((est2.pose_dot - before.estimate().pose_dot).amax() < 1e-6);
     // Refused input leaves the state untouched.
-    let mut kf3 = before;
+    let mut kf3 = before.clone();
     let mut bad = v;
     bad[2] = f64::NAN;
     assert!(matches!(
@@ -336,7 +336,7 @@ fn rate_measurement_updates_the_velocity() {
     let mut ss = PoseKalman::new(
         KalmanConfig {
             steady_state: true,
-            ..KalmanConfig::thesis()
+            ..KalmanConfig::tuned()
         },
         &home_pose(),
     )

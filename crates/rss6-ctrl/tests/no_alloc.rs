@@ -51,11 +51,11 @@ fn every_step_is_allocation_free() {
         pose_ddot: Vec6::zeros(),
     };
     let theta = Vec6::repeat(0.01);
-    let mut kf = PoseKalman::new(KalmanConfig::thesis(), &home_pose()).unwrap();
+    let mut kf = PoseKalman::new(KalmanConfig::tuned(), &home_pose()).unwrap();
     let mut kf_ss = PoseKalman::new(
         KalmanConfig {
             steady_state: true,
-            ..KalmanConfig::thesis()
+            ..KalmanConfig::tuned()
         },
         &home_pose(),
     )
@@ -63,10 +63,10 @@ fn every_step_is_allocation_free() {
     let mut dsmc = Dsmc::new(kp, dp, DsmcGains::tuned()).unwrap();
     let mut kcsc = Kcsc::new(kp, CartesianPidGains::thesis(), &Vec6::zeros()).unwrap();
     let mut vpid = VisualPid::new(kp, CartesianPidGains::thesis(), &Vec6::zeros()).unwrap();
-    let mut kjsc = Kjsc::new(kp, JointSpaceGains::thesis(), &Vec6::zeros()).unwrap();
-    let mut conv = TorqueToPosition::new(PidGains::nominal(), 1e-3, 30.0).unwrap();
+    let mut kjsc = Kjsc::new(kp, JointSpaceGains::from_visual_pid(), &Vec6::zeros()).unwrap();
+    let mut conv = TorqueToPosition::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
     let mut guard = CommandGuard::new(CommandLimits::nominal(), &Vec6::zeros()).unwrap();
-    let mut pid = JointPid::new(PidGains::nominal(), 1e-3, 30.0);
+    let mut pid = JointPid::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
     let mut sink = 0.0;
 
     let n = allocations(|| {
@@ -112,18 +112,18 @@ fn every_step_is_allocation_free() {
     let aided = ServoConfig {
         kalman: rss6_ctrl::KalmanConfig::model_aided(),
         kalman_model_input: true,
-        ..ServoConfig::nominal()
+        ..ServoConfig::tuned()
     };
     for (which, config, gains) in [
-        (Which::Dsmc, ServoConfig::nominal(), DsmcGains::tuned()),
+        (Which::Dsmc, ServoConfig::tuned(), DsmcGains::tuned()),
         (Which::Dsmc, aided, DsmcGains::tuned()),
         (
             Which::Dsmc,
             ServoConfig::low_noise(),
             DsmcGains::low_noise(),
         ),
-        (Which::Kcsc, ServoConfig::nominal(), DsmcGains::tuned()),
-        (Which::Kjsc, ServoConfig::nominal(), DsmcGains::tuned()),
+        (Which::Kcsc, ServoConfig::tuned(), DsmcGains::tuned()),
+        (Which::Kjsc, ServoConfig::tuned(), DsmcGains::tuned()),
     ] {
         let start = home_pose();
         let mut plant = rig(

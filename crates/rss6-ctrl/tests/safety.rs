@@ -43,7 +43,7 @@ fn kcsc_servo(stale_after: f64) -> Servo {
     let kcsc = Kcsc::new(kp, CartesianPidGains::thesis(), &Vec6::zeros()).unwrap();
     let config = ServoConfig {
         stale_after,
-        ..ServoConfig::nominal()
+        ..ServoConfig::tuned()
     };
     let kappa = kp.reading_from_theta(&Vec6::zeros());
     Servo::new(kp, config, Scheme::Kcsc(kcsc), &home_pose(), &kappa, 0.0).unwrap()

@@ -69,7 +69,7 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     let theta0 = kp.theta_from_reading(&kappa0);
     let mut servo = Servo::new(
         kp,
-        ServoConfig::nominal(),
+        ServoConfig::tuned(),
         scheme(Which::Dsmc, &theta0, DsmcGains::tuned()),
         &start,
         &kappa0,
@@ -124,7 +124,7 @@ fn restart_after_a_fault_is_bumpless_and_the_shadow_tracks_the_drive() {
     assert!(servo.fault().is_none(), "{:?}", servo.fault());
     let jump = (first.unwrap() - held).amax();
     assert!(
-        jump <= ServoConfig::nominal().limits.max_rate * 1e-3 + 1e-15,
+        jump <= ServoConfig::tuned().limits.max_rate * 1e-3 + 1e-15,
         "bump {jump} rad"
     );
     assert_eq!(*servo.converter().shadow(), *plant.robot.drive_pid());

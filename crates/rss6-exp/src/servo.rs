@@ -63,7 +63,7 @@ impl Controller {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Tuning {
     /// rss6's tuning used to reproduce Tables 6.1/6.2: the thesis's Kalman filter
-    /// ([`ServoConfig::nominal`]), [`DsmcGains::tuned`] (the thesis gives no DSMC gains in SI for
+    /// ([`ServoConfig::tuned`]), [`DsmcGains::tuned`] (the thesis gives no DSMC gains in SI for
     /// this robot), the thesis's KCSC/KJSC gains.
     Tuned,
     /// The low-noise DSMC servo: [`ServoConfig::low_noise`] + [`DsmcGains::low_noise`] (DSMC only).
@@ -128,7 +128,7 @@ impl ServoSpec {
         externals: Externals,
     ) -> Result<Self> {
         let (config, dsmc) = match tuning {
-            Tuning::Tuned => (ServoConfig::nominal(), DsmcGains::tuned()),
+            Tuning::Tuned => (ServoConfig::tuned(), DsmcGains::tuned()),
             Tuning::LowNoise => {
                 if controller != Controller::Dsmc {
                     return Err(ExpError::InvalidInput(format!(
@@ -167,7 +167,7 @@ pub struct ServoOutcome {
 
 /// The camera-rate controller `controller` on the model (`kp_model`, `dp_model`): the DSMC with
 /// `dsmc` gains; KCSC and KJSC with the thesis's gains ([`CartesianPidGains::thesis`],
-/// [`JointSpaceGains::thesis`]), starting from the joint command `theta0` (rad, the controller's
+/// [`JointSpaceGains::from_visual_pid`]), starting from the joint command `theta0` (rad, the controller's
 /// convention).
 pub fn scheme(
     controller: Controller,
@@ -181,7 +181,11 @@ pub fn scheme(
         Controller::Kcsc => {
             Scheme::Kcsc(Kcsc::new(*kp_model, CartesianPidGains::thesis(), theta0)?)
         }
-        Controller::Kjsc => Scheme::Kjsc(Kjsc::new(*kp_model, JointSpaceGains::thesis(), theta0)?),
+        Controller::Kjsc => Scheme::Kjsc(Kjsc::new(
+            *kp_model,
+            JointSpaceGains::from_visual_pid(),
+            theta0,
+        )?),
     })
 }
 
@@ -212,19 +216,13 @@ fn build_servo(
             .pose
         }
     };
-    let scheme = match spec.controller {
-        Controller::Dsmc => Scheme::Dsmc(Dsmc::new(spec.kp_model, spec.dp_model, spec.dsmc)?),
-        Controller::Kcsc => Scheme::Kcsc(Kcsc::new(
-            spec.kp_model,
-            CartesianPidGains::thesis(),
-            &theta0,
-        )?),
-        Controller::Kjsc => Scheme::Kjsc(Kjsc::new(
-            spec.kp_model,
-            JointSpaceGains::thesis(),
-            &theta0,
-        )?),
-    };
+    let scheme = scheme(
+        spec.controller,
+        &spec.kp_model,
+        &spec.dp_model,
+        &spec.dsmc,
+        &theta0,
+    )?;
     Ok(Servo::new(
         kp_servo,
         spec.config,

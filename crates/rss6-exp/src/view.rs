@@ -33,8 +33,9 @@ impl Externals {
 }
 
 /// The joint convention a controller commands in.
+// Built once per run and read every tick: keep the parameters inline rather than boxed.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[allow(clippy::large_enum_variant)] // one per run, never in a hot container
 pub enum Convention {
     /// The drive's (nominal η, Δθ): commands go to the drive unchanged. DSMC (its converter mirrors
     /// the drive's PID) and KCSC (joint increments from J_θ) work here.

@@ -14,7 +14,7 @@ fn twin(seed: u64) -> ModelSim {
     let mut cfg = SimConfig::new(
         KinematicParams::nominal(),
         DynamicParams::nominal(),
-        PidGains::nominal(),
+        PidGains::tuned(),
     );
     cfg.seed = seed;
     ModelSim::new(cfg).unwrap()

@@ -163,7 +163,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "  {:<44} {tn:>11.4e} / {tn95:<11.4e}",
         "Σ_l ‖Φ_I^l‖ at the true parameters"
     );
-    println!("  [thesis: 3.273 → 0.8197; 0.00109929 → 2.94235e-05]");
+    let t = rss6_core::thesis::TABLE_4_3_IMPLICIT;
+    println!(
+        "  [thesis: {} → {}; {} → {}]",
+        t.param_error.0, t.param_error.1, t.residual.0, t.residual.1
+    );
     println!("\nTable 4.4 (RPBA, 66 parameters)                before calibration          after calibration");
     pr(
         "‖S⁻¹(b_R − b_R^n)‖, gauge removed (σ units)",
@@ -185,10 +189,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "  {:<44} {tn:>11.4e} / {tn95:<11.4e}",
         "Σ_l ‖Φ_R^l‖ at the true parameters"
     );
-    println!("  [thesis: 3.1630 → 0.6616; 0.00542206 → 2.38881e-05]");
+    let t = rss6_core::thesis::TABLE_4_4_RPBA;
+    println!(
+        "  [thesis: {:.4} → {}; {} → {}]",
+        t.param_error.0, t.param_error.1, t.residual.0, t.residual.1
+    );
     let (ii, _) = stat(&|r| r.iterations.0 as f64);
     let (ir, _) = stat(&|r| r.iterations.1 as f64);
-    println!("  mean LM iterations: implicit {ii:.1} [thesis 11], RPBA {ir:.1} [thesis 4]");
+    println!(
+        "  mean LM iterations: implicit {ii:.1} [thesis {}], RPBA {ir:.1} [thesis {}]",
+        rss6_core::thesis::TABLE_4_3_IMPLICIT.iterations,
+        rss6_core::thesis::TABLE_4_4_RPBA.iterations
+    );
     println!(
         "  ranks: implicit {:?}, RPBA {:?}",
         rows.iter()
@@ -201,7 +213,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     println!("\nTable 4.5 RMS relative pose errors on 100 random test configurations (mean / p95 over robots)");
     println!("  axis      uncalibrated              implicit                  RPBA                      thesis RPBA  target met (p95)  implicit, ᴼχ_C fixed rough");
-    let thesis = [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5];
+    let thesis = rss6_core::thesis::TABLE_4_5_RPBA;
     let names = [
         "x (mm)", "y (mm)", "z (mm)", "α (rad)", "β (rad)", "γ (rad)",
     ];

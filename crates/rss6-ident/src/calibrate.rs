@@ -64,8 +64,8 @@ pub struct CalibrationOptions {
 
 impl Default for CalibrationOptions {
     fn default() -> Self {
-        let sp = 0.0096e-3;
-        let sa = 0.0261f64.to_radians();
+        let sp = rss6_core::thesis::POSE_POSITION_NOISE;
+        let sa = rss6_core::thesis::POSE_ANGLE_NOISE;
         CalibrationOptions {
             max_iterations: 60,
             cost_tolerance: 1e-12,
@@ -110,7 +110,7 @@ pub struct CalibrationResult {
     pub params: KinematicParams,
     /// The parameters the calibration started from (the nominal model; b is relative to them).
     pub reference: KinematicParams,
-    /// Calibrated error vector b relative to the parameters passed in (DESIGN.md order).
+    /// Calibrated error vector b relative to the parameters passed in (docs/architecture.md order).
     pub errors: [f64; N_KIN_ERRORS],
     /// Calibrated ᴱχ_t (m, rad).
     pub target_in_effector: Vec6,

@@ -36,9 +36,9 @@ impl Default for NoiseModel {
     /// Table 4.1 at 500 Hz / 29 Hz.
     fn default() -> Self {
         NoiseModel {
-            kappa: 0.2233,
-            position: 0.0096e-3,
-            angle: 0.0261f64.to_radians(),
+            kappa: rss6_core::thesis::KAPPA_NOISE_BITS,
+            position: rss6_core::thesis::POSE_POSITION_NOISE,
+            angle: rss6_core::thesis::POSE_ANGLE_NOISE,
             kappa_rate: 500.0,
             camera_rate: 29.0,
         }

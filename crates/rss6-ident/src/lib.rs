@@ -9,7 +9,7 @@
 //! Symbols follow the thesis: ᴼχ_C is the sensor (camera) pose in the base frame ("sensor_in_base"),
 //! ᴱχ_t the target (reflector) frame in the end-effector frame ("target_in_effector"), ᶜχ_t the
 //! measured target pose in the sensor frame, κ potentiometer readings (bits), b the 60 kinematic error
-//! parameters in DESIGN.md order. Units are SI (m, rad). See `docs/calibration.md`.
+//! parameters in docs/architecture.md order. Units are SI (m, rad). See `docs/calibration.md`.
 #![forbid(unsafe_code)]
 #![allow(non_snake_case)]
 

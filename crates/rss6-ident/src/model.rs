@@ -29,15 +29,15 @@ use rss6_core::{
 pub const N_GAUGE: usize = 10;
 
 /// Table 4.2 standard deviations: positions and lengths (m).
-pub const SIGMA_LENGTH: f64 = 1e-3;
+pub const SIGMA_LENGTH: f64 = rss6_core::thesis::SIGMA_LENGTH;
 /// Table 4.2: potentiometer gain η (rad/bit).
-pub const SIGMA_ETA: f64 = 5e-5;
+pub const SIGMA_ETA: f64 = rss6_core::thesis::SIGMA_ETA;
 /// Table 4.2: potentiometer offset Δθ (rad).
-pub const SIGMA_DTHETA: f64 = 0.05;
+pub const SIGMA_DTHETA: f64 = rss6_core::thesis::SIGMA_DTHETA;
 /// Table 4.2: external pose positions (m).
-pub const SIGMA_EXT_POSITION: f64 = 0.5e-3;
+pub const SIGMA_EXT_POSITION: f64 = rss6_core::thesis::SIGMA_EXT_POSITION;
 /// Table 4.2: external pose angles (rad).
-pub const SIGMA_EXT_ANGLE: f64 = 0.017;
+pub const SIGMA_EXT_ANGLE: f64 = rss6_core::thesis::SIGMA_EXT_ANGLE;
 
 /// Layout of the parameter vector for one method.
 #[derive(Debug, Clone, Copy)]

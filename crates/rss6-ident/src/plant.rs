@@ -52,7 +52,7 @@ pub fn random_plant(
     let mut cfg = SimConfig::new(
         drawn.kp,
         rss6_core::DynamicParams::nominal(),
-        rss6_ctrl::PidGains::nominal(),
+        rss6_ctrl::PidGains::tuned(),
     );
     cfg.nominal = *nominal;
     cfg.seed = seed;

@@ -1,5 +1,6 @@
-//! Calibration bindings (rss6-ident, thesis ch. 4): configuration selection, stroke, data collection on
-//! a simulated robot, RPBA, implicit calibration, relative pose errors and the §4.4.3 study.
+//! Calibration bindings (rss6-ident, thesis ch. 4): configuration selection, stroke, the data type of
+//! a collection (collected in `dwell.rs`), RPBA, implicit calibration, relative pose errors and the
+//! §4.4.3 study.
 
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -7,13 +8,12 @@ use pyo3::types::{PyDict, PyList};
 use rss6_core::{KinematicParams, Vec6};
 use rss6_ident::{
     CalibrationData, CalibrationOptions, CalibrationResult, ConfigurationData, IdentError, Method,
-    SelectionOptions, Stepped, SteppedRobot, StudyOptions, TrueRobot,
+    SelectionOptions, StudyOptions, TrueRobot,
 };
 
 use crate::convert::{array, out1, out6, out_rows, out_rows6, rows6, vec6};
 use crate::errors::{core, invalid, make, shape, Attr};
 use crate::params::PyKinematicParams;
-use crate::plant::{with_robot, SimRobot};
 
 /// Maps an [`IdentError`] onto its exception class.
 pub(crate) fn ident_err(e: IdentError) -> PyErr {
@@ -63,15 +63,6 @@ fn method(name: &str) -> PyResult<Method> {
     }
 }
 
-/// Calls a Python progress callback `cb(done, total)` from Rust (re-attaching to the interpreter).
-fn call_progress(cb: &Option<Py<PyAny>>, done: usize, total: usize) {
-    if let Some(cb) = cb {
-        Python::attach(|py| {
-            let _ = cb.call1(py, (done, total));
-        });
-    }
-}
-
 /// Means over one dwell per configuration (configuration 0 = the initial configuration).
 #[pyclass(name = "CalibrationData", module = "rss6._rss6")]
 #[derive(Debug, Clone)]
@@ -82,13 +73,17 @@ pub(crate) struct PyCalibrationData {
 #[pymethods]
 impl PyCalibrationData {
     /// Data from arrays: kappa (m, 6) mean readings (bits), sensor_pose (m, 6) mean ᶜχ_t (a NaN row
-    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional).
+    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional; NaN if
+    /// absent), and the sample counts per row kappa_samples, camera_frames (m,) (optional; default
+    /// 1, and 1 or 0 frames by the NaN rows).
     #[staticmethod]
-    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None))]
+    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None, *, kappa_samples=None, camera_frames=None))]
     fn from_arrays(
         kappa: &Bound<'_, PyAny>,
         sensor_pose: &Bound<'_, PyAny>,
         theta_cmd: Option<&Bound<'_, PyAny>>,
+        kappa_samples: Option<Vec<u32>>,
+        camera_frames: Option<Vec<u32>>,
     ) -> PyResult<Self> {
         let kappa = rows6(kappa, "kappa")?;
         let (dims, data) = array(sensor_pose, "sensor_pose")?;
@@ -105,11 +100,20 @@ impl PyCalibrationData {
         if theta.len() != kappa.len() {
             return Err(shape("theta_cmd must have as many rows as kappa"));
         }
+        for (name, c) in [
+            ("kappa_samples", &kappa_samples),
+            ("camera_frames", &camera_frames),
+        ] {
+            if c.as_ref().is_some_and(|c| c.len() != kappa.len()) {
+                return Err(shape(format!("{name} must have as many entries as kappa")));
+            }
+        }
         let configurations = kappa
             .iter()
             .zip(data.chunks_exact(6))
             .zip(theta.iter())
-            .map(|((k, s), th)| ConfigurationData {
+            .enumerate()
+            .map(|(i, ((k, s), th))| ConfigurationData {
                 theta_cmd: (*th).into(),
                 kappa: (*k).into(),
                 sensor_pose: if s.iter().any(|x| x.is_nan()) {
@@ -119,8 +123,10 @@ impl PyCalibrationData {
                     p.copy_from_slice(s);
                     Some(p)
                 },
-                kappa_samples: 1,
-                camera_frames: u32::from(!s.iter().any(|x| x.is_nan())),
+                kappa_samples: kappa_samples.as_ref().map_or(1, |c| c[i]),
+                camera_frames: camera_frames
+                    .as_ref()
+                    .map_or(u32::from(!s.iter().any(|x| x.is_nan())), |c| c[i]),
             })
             .collect();
         Ok(PyCalibrationData {
@@ -324,62 +330,6 @@ pub(crate) fn select_configurations<'py>(
         .detach(move || rss6_ident::select_configurations_with(&k, m, seed, &opts))
         .map_err(ident_err)?;
     Ok(out_rows6(py, &rep.thetas))
-}
-
-/// A [`SimRobot`] seen by rss6-ident.
-struct Stepper<'a>(&'a mut dyn SimRobot);
-
-impl SteppedRobot for Stepper<'_> {
-    fn dt(&self) -> f64 {
-        self.0.dt()
-    }
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> rss6_ident::Result<()> {
-        self.0.step(theta_cmd).map_err(IdentError::Source)
-    }
-    fn camera(&mut self) -> Option<Vec6> {
-        self.0.camera()
-    }
-    fn potentiometers(&mut self) -> Vec6 {
-        self.0.potentiometers()
-    }
-}
-
-/// Visits every configuration of `thetas` (m, 6) on `plant` (rss6.Plant or rss6.ModelSim), waits,
-/// and averages κ and ᶜχ_t over `dwell` s. The plant should be at rest at thetas[0]'s command (e.g.
-/// just reset). `progress(done, total)` is called after each configuration. Releases the GIL.
-#[pyfunction]
-#[pyo3(signature = (plant, thetas, dwell=2.0, *, move_time=1.0, settle_time=0.5, progress=None))]
-pub(crate) fn collect(
-    py: Python<'_>,
-    plant: &Bound<'_, PyAny>,
-    thetas: &Bound<'_, PyAny>,
-    dwell: f64,
-    move_time: f64,
-    settle_time: f64,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<PyCalibrationData> {
-    let thetas = rows6(thetas, "thetas")?;
-    if thetas.is_empty() {
-        return Err(invalid("thetas must contain at least one configuration"));
-    }
-    if !(move_time.is_finite() && move_time > 0.0 && settle_time.is_finite() && settle_time >= 0.0)
-    {
-        return Err(invalid("move_time must be > 0 and settle_time >= 0"));
-    }
-    let data = with_robot(plant, |robot| {
-        // The robot is at rest at its current readings: start the first move from there.
-        let start = KinematicParams::nominal().theta_from_reading(&robot.potentiometers());
-        py.detach(|| {
-            let mut src = Stepped::new(Stepper(robot), start);
-            src.move_time = move_time;
-            src.settle_time = settle_time;
-            rss6_ident::collect_with_progress(&mut src, &thetas, dwell, &mut |d, t| {
-                call_progress(&progress, d, t)
-            })
-        })
-    })?
-    .map_err(ident_err)?;
-    Ok(PyCalibrationData { inner: data })
 }
 
 fn options(

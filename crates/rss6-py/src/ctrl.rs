@@ -304,7 +304,7 @@ impl PyKalmanFilter {
         nominal_dt: f64,
         steady_state: bool,
     ) -> PyResult<Self> {
-        let d = KalmanConfig::thesis();
+        let d = KalmanConfig::tuned();
         let cfg = KalmanConfig {
             r: opt6(r, "r", d.r)?,
             q_jerk: opt6(q_jerk, "q_jerk", d.q_jerk)?,
@@ -490,7 +490,7 @@ controller_methods!(PyKjsc, "Clears the integral and the fault.", {
         ki: Option<f64>,
         kd: Option<f64>,
     ) -> PyResult<Self> {
-        let d = JointSpaceGains::thesis();
+        let d = JointSpaceGains::from_visual_pid();
         let g = JointSpaceGains {
             kp: kp.unwrap_or(d.kp),
             ki: ki.unwrap_or(d.ki),

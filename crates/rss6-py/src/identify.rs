@@ -22,14 +22,20 @@ fn coefficients(obj: &Bound<'_, PyAny>) -> PyResult<[Vec<f64>; 6]> {
 }
 
 fn excitation(f0: f64, coeffs: &Bound<'_, PyAny>) -> PyResult<Excitation> {
-    Excitation::from_coefficients(f0, coefficients(coeffs)?)
-        .map_err(|e| invalid(e.to_string()))
+    Excitation::from_coefficients(f0, coefficients(coeffs)?).map_err(|e| invalid(e.to_string()))
 }
 
 fn out_coefficients<'py>(py: Python<'py>, e: &Excitation) -> Bound<'py, PyArray2<f64>> {
     let rows: Vec<Vec<f64>> = e.coefficients().to_vec();
     PyArray2::from_vec2(py, &rows).unwrap_or_else(|_| PyArray2::zeros(py, [6, 0], false))
 }
+
+/// (χ, χ̇, χ̈) as three (6,) arrays.
+type Sample<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
 
 /// (χ, χ̇, χ̈) (each (6,)) of the Fourier trajectory (eq. 5.11) with fundamental `f0` (Hz) and
 /// `coefficients` (6, 2n + 1) = per axis [s¹, c¹, …, sⁿ, cⁿ, χ0] at time `t` (s).
@@ -39,11 +45,7 @@ pub(crate) fn excitation_at<'py>(
     f0: f64,
     coefficients: &Bound<'py, PyAny>,
     t: f64,
-) -> PyResult<(
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-)> {
+) -> PyResult<Sample<'py>> {
     let r = excitation(f0, coefficients)?.at(t);
     Ok((
         out6(py, &r.pose),
@@ -109,7 +111,9 @@ impl PyExcitationProblem {
                 })
                 .collect();
             let e = Excitation::at_rest(harmonics, f0, &start, &free).map_err(|e| e.to_string())?;
-            let h = e.stacked_regressor(&kp, samples).map_err(|e| e.to_string())?;
+            let h = e
+                .stacked_regressor(&kp, samples)
+                .map_err(|e| e.to_string())?;
             Ok(base_columns(&h, rank_threshold))
         });
         let columns = columns.map_err(invalid)?;
@@ -189,7 +193,11 @@ impl PyExcitationProblem {
     }
 
     /// (O_in, cond) of the trajectory's stacked regressor restricted to the identifiable columns.
-    fn observability(&self, py: Python<'_>, coefficients: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    fn observability(
+        &self,
+        py: Python<'_>,
+        coefficients: &Bound<'_, PyAny>,
+    ) -> PyResult<(f64, f64)> {
         let e = excitation(self.inner.f0, coefficients)?;
         let p = &self.inner;
         py.detach(|| e.observability(&p.kp, &p.columns, p.samples))

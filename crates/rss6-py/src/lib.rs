@@ -10,13 +10,18 @@ mod macros;
 mod calib;
 mod convert;
 mod ctrl;
+mod dwell;
 mod dynamics;
 mod errors;
+mod exp;
 mod identify;
 mod kinematics;
+mod log;
 mod params;
 mod plant;
+mod pyrobot;
 mod servo;
+mod thesis;
 
 /// The compiled part of the `rss6` package.
 #[pymodule]
@@ -47,20 +52,23 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ctrl::PyTorqueToPosition>()?;
     m.add_class::<plant::PyModelSim>()?;
     m.add_class::<plant::PyPlant>()?;
-    m.add_function(wrap_pyfunction!(plant::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(servo::run_servo, m)?)?;
     m.add_function(wrap_pyfunction!(servo::compose_poses, m)?)?;
     m.add_function(wrap_pyfunction!(servo::invert_pose, m)?)?;
+    m.add_class::<log::PyLogWriter>()?;
+    m.add_function(wrap_pyfunction!(log::read_log, m)?)?;
+    m.add_function(wrap_pyfunction!(log::mean_pose, m)?)?;
     m.add_class::<calib::PyCalibrationData>()?;
     m.add_class::<calib::PyCalibrationResult>()?;
     m.add_function(wrap_pyfunction!(calib::stroke, m)?)?;
     m.add_function(wrap_pyfunction!(calib::select_configurations, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::collect, m)?)?;
+    m.add_function(wrap_pyfunction!(dwell::collect, m)?)?;
     m.add_function(wrap_pyfunction!(calib::rpba, m)?)?;
     m.add_function(wrap_pyfunction!(calib::implicit, m)?)?;
     m.add_function(wrap_pyfunction!(calib::relative_pose_errors_raw, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
     m.add_class::<identify::PyExcitationProblem>()?;
     m.add_function(wrap_pyfunction!(identify::excitation_at, m)?)?;
+    m.add_function(wrap_pyfunction!(thesis::thesis_tables, m)?)?;
     Ok(())
 }

@@ -1,4 +1,4 @@
-//! `rss6.KinematicParams` and `rss6.DynamicParams`: dict and TOML round trips with the keys of DESIGN.md.
+//! `rss6.KinematicParams` and `rss6.DynamicParams`: dict and TOML round trips with the keys of docs/architecture.md.
 
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -102,7 +102,7 @@ impl PyKinematicParams {
         Ok(Self::wrap(kp))
     }
 
-    /// The nominal robot (DESIGN.md geometry; home χ = [0, 0, 0.115, 0, 0, 0] ↔ θ = 0).
+    /// The nominal robot (geometry of docs/kinematics.md, "The nominal geometry"; home χ = [0, 0, 0.115, 0, 0, 0] ↔ θ = 0).
     #[staticmethod]
     fn nominal() -> Self {
         Self::wrap(KinematicParams::nominal())

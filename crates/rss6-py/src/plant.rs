@@ -1,6 +1,6 @@
 //! Simulated robots as Python classes: `rss6.Plant` (rss6-sim's rapier plant, the "real robot") and
 //! `rss6.ModelSim` (its analytic-model twin: rss6-core forward dynamics + the drive's joint PID + the
-//! same sensors). Both implement [`SimRobot`], which is what the servo and calibration runners drive.
+//! same sensors). The runners of rss6-exp drive them as [`rss6_exp::Robot`]s ([`with_robot`]).
 
 use std::collections::BTreeMap;
 use std::sync::Mutex;
@@ -8,102 +8,13 @@ use std::sync::Mutex;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rss6_core::{DynamicParams, KinematicParams, Vec6};
+use rss6_core::Vec6;
 use rss6_ctrl::PidGains;
-use rss6_sim::{EffectSpec, RobotSim, SimConfig, SimError};
+use rss6_sim::{EffectSpec, RobotSim, SimConfig, SimError, Truth};
 
-use crate::convert::{out6, vec6};
+use crate::convert::{out1, out6, out_rows6, rows6, vec6};
 use crate::errors::{core, invalid, make};
 use crate::params::{PyDynamicParams, PyKinematicParams};
-
-/// The plant's hidden truth.
-#[derive(Debug, Clone)]
-pub(crate) struct Truth {
-    pub(crate) kp: KinematicParams,
-    pub(crate) dp: DynamicParams,
-    pub(crate) pid: PidGains,
-    pub(crate) sensor_in_base: Vec6,
-    pub(crate) target_in_effector: Vec6,
-    pub(crate) effects: Vec<EffectSpec>,
-}
-
-/// A robot driven tick by tick (joint commands in the nominal joint convention).
-pub(crate) trait SimRobot: Send {
-    /// Tick length (s).
-    fn dt(&self) -> f64;
-    /// Plant time (s).
-    fn time(&self) -> f64;
-    /// Places the robot at rest at `pose` (physical IK of the truth), drive PID at rest.
-    fn reset(&mut self, pose: &Vec6) -> Result<(), String>;
-    /// One tick with the joint command θ_cmd (rad, nominal convention).
-    fn step(&mut self, theta_cmd: &Vec6) -> Result<(), String>;
-    /// ᶜχ_t if a frame became available on the last tick.
-    fn camera(&mut self) -> Option<Vec6>;
-    /// Latest potentiometer readings κ (bits).
-    fn potentiometers(&self) -> Vec6;
-    /// True end-effector pose χ_E (m, rad).
-    fn true_pose(&self) -> Vec6;
-    /// True physical joint angles (rad).
-    fn true_theta(&self) -> Vec6;
-    /// Last drive torques (N·m).
-    fn torque(&self) -> Vec6;
-    /// The hidden truth.
-    fn truth(&self) -> Truth;
-    /// (loop-closure gap after the last tick, solver gap before the projection) (m).
-    fn gaps(&self) -> (f64, f64);
-}
-
-/// Any rss6-sim robot (rapier plant or model twin) as a [`SimRobot`].
-struct SimWrap<R> {
-    robot: R,
-    dt: f64,
-}
-
-impl<R: RobotSim + Send> SimRobot for SimWrap<R> {
-    fn dt(&self) -> f64 {
-        self.dt
-    }
-    fn time(&self) -> f64 {
-        self.robot.time()
-    }
-    fn reset(&mut self, pose: &Vec6) -> Result<(), String> {
-        self.robot.reset(pose).map_err(|e| e.to_string())
-    }
-    fn step(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
-        self.robot
-            .step_joint_command(theta_cmd)
-            .map_err(|e| e.to_string())
-    }
-    fn camera(&mut self) -> Option<Vec6> {
-        self.robot.camera()
-    }
-    fn potentiometers(&self) -> Vec6 {
-        self.robot.potentiometers()
-    }
-    fn true_pose(&self) -> Vec6 {
-        self.robot.true_pose()
-    }
-    fn true_theta(&self) -> Vec6 {
-        self.robot.true_theta()
-    }
-    fn torque(&self) -> Vec6 {
-        self.robot.torques()
-    }
-    fn gaps(&self) -> (f64, f64) {
-        (self.robot.loop_closure_error(), self.robot.solver_gap())
-    }
-    fn truth(&self) -> Truth {
-        let t = self.robot.truth();
-        Truth {
-            kp: t.kinematics,
-            dp: t.dynamics,
-            pid: t.pid,
-            sensor_in_base: t.sensor_in_base,
-            target_in_effector: t.target_in_effector,
-            effects: t.effects,
-        }
-    }
-}
 
 /// Maps a [`SimError`] onto its exception class.
 pub(crate) fn sim_error(e: SimError) -> PyErr {
@@ -151,8 +62,8 @@ pub(crate) fn truth_dict<'py>(py: Python<'py>, t: &Truth) -> PyResult<Bound<'py,
         effects.set_item(&e.name, p)?;
     }
     let d = PyDict::new(py);
-    d.set_item("kinematics", PyKinematicParams::wrap(t.kp))?;
-    d.set_item("dynamics", PyDynamicParams { inner: t.dp })?;
+    d.set_item("kinematics", PyKinematicParams::wrap(t.kinematics))?;
+    d.set_item("dynamics", PyDynamicParams { inner: t.dynamics })?;
     d.set_item("pid", (t.pid.lp, t.pid.li, t.pid.ld))?;
     d.set_item("sensor_in_base", out6(py, &t.sensor_in_base))?;
     d.set_item("target_in_effector", out6(py, &t.target_in_effector))?;
@@ -236,17 +147,86 @@ fn sim_config(
     Ok(cfg)
 }
 
+/// What `step_joint_commands` records: per tick, the state after it; camera frames as they arrive.
+#[derive(Default)]
+struct Ticks {
+    time: Vec<f64>,
+    pose: Vec<Vec6>,
+    theta: Vec<Vec6>,
+    kappa: Vec<Vec6>,
+    torque: Vec<Vec6>,
+    camera_time: Vec<f64>,
+    camera: Vec<Vec6>,
+}
+
+/// Ticks between two checks for Ctrl-C in `step_joint_commands`.
+const SIGNAL_CHECK_TICKS: usize = 1000;
+
+/// Runs one tick per command on `robot`, recording what a caller stepping tick by tick would read.
+/// Called with the GIL released; checks for Ctrl-C every [`SIGNAL_CHECK_TICKS`] ticks.
+fn run_ticks<R: RobotSim>(robot: &mut R, commands: &[Vec6]) -> PyResult<Ticks> {
+    let n = commands.len();
+    let mut r = Ticks {
+        time: Vec::with_capacity(n),
+        pose: Vec::with_capacity(n),
+        theta: Vec::with_capacity(n),
+        kappa: Vec::with_capacity(n),
+        torque: Vec::with_capacity(n),
+        ..Ticks::default()
+    };
+    for (k, c) in commands.iter().enumerate() {
+        if k % SIGNAL_CHECK_TICKS == SIGNAL_CHECK_TICKS - 1 {
+            Python::attach(|py| py.check_signals())?;
+        }
+        robot
+            .step_joint_command(c)
+            .map_err(|e| sim_err(format!("tick {k}: {e}")))?;
+        let t = robot.time();
+        r.time.push(t);
+        r.pose.push(robot.true_pose());
+        r.theta.push(robot.true_theta());
+        r.kappa.push(robot.potentiometers());
+        r.torque.push(robot.torques());
+        if let Some(z) = robot.camera() {
+            r.camera_time.push(t);
+            r.camera.push(z);
+        }
+    }
+    Ok(r)
+}
+
+fn ticks_dict<'py>(py: Python<'py>, r: &Ticks) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("time", out1(py, &r.time))?;
+    d.set_item("true_pose", out_rows6(py, &r.pose))?;
+    d.set_item("true_theta", out_rows6(py, &r.theta))?;
+    d.set_item("kappa", out_rows6(py, &r.kappa))?;
+    d.set_item("torque", out_rows6(py, &r.torque))?;
+    d.set_item("camera_time", out1(py, &r.camera_time))?;
+    d.set_item("camera", out_rows6(py, &r.camera))?;
+    Ok(d)
+}
+
 macro_rules! sim_class {
-    ($name:ident, $pyname:literal, $doc:literal, $ctor:expr) => {
+    ($name:ident, $pyname:literal, $doc:literal, $ty:ty) => {
         #[doc = $doc]
         #[pyclass(name = $pyname, module = "rss6._rss6")]
         pub(crate) struct $name {
-            pub(crate) robot: Mutex<Box<dyn SimRobot>>,
+            pub(crate) robot: Mutex<$ty>,
         }
 
         impl $name {
-            fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Box<dyn SimRobot>>> {
-                self.robot.lock().map_err(|_| sim_err("the simulation panicked earlier and is unusable"))
+            /// The robot. Never waits: a thread that waited here holding the GIL would deadlock a run
+            /// on another thread that needs the GIL for its callbacks.
+            pub(crate) fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, $ty>> {
+                self.robot.try_lock().map_err(|e| match e {
+                    std::sync::TryLockError::WouldBlock => sim_err(
+                        "the plant is busy: another thread is running an experiment on it",
+                    ),
+                    std::sync::TryLockError::Poisoned(_) => {
+                        sim_err("the simulation panicked earlier and is unusable")
+                    }
+                })
             }
         }
 
@@ -278,21 +258,36 @@ macro_rules! sim_class {
                 pixel_noise: Option<f64>,
             ) -> PyResult<Self> {
                 let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise)?;
-                let dt = cfg.dt;
-                let robot = py.detach(move || $ctor(cfg)).map_err(sim_error)?;
-                Ok($name { robot: Mutex::new(Box::new(SimWrap { robot, dt })) })
+                let robot = py.detach(move || <$ty>::new(cfg)).map_err(sim_error)?;
+                Ok($name { robot: Mutex::new(robot) })
             }
 
             /// Places the true robot at rest at `pose` (6,), drive PID at rest, time 0.
             fn reset(&self, pose: &Bound<'_, PyAny>) -> PyResult<()> {
                 let p = vec6(pose, "pose")?;
-                self.lock()?.reset(&p).map_err(sim_err)
+                self.lock()?.reset(&p).map_err(sim_error)
             }
 
-            /// One joint-loop tick with θ_cmd (6,) rad in the nominal joint convention.
+            /// One joint-loop tick with θ_cmd (6,) rad in the drive's (nominal) joint convention.
             fn step_joint_command(&self, theta_cmd: &Bound<'_, PyAny>) -> PyResult<()> {
                 let c = vec6(theta_cmd, "theta_cmd")?;
-                self.lock()?.step(&c).map_err(sim_err)
+                self.lock()?.step_joint_command(&c).map_err(sim_error)
+            }
+
+            /// N joint-loop ticks in one call, one per row of `commands` (N, 6) rad (drive convention),
+            /// with the GIL released (Ctrl-C is checked every 1000 ticks). Returns what a caller would
+            /// collect tick by tick after each step: time (N,) s, true_pose (N, 6), true_theta (N, 6),
+            /// kappa (N, 6) bit, torque (N, 6) N·m, camera_time (M,) s and camera (M, 6) ᶜχ_t frames.
+            fn step_joint_commands<'py>(
+                &self,
+                py: Python<'py>,
+                commands: &Bound<'py, PyAny>,
+            ) -> PyResult<Bound<'py, PyDict>> {
+                let cmds = rows6(commands, "commands")?;
+                let mut robot = self.lock()?;
+                let robot: &mut $ty = &mut robot;
+                let r = py.detach(|| run_ticks(robot, &cmds))?;
+                ticks_dict(py, &r)
             }
 
             /// True pose χ_E (6,).
@@ -308,51 +303,51 @@ macro_rules! sim_class {
             /// Largest distance between joint anchors that should coincide, after the last tick (m);
             /// 0 for the model twin.
             fn loop_closure_error(&self) -> PyResult<f64> {
-                Ok(self.lock()?.gaps().0)
+                Ok(RobotSim::loop_closure_error(&*self.lock()?))
             }
 
             /// Largest loop gap rapier's solver left in the last tick before the post-step
             /// projection (m); 0 for the model twin.
             fn solver_gap(&self) -> PyResult<f64> {
-                Ok(self.lock()?.gaps().1)
+                Ok(RobotSim::solver_gap(&*self.lock()?))
             }
 
             /// Plant time (s).
             #[getter]
             fn time(&self) -> PyResult<f64> {
-                Ok(self.lock()?.time())
+                Ok(RobotSim::time(&*self.lock()?))
             }
 
             /// Joint-loop tick length (s).
             #[getter]
             fn dt(&self) -> PyResult<f64> {
-                Ok(self.lock()?.dt())
+                Ok(self.lock()?.config().dt)
             }
 
             /// ᶜχ_t (6,) if a camera frame became available on the last tick, else None.
             fn camera<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray1<f64>>>> {
-                Ok(self.lock()?.camera().map(|z| out6(py, &z)))
+                Ok(RobotSim::camera(&*self.lock()?).map(|z| out6(py, &z)))
             }
 
             /// Latest potentiometer readings κ (6,) bits.
             fn potentiometers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-                Ok(out6(py, &self.lock()?.potentiometers()))
+                Ok(out6(py, &RobotSim::potentiometers(&*self.lock()?)))
             }
 
             /// Drive torques of the last tick (6,) N·m.
             fn torque<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-                Ok(out6(py, &self.lock()?.torque()))
+                Ok(out6(py, &self.lock()?.torques()))
             }
 
             /// The hidden truth: kinematics, dynamics, pid, sensor_in_base (ᴼχ_C), target_in_effector
             /// (ᴱχ_t), effects.
             fn truth<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-                let t = self.lock()?.truth();
+                let t = RobotSim::truth(&*self.lock()?);
                 truth_dict(py, &t)
             }
 
             fn __repr__(&self) -> PyResult<String> {
-                Ok(format!("{}(t = {:.3} s)", $pyname, self.lock()?.time()))
+                Ok(format!("{}(t = {:.3} s)", $pyname, RobotSim::time(&*self.lock()?)))
             }
         }
     };
@@ -362,84 +357,44 @@ sim_class!(
     PyPlant,
     "Plant",
     "The rapier plant (rss6-sim): the simulated \"real robot\" with its drive PID, potentiometers and optical CMM.",
-    rss6_sim::Plant::new
+    rss6_sim::Plant
 );
 sim_class!(
     PyModelSim,
     "ModelSim",
     "The analytic-model twin of the plant (thesis Fig. 5.1's simulated model): same call shape, rss6-core dynamics.",
-    rss6_sim::ModelSim::new
+    rss6_sim::ModelSim
 );
 
-/// Runs `f` on the robot behind a `rss6.Plant` or `rss6.ModelSim` object.
+/// A robot the experiment layer can drive from a thread without the GIL.
+pub(crate) type SendRobot = dyn rss6_exp::Robot + Send;
+
+/// Runs `f` on the robot behind a `rss6.Plant` or `rss6.ModelSim` object (locked for the call), or on
+/// any Python object implementing `rss6.types.Robot`.
 pub(crate) fn with_robot<R>(
     obj: &Bound<'_, PyAny>,
-    f: impl FnOnce(&mut dyn SimRobot) -> R,
+    f: impl FnOnce(&mut SendRobot) -> R,
 ) -> PyResult<R> {
     if let Ok(m) = obj.cast::<PyModelSim>() {
         let m = m.borrow();
         let mut g = m.lock()?;
-        return Ok(f(g.as_mut()));
+        return Ok(f(&mut *g));
     }
     if let Ok(m) = obj.cast::<PyPlant>() {
         let m = m.borrow();
         let mut g = m.lock()?;
-        return Ok(f(g.as_mut()));
+        return Ok(f(&mut *g));
     }
-    Err(invalid(format!(
-        "plant must be an rss6.Plant or rss6.ModelSim, got {}",
-        obj.get_type().name()?
-    )))
-}
-
-/// Drives `plant` (rss6.Plant or rss6.ModelSim) with one joint command per tick, `commands` (N, 6)
-/// rad in the nominal joint convention, from its current state; releases the GIL. Returns a dict:
-/// time (N,) s after each tick, true_pose (N, 6), true_theta (N, 6), kappa (N, 6) bits, torque (N, 6)
-/// N·m, camera_time (M,), camera (M, 6) ᶜχ_t frames.
-#[pyfunction]
-pub(crate) fn simulate<'py>(
-    py: Python<'py>,
-    plant: &Bound<'py, PyAny>,
-    commands: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let cmds = crate::convert::rows6(commands, "commands")?;
-    #[derive(Default)]
-    struct Rec {
-        t: Vec<f64>,
-        pose: Vec<Vec6>,
-        theta: Vec<Vec6>,
-        kappa: Vec<Vec6>,
-        tau: Vec<Vec6>,
-        cam_t: Vec<f64>,
-        cam: Vec<Vec6>,
+    // Any other object implementing the rss6.types.Robot protocol (e.g. rss6.can's robot): driven
+    // tick by tick through Python; an exception it raised stops the run and is raised here.
+    let mut r = crate::pyrobot::PyRobot::new(obj).map_err(|e| {
+        invalid(format!(
+            "plant must be an rss6.Plant, rss6.ModelSim or implement rss6.types.Robot ({e})"
+        ))
+    })?;
+    let out = f(&mut r);
+    match r.take_error() {
+        Some(e) => Err(e),
+        None => Ok(out),
     }
-    let rec = with_robot(plant, |robot| {
-        py.detach(|| {
-            let mut r = Rec::default();
-            for c in &cmds {
-                robot.step(c)?;
-                let t = robot.time();
-                r.t.push(t);
-                r.pose.push(robot.true_pose());
-                r.theta.push(robot.true_theta());
-                r.kappa.push(robot.potentiometers());
-                r.tau.push(robot.torque());
-                if let Some(z) = robot.camera() {
-                    r.cam_t.push(t);
-                    r.cam.push(z);
-                }
-            }
-            Ok::<_, String>(r)
-        })
-    })?
-    .map_err(sim_err)?;
-    let d = PyDict::new(py);
-    d.set_item("time", crate::convert::out1(py, &rec.t))?;
-    d.set_item("true_pose", crate::convert::out_rows6(py, &rec.pose))?;
-    d.set_item("true_theta", crate::convert::out_rows6(py, &rec.theta))?;
-    d.set_item("kappa", crate::convert::out_rows6(py, &rec.kappa))?;
-    d.set_item("torque", crate::convert::out_rows6(py, &rec.tau))?;
-    d.set_item("camera_time", crate::convert::out1(py, &rec.cam_t))?;
-    d.set_item("camera", crate::convert::out_rows6(py, &rec.cam))?;
-    Ok(d)
 }

@@ -1,88 +1,27 @@
-//! The whole visual-servo loop of Fig. 6.2 run in Rust (`rss6._rss6.run_servo`): rss6-ctrl's `Servo`
-//! (Kalman filter + DSMC/KCSC/KJSC + converter + command guard) driving a simulated robot at 1 kHz,
-//! recording every tick. `rss6.servo.track` wraps it.
+//! `rss6._rss6.run_servo`: a thin binding over rss6-exp's servo runner ([`rss6_exp::servo::track`]).
+//! The arguments become a [`ServoSpec`]; an observer collects the arrays `rss6.servo.track` needs,
+//! hands the rows of each segment to `on_segment`, stops the run when a callback raised or Ctrl-C was
+//! pressed, and (with `mcap`) a [`LogObserver`] logs the run as it goes.
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rss6_core::{compose, pose_inverse, KinematicParams, Vec6};
-use rss6_ctrl::servo::{run, TickRecord};
-use rss6_ctrl::{
-    CartesianPidGains, Dsmc, DsmcGains, JointSpaceGains, Kcsc, Kjsc, PidGains, Plant, Reference,
-    Scheme, Servo, ServoConfig, Trajectory,
-};
+use rss6_core::{compose, pose_inverse, Vec6};
+use rss6_ctrl::{PidGains, Reference, Trajectory};
+use rss6_exp::servo::{track, Controller, ServoSpec, Tuning};
+use rss6_exp::{Externals, Flow, Observer, Progress, Record, Tabulated};
 
 use crate::convert::{out1, out_rows6, rows6, vec6};
-use crate::ctrl::{ctrl_err, PyTrajectory, Traj};
-use crate::errors::{core, invalid, shape};
+use crate::ctrl::{PyTrajectory, Traj};
+use crate::errors::{invalid, make, shape};
+use crate::exp::{create_log, exp_err, finish_log, Interrupt};
 use crate::params::{PyDynamicParams, PyKinematicParams};
-use crate::plant::{sim_err, with_robot, SimRobot};
+use crate::plant::with_robot;
 
-/// The servo's view of a simulated robot: camera frames converted to χ_E in the base frame with the
-/// (estimated) external parameters, joint commands converted from the model's joint convention to the
-/// drive's nominal one.
-struct Adapter<'a> {
-    robot: &'a mut dyn SimRobot,
-    /// Set by the observer when an `on_segment` callback raised: the next step stops the run.
-    stop: std::cell::Cell<bool>,
-    sensor_in_base: Vec6,
-    target_inv: Vec6,
-    kp_model: KinematicParams,
-    kp_nominal: KinematicParams,
-    convert: bool,
-}
-
-impl Plant for Adapter<'_> {
-    type Error = String;
-
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> Result<(), String> {
-        if self.stop.get() {
-            return Err("run stopped: the on_segment callback raised".to_string());
-        }
-        if self.convert {
-            let kappa = self.kp_model.reading_from_theta(theta_cmd);
-            self.robot.step(&self.kp_nominal.theta_from_reading(&kappa))
-        } else {
-            self.robot.step(theta_cmd)
-        }
-    }
-
-    fn camera(&mut self) -> Option<Vec6> {
-        self.robot
-            .camera()
-            .map(|z| compose(&compose(&self.sensor_in_base, &z), &self.target_inv))
-    }
-
-    fn potentiometers(&self) -> Vec6 {
-        self.robot.potentiometers()
-    }
-
-    fn time(&self) -> f64 {
-        self.robot.time()
-    }
-}
-
-/// A trajectory tabulated on the tick grid (for Python callables).
-#[derive(Debug, Clone)]
-struct Table {
-    dt: f64,
-    rows: Vec<Reference>,
-}
-
-impl Trajectory for Table {
-    fn sample(&self, t: f64) -> Reference {
-        let k = (t / self.dt).round().max(0.0) as usize;
-        let k = k.min(self.rows.len().saturating_sub(1));
-        self.rows
-            .get(k)
-            .copied()
-            .unwrap_or(Reference::hold(&Vec6::repeat(f64::NAN)))
-    }
-}
-
+/// A built-in trajectory or one tabulated from Python.
 enum AnyTraj {
     Builtin(Traj),
-    Table(Table),
+    Table(Tabulated),
 }
 
 impl Trajectory for AnyTraj {
@@ -94,8 +33,9 @@ impl Trajectory for AnyTraj {
     }
 }
 
+/// The arrays of a servo run: per tick and per camera frame (see `rss6.servo.TrackingResult`).
 #[derive(Default)]
-struct Log {
+struct Arrays {
     t: Vec<f64>,
     desired: Vec<Vec6>,
     truth: Vec<Vec6>,
@@ -108,54 +48,150 @@ struct Log {
     estimate: Vec<Vec6>,
     estimate_dot: Vec<Vec6>,
     sliding: Vec<Vec6>,
-    fault: Option<(f64, String)>,
 }
 
-/// The rows of `log` from tick `from.0` and camera frame `from.1` on, as the dict passed to
-/// `run_servo`'s `on_segment` callback (same keys and units as its result).
-fn segment_dict<'py>(
-    py: Python<'py>,
-    log: &Log,
-    from: (usize, usize),
-) -> PyResult<Bound<'py, PyDict>> {
-    let (a, f) = from;
-    let d = PyDict::new(py);
-    d.set_item("t", out1(py, log.t.get(a..).unwrap_or_default()))?;
-    for (key, v) in [
-        ("desired", &log.desired),
-        ("true", &log.truth),
-        ("theta_cmd", &log.theta_cmd),
-        ("torque", &log.torque),
-    ] {
-        d.set_item(key, out_rows6(py, v.get(a..).unwrap_or_default()))?;
+impl Arrays {
+    fn push(&mut self, r: &Record) {
+        let nan = Vec6::repeat(f64::NAN);
+        let desired = r.reference.map_or(nan, |x| x.pose);
+        let truth = r.truth.map_or(nan, |s| s.pose);
+        self.t.push(r.t);
+        self.desired.push(desired);
+        self.truth.push(truth);
+        self.theta_cmd.push(r.theta_cmd);
+        self.torque.push(r.torque.unwrap_or(nan));
+        if let Some(z) = r.camera {
+            self.frame_t.push(r.t);
+            self.frame_desired.push(desired);
+            self.frame_truth.push(truth);
+            self.measured.push(z);
+            self.estimate.push(r.estimate.map_or(nan, |e| e.pose));
+            self.estimate_dot
+                .push(r.estimate.map_or(nan, |e| e.pose_dot));
+            self.sliding.push(r.dsmc.map_or(nan, |(_, f)| f));
+        }
     }
-    d.set_item(
-        "frame_t",
-        out1(py, log.frame_t.get(f..).unwrap_or_default()),
-    )?;
-    for (key, v) in [
-        ("frame_desired", &log.frame_desired),
-        ("frame_true", &log.frame_truth),
-        ("measured", &log.measured),
-        ("estimate", &log.estimate),
-        ("estimate_dot", &log.estimate_dot),
-        ("sliding", &log.sliding),
-    ] {
-        d.set_item(key, out_rows6(py, v.get(f..).unwrap_or_default()))?;
+
+    /// The rows from tick `from.0` and camera frame `from.1` on, as a dict (keys of the result).
+    fn dict<'py>(&self, py: Python<'py>, from: (usize, usize)) -> PyResult<Bound<'py, PyDict>> {
+        let (a, f) = from;
+        let d = PyDict::new(py);
+        d.set_item("t", out1(py, self.t.get(a..).unwrap_or_default()))?;
+        for (key, v) in [
+            ("desired", &self.desired),
+            ("true", &self.truth),
+            ("theta_cmd", &self.theta_cmd),
+            ("torque", &self.torque),
+        ] {
+            d.set_item(key, out_rows6(py, v.get(a..).unwrap_or_default()))?;
+        }
+        d.set_item(
+            "frame_t",
+            out1(py, self.frame_t.get(f..).unwrap_or_default()),
+        )?;
+        for (key, v) in [
+            ("frame_desired", &self.frame_desired),
+            ("frame_true", &self.frame_truth),
+            ("measured", &self.measured),
+            ("estimate", &self.estimate),
+            ("estimate_dot", &self.estimate_dot),
+            ("sliding", &self.sliding),
+        ] {
+            d.set_item(key, out_rows6(py, v.get(f..).unwrap_or_default()))?;
+        }
+        Ok(d)
     }
-    Ok(d)
 }
 
-/// Runs the closed loop for `duration` s on `plant` (rss6.Plant or rss6.ModelSim) and returns a dict
-/// of arrays (see `rss6.servo.track`). `controller`: "dsmc", "kcsc" or "kjsc". `trajectory`: an
-/// rss6.Trajectory, or a tuple of three (N, 6) arrays (χ_d, χ̇_d, χ̈_d) tabulated every plant tick.
-/// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t) convert camera frames to χ_E; default: the
-/// plant's truth. `pid`: the drive's PID gains the converter inverts (default rss6-ctrl's nominal).
-/// `on_segment`: called with a dict of the rows recorded since its previous call (same keys as the
-/// result, without "controller" and "fault") every `segment` s of simulated time and once at the end,
-/// so a caller can log the run as it goes; if it raises, the run stops and the error propagates.
+/// Collects the arrays; at each progress: Ctrl-C check and `on_segment(rows since the last call)`.
+struct Collector {
+    arrays: Arrays,
+    on_segment: Option<Py<PyAny>>,
+    sent: (usize, usize),
+    interrupt: Interrupt,
+}
+
+impl Observer for Collector {
+    fn record(&mut self, record: &Record) -> Flow {
+        self.arrays.push(record);
+        Flow::Continue
+    }
+
+    fn progress(&mut self, _progress: &Progress) -> Flow {
+        let (arrays, sent, cb) = (&self.arrays, &mut self.sent, &self.on_segment);
+        self.interrupt.call(|py| {
+            if let Some(cb) = cb {
+                cb.call1(py, (arrays.dict(py, *sent)?,))?;
+            }
+            *sent = (arrays.t.len(), arrays.frame_t.len());
+            Ok(())
+        })
+    }
+}
+
+/// The reference: an rss6.Trajectory, or a tuple of three (N, 6) arrays tabulated every `dt`.
+fn trajectory(obj: &Bound<'_, PyAny>, dt: f64) -> PyResult<(AnyTraj, String)> {
+    if let Ok(t) = obj.cast::<PyTrajectory>() {
+        let name: String = t.getattr("name")?.extract()?;
+        return Ok((AnyTraj::Builtin(t.get().inner.clone()), name));
+    }
+    let Ok((p, v, a)) = obj.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>, Bound<'_, PyAny>)>()
+    else {
+        return Err(invalid(
+            "trajectory must be an rss6.Trajectory or a tuple of three (N, 6) arrays",
+        ));
+    };
+    let (p, v, a) = (
+        rows6(&p, "trajectory[0]")?,
+        rows6(&v, "trajectory[1]")?,
+        rows6(&a, "trajectory[2]")?,
+    );
+    if p.len() != v.len() || p.len() != a.len() || p.is_empty() {
+        return Err(shape(
+            "tabulated trajectory arrays must have the same non-zero length",
+        ));
+    }
+    let rows = p
+        .iter()
+        .zip(v.iter().zip(a.iter()))
+        .map(|(pose, (pose_dot, pose_ddot))| Reference {
+            pose: *pose,
+            pose_dot: *pose_dot,
+            pose_ddot: *pose_ddot,
+        })
+        .collect();
+    let table = Tabulated::new(dt, rows)
+        .ok_or_else(|| invalid(format!("cannot tabulate the trajectory every {dt} s")))?;
+    Ok((AnyTraj::Table(table), "table".into()))
+}
+
+/// The tuning name; "thesis" is refused with a pointer to "tuned".
+fn tuning(name: &str) -> PyResult<Tuning> {
+    if name.eq_ignore_ascii_case("thesis") {
+        return Err(make(
+            "InvalidParameterError",
+            "tuning 'thesis' is no longer a tuning name: it selected rss6's own tuned DSMC gains \
+             (the thesis gives none in SI for this robot); use 'tuned'",
+            vec![],
+        ));
+    }
+    Tuning::parse(name).map_err(exp_err)
+}
+
+/// Runs the closed loop of Fig. 6.2 (rss6-exp's servo runner) for `duration` s on `plant`
+/// (rss6.Plant or rss6.ModelSim) and returns a dict of arrays (see `rss6.servo.track`; `theta_cmd`
+/// in the drive's joint convention). `controller`: "dsmc", "kcsc" or "kjsc"; `tuning`: "tuned" or
+/// "low_noise" (DSMC only). `trajectory`: an rss6.Trajectory, or a tuple of three (N, 6) arrays
+/// (χ_d, χ̇_d, χ̈_d) tabulated every plant tick. `sensor_in_base` (ᴼχ_C) and `target_in_effector`
+/// (ᴱχ_t) convert camera frames to χ_E; default: the plant's truth. `pid`, `torque_limit`,
+/// `steady_state_kalman`, `kalman_r`, `kalman_q_jerk`, `camera_latency` override the tuning's
+/// servo configuration. `on_segment` is called with a dict of the rows recorded since its previous
+/// call (same keys as the result, without "controller" and "fault") every `segment` s of simulated
+/// time and at the end; if it raises (KeyboardInterrupt included), the run stops and the exception
+/// propagates; Ctrl-C is checked at the same points. `mcap`: log the run to this file as it goes
+/// (metadata controller, tuning, trajectory, duration; at the end status and fault). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=30.0, steady_state_kalman=false, kalman_r=None, kalman_q_jerk=None, camera_latency=0.0, on_segment=None, segment=1.0, tuning="thesis"))]
+#[pyo3(signature = (plant, controller, trajectory, duration, kp_model, dp_model, *, sensor_in_base=None, target_in_effector=None, pid=None, torque_limit=None, steady_state_kalman=None, kalman_r=None, kalman_q_jerk=None, camera_latency=None, on_segment=None, segment=1.0, tuning="tuned", mcap=None, trajectory_name=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_servo<'py>(
     py: Python<'py>,
@@ -168,242 +204,107 @@ pub(crate) fn run_servo<'py>(
     sensor_in_base: Option<&Bound<'py, PyAny>>,
     target_in_effector: Option<&Bound<'py, PyAny>>,
     pid: Option<(f64, f64, f64)>,
-    torque_limit: f64,
-    steady_state_kalman: bool,
+    torque_limit: Option<f64>,
+    steady_state_kalman: Option<bool>,
     kalman_r: Option<&Bound<'py, PyAny>>,
     kalman_q_jerk: Option<&Bound<'py, PyAny>>,
-    camera_latency: f64,
-    on_segment: Option<&Bound<'py, PyAny>>,
+    camera_latency: Option<f64>,
+    on_segment: Option<Py<PyAny>>,
     segment: f64,
     tuning: &str,
+    mcap: Option<std::path::PathBuf>,
+    trajectory_name: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let controller = Controller::parse(controller).map_err(exp_err)?;
+    let tuning = self::tuning(tuning)?;
+    let (dt, truth) = with_robot(plant, |r| (r.dt(), r.truth()))?;
+    let (traj, name) = self::trajectory(trajectory, dt)?;
+    let name = trajectory_name.unwrap_or(name);
+    let externals = Externals {
+        sensor_in_base: match (sensor_in_base, &truth) {
+            (Some(s), _) => vec6(s, "sensor_in_base")?,
+            (None, Some(t)) => t.sensor_in_base,
+            (None, None) => return Err(invalid("sensor_in_base is needed for this robot")),
+        },
+        target_in_effector: match (target_in_effector, &truth) {
+            (Some(s), _) => vec6(s, "target_in_effector")?,
+            (None, Some(t)) => t.target_in_effector,
+            (None, None) => return Err(invalid("target_in_effector is needed for this robot")),
+        },
+    };
+    let mut spec = ServoSpec::new(
+        controller,
+        tuning,
+        kp_model.inner,
+        dp_model.inner,
+        externals,
+    )
+    .map_err(exp_err)?;
+    spec.duration = duration;
+    spec.segment = segment;
+    let c = &mut spec.config;
+    if let Some((lp, li, ld)) = pid {
+        c.pid = PidGains { lp, li, ld };
+    }
+    if let Some(v) = torque_limit {
+        c.torque_limit = v;
+    }
+    if let Some(v) = steady_state_kalman {
+        c.kalman.steady_state = v;
+    }
+    if let Some(r) = kalman_r {
+        c.kalman.r = vec6(r, "kalman_r")?;
+    }
+    if let Some(q) = kalman_q_jerk {
+        c.kalman.q_jerk = vec6(q, "kalman_q_jerk")?;
+    }
+    if let Some(v) = camera_latency {
+        c.camera_latency = v;
+    }
     if !(duration.is_finite() && duration > 0.0) {
         return Err(invalid(format!(
             "duration must be finite and > 0 s, got {duration}"
         )));
     }
-    if !(segment.is_finite() && segment > 0.0) {
-        return Err(invalid(format!(
-            "segment must be finite and > 0 s, got {segment}"
-        )));
-    }
-    let on_segment: Option<Py<PyAny>> = on_segment.map(|cb| cb.clone().unbind());
-    let traj = if let Ok(t) = trajectory.cast::<PyTrajectory>() {
-        AnyTraj::Builtin(t.get().inner.clone())
-    } else if let Ok((p, v, a)) =
-        trajectory.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)>()
-    {
-        let (p, v, a) = (
-            rows6(&p, "trajectory[0]")?,
-            rows6(&v, "trajectory[1]")?,
-            rows6(&a, "trajectory[2]")?,
-        );
-        if p.len() != v.len() || p.len() != a.len() || p.is_empty() {
-            return Err(shape(
-                "tabulated trajectory arrays must have the same non-zero length",
-            ));
-        }
-        let dt = with_robot(plant, |r| r.dt())?;
-        let rows = p
-            .iter()
-            .zip(v.iter().zip(a.iter()))
-            .map(|(pose, (pose_dot, pose_ddot))| Reference {
-                pose: *pose,
-                pose_dot: *pose_dot,
-                pose_ddot: *pose_ddot,
-            })
-            .collect();
-        AnyTraj::Table(Table { dt, rows })
-    } else {
-        return Err(invalid(
-            "trajectory must be an rss6.Trajectory or a tuple of three (N, 6) arrays",
-        ));
+    let mut log = match &mcap {
+        Some(path) => Some(create_log(
+            path,
+            &[
+                ("controller", controller.name().to_string()),
+                ("tuning", tuning.name().to_string()),
+                ("trajectory", name),
+                ("duration", format!("{duration:?}")),
+            ],
+        )?),
+        None => None,
     };
-    let kp_model = kp_model.inner;
-    let dp_model = dp_model.inner;
-    let truth = with_robot(plant, |r| r.truth())?;
-    let sensor = match sensor_in_base {
-        Some(s) => vec6(s, "sensor_in_base")?,
-        None => truth.sensor_in_base,
+    let mut coll = Collector {
+        arrays: Arrays::default(),
+        on_segment,
+        sent: (0, 0),
+        interrupt: Interrupt::default(),
     };
-    let target = match target_in_effector {
-        Some(s) => vec6(s, "target_in_effector")?,
-        None => truth.target_in_effector,
-    };
-    let controller = controller.to_ascii_lowercase();
-    let low_noise = match tuning.to_ascii_lowercase().replace('-', "_").as_str() {
-        "thesis" => false,
-        "low_noise" => true,
-        other => {
-            return Err(invalid(format!(
-                "tuning must be 'thesis' or 'low_noise', got '{other}'"
-            )))
-        }
-    };
-    if low_noise && controller != "dsmc" {
-        return Err(invalid(format!(
-            "tuning 'low_noise' is for the DSMC only (controller '{controller}')"
-        )));
-    }
-    let mut config = if low_noise {
-        ServoConfig::low_noise()
-    } else {
-        ServoConfig::nominal()
-    };
-    if let Some((lp, li, ld)) = pid {
-        config.pid = PidGains { lp, li, ld };
-    }
-    config.torque_limit = torque_limit;
-    config.kalman.steady_state = steady_state_kalman;
-    if let Some(r) = kalman_r {
-        config.kalman.r = vec6(r, "kalman_r")?;
-    }
-    if let Some(q) = kalman_q_jerk {
-        config.kalman.q_jerk = vec6(q, "kalman_q_jerk")?;
-    }
-    config.camera_latency = camera_latency;
-
-    let result = with_robot(plant, |robot| -> PyResult<Log> {
-        let dt = robot.dt();
-        config.joint_dt = dt;
-        // Joint conventions: KJSC turns χ_d into joint angles by the model's IK, so it works in the
-        // model's (calibrated) physical convention and its commands are converted to the drive's nominal
-        // one. DSMC's converter must mirror the drive's PID exactly, so DSMC (and KCSC, whose joint
-        // increments come from J_θ) work in the drive's nominal convention.
-        let convert = controller == "kjsc";
-        let kp_nominal = KinematicParams::nominal();
-        let kp_servo = if convert { kp_model } else { kp_nominal };
-        let kappa0 = robot.potentiometers();
-        let theta0 = kp_servo.theta_from_reading(&kappa0);
-        let t0 = robot.time();
-        let mut adapter = Adapter {
-            robot,
-            stop: std::cell::Cell::new(false),
-            sensor_in_base: sensor,
-            target_inv: pose_inverse(&target),
-            kp_model,
-            kp_nominal,
-            convert,
-        };
-        // Kalman start: the first camera frame if one is pending, else the model's FK of the readings.
-        let start = match adapter.camera() {
-            Some(p) => p,
-            None => {
-                rss6_core::fk(
-                    &kp_model,
-                    &kp_model.theta_from_reading(&kappa0),
-                    &rss6_core::home_pose(),
-                    &rss6_core::FkOptions::default(),
-                )
-                .map_err(core)?
-                .pose
-            }
-        };
-        let scheme = match controller.as_str() {
-            "dsmc" => {
-                let gains = if low_noise {
-                    DsmcGains::low_noise()
-                } else {
-                    DsmcGains::tuned()
-                };
-                Scheme::Dsmc(Dsmc::new(kp_model, dp_model, gains).map_err(ctrl_err)?)
-            }
-            "kcsc" => Scheme::Kcsc(
-                Kcsc::new(kp_model, CartesianPidGains::thesis(), &theta0).map_err(ctrl_err)?,
-            ),
-            "kjsc" => Scheme::Kjsc(
-                Kjsc::new(kp_model, JointSpaceGains::thesis(), &theta0).map_err(ctrl_err)?,
-            ),
-            other => {
-                return Err(invalid(format!(
-                    "controller must be 'dsmc', 'kcsc' or 'kjsc', got '{other}'"
-                )))
-            }
-        };
-        let mut servo =
-            Servo::new(kp_servo, config, scheme, &start, &kappa0, t0).map_err(ctrl_err)?;
-        let ticks = (duration / dt).round() as u32;
-        let mut log = Log::default();
-        // The observer sees the plant after the tick's step; record the true pose at the start of the
-        // tick, when the reference was sampled and the consumed camera frame was taken.
-        let mut start_pose = adapter.robot.true_pose();
-        let segment_ticks = ((segment / dt).round() as usize).max(1);
-        let mut sent = (0usize, 0usize);
-        let mut callback_error: Option<PyErr> = None;
-        let deliver = |log: &Log, sent: &mut (usize, usize)| -> PyResult<()> {
-            if let Some(cb) = on_segment.as_ref() {
-                Python::attach(|py| cb.call1(py, (segment_dict(py, log, *sent)?,)))?;
-            }
-            *sent = (log.t.len(), log.frame_t.len());
-            Ok(())
-        };
-        let summary = py.detach(|| {
-            run(
-                &mut adapter,
-                &mut servo,
-                &traj,
-                t0,
-                ticks,
-                |rec: &TickRecord, p: &Adapter<'_>| {
-                    let t = rec.t - t0;
-                    let true_pose = start_pose;
-                    start_pose = p.robot.true_pose();
-                    log.t.push(t);
-                    log.desired.push(rec.reference.pose);
-                    log.truth.push(true_pose);
-                    log.theta_cmd.push(rec.theta_cmd);
-                    log.torque.push(p.robot.torque());
-                    if let Some(z) = rec.camera {
-                        log.frame_t.push(t);
-                        log.frame_desired.push(rec.reference.pose);
-                        log.frame_truth.push(true_pose);
-                        log.measured.push(z);
-                        let est = rec.tick.and_then(|k| k.estimate);
-                        log.estimate
-                            .push(est.map(|e| e.pose).unwrap_or(Vec6::repeat(f64::NAN)));
-                        log.estimate_dot
-                            .push(est.map(|e| e.pose_dot).unwrap_or(Vec6::repeat(f64::NAN)));
-                        let f = rec.tick.and_then(|k| k.dsmc).map(|(_, f)| f);
-                        log.sliding.push(f.unwrap_or(Vec6::repeat(f64::NAN)));
-                    }
-                    if on_segment.is_some()
-                        && callback_error.is_none()
-                        && log.t.len() - sent.0 >= segment_ticks
-                    {
-                        if let Err(e) = deliver(&log, &mut sent) {
-                            callback_error = Some(e);
-                            p.stop.set(true);
-                        }
-                    }
-                },
-            )
-        });
-        if let Some(e) = callback_error {
-            return Err(e);
-        }
-        let summary = summary.map_err(sim_err)?;
-        if on_segment.is_some() && (log.t.len() > sent.0 || sent == (0, 0)) {
-            deliver(&log, &mut sent)?;
-        }
-        log.fault = summary.first_fault.map(|(t, r)| (t - t0, r.to_string()));
-        Ok(log)
-    })??;
-
-    let d = PyDict::new(py);
-    d.set_item("t", out1(py, &result.t))?;
-    d.set_item("desired", out_rows6(py, &result.desired))?;
-    d.set_item("true", out_rows6(py, &result.truth))?;
-    d.set_item("theta_cmd", out_rows6(py, &result.theta_cmd))?;
-    d.set_item("torque", out_rows6(py, &result.torque))?;
-    d.set_item("frame_t", out1(py, &result.frame_t))?;
-    d.set_item("frame_desired", out_rows6(py, &result.frame_desired))?;
-    d.set_item("frame_true", out_rows6(py, &result.frame_truth))?;
-    d.set_item("measured", out_rows6(py, &result.measured))?;
-    d.set_item("estimate", out_rows6(py, &result.estimate))?;
-    d.set_item("estimate_dot", out_rows6(py, &result.estimate_dot))?;
-    d.set_item("sliding", out_rows6(py, &result.sliding))?;
-    d.set_item("controller", controller.to_ascii_uppercase())?;
-    match result.fault {
+    let outcome = with_robot(plant, |robot| {
+        py.detach(|| match log.as_mut() {
+            // The log first: a segment is on disk before the caller hears of it.
+            Some(l) => track(robot, &spec, &traj, &mut (l, &mut coll)),
+            None => track(robot, &spec, &traj, &mut coll),
+        })
+    })?;
+    let fault = outcome
+        .as_ref()
+        .ok()
+        .and_then(|o| o.first_fault)
+        .map(|(t, r)| (t, r.to_string()));
+    let end: Vec<(&str, String)> = fault
+        .iter()
+        .map(|(t, r)| ("fault", format!("t = {t:.3} s: {r}")))
+        .collect();
+    finish_log(py, log, outcome, coll.interrupt.take(), &end)?;
+    let a = &coll.arrays;
+    let d = a.dict(py, (0, 0))?;
+    d.set_item("controller", controller.name())?;
+    match fault {
         Some((t, r)) => d.set_item("fault", (t, r))?,
         None => d.set_item("fault", py.None())?,
     }

@@ -1,4 +1,4 @@
-//! Parameter files: TOML (serde) with the `to_dict` keys of DESIGN.md, SI units. Unknown keys and
+//! Parameter files: TOML (serde) with the `to_dict` keys of docs/architecture.md, SI units. Unknown keys and
 //! wrong shapes are errors ([`SimError::ParamFile`], naming the file and the parser's message).
 //!
 //! Kinematics: `base_joints` (6×3 B_i), `platform_joints` (6×3 A'_i in ΣE), `wrench_lengths`,

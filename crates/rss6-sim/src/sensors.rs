@@ -19,11 +19,11 @@ use rss6_core::{isometry_to_pose, pose_to_isometry, Vec3, Vec6};
 use serde::{Deserialize, Serialize};
 
 /// Potentiometer noise std of Table 4.1 (bit).
-pub const POT_NOISE_BITS: f64 = 0.2233;
+pub const POT_NOISE_BITS: f64 = rss6_core::thesis::KAPPA_NOISE_BITS;
 /// Pose noise of Table 4.1: position std (m) per axis.
-pub const CMM_POSITION_NOISE: f64 = 0.0096e-3;
+pub const CMM_POSITION_NOISE: f64 = rss6_core::thesis::POSE_POSITION_NOISE;
 /// Pose noise of Table 4.1: angle std (rad) per axis (0.0261°).
-pub const CMM_ANGLE_NOISE: f64 = 0.0261 * std::f64::consts::PI / 180.0;
+pub const CMM_ANGLE_NOISE: f64 = rss6_core::thesis::POSE_ANGLE_NOISE;
 
 /// One pinhole camera of the stereo head.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -115,7 +115,7 @@ impl CmmConfig {
             cameras: [cam(-0.5 * b, toe), cam(0.5 * b, -toe)],
             reflectors,
             pixel_noise: DEFAULT_PIXEL_NOISE,
-            period: 0.033,
+            period: rss6_core::thesis::CONTROL_PERIOD,
             latency: 0.0,
             pose_noise: None,
         }

@@ -129,7 +129,7 @@ impl SimConfig {
         Self::new(
             KinematicParams::nominal(),
             DynamicParams::nominal(),
-            PidGains::nominal(),
+            PidGains::tuned(),
         )
     }
 
@@ -299,7 +299,8 @@ impl<P: Physics> Robot<P> {
         setup: EffectSetup,
         physics: P,
     ) -> Result<Self> {
-        let pid = JointPid::new(cfg.pid, cfg.dt, cfg.torque_limit);
+        let pid = JointPid::new(cfg.pid, cfg.dt, cfg.torque_limit)
+            .map_err(|e| SimError::InvalidConfig(format!("drive PID: {e}")))?;
         let period_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
         let pots = Potentiometers::new(
             cfg.kinematics.eta,

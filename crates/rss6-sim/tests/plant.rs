@@ -4,21 +4,21 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rss6_core::{fk, home_pose, ik, FkOptions, KinematicParams, Vec6, N_KIN_ERRORS};
+use rss6_core::{fk, home_pose, ik, thesis, FkOptions, KinematicParams, Vec6, N_KIN_ERRORS};
 use rss6_sim::{
     EffectSpec, Plant, RobotSim, SimConfig, TJoint, CMM_ANGLE_NOISE, CMM_POSITION_NOISE,
     POT_NOISE_BITS,
 };
 
-/// A robot with Table 4.2-sized errors (1 mm, η 5e-5 rad/bit, Δθ 0.05 rad).
+/// A robot with Table 4.2-sized errors (uniform within ±1σ).
 fn perturbed(seed: u64) -> KinematicParams {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut b = [0.0; N_KIN_ERRORS];
     for (k, x) in b.iter_mut().enumerate() {
         let s = match k {
-            0..=47 => 1e-3,
-            48..=53 => 5e-5,
-            _ => 0.05,
+            0..=47 => thesis::SIGMA_LENGTH,
+            48..=53 => thesis::SIGMA_ETA,
+            _ => thesis::SIGMA_DTHETA,
         };
         *x = s * (rng.random::<f64>() * 2.0 - 1.0);
     }

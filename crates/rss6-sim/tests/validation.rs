@@ -39,7 +39,7 @@ fn plant_and_twin_agree_like_fig_5_5() {
     let gap = worst(&|d| d.loop_closure, 0.0);
     let raw = worst(&|d| d.solver_gap, 0.0);
     println!(
-        "worst: {:.4} mm {:.4} mrad; after {TRANSIENT} s: {:.4} mm {:.4} mrad; loop gap {:.2} µm (solver, before projection: {:.2} µm)",
+        "worst: {:.4} mm {:.4} mrad; after {TRANSIENT} s: {:.4} mm {:.4} mrad; loop gap {:.3e} µm (solver, before projection: {:.2} µm)",
         p_all * 1e3,
         a_all * 1e3,
         p_late * 1e3,
@@ -63,18 +63,25 @@ fn plant_and_twin_agree_like_fig_5_5() {
         )
         .unwrap();
     }
+    // Bounds ≈ 3× what this test measured (2026-11, rapier 0.36): worst 0.0205 mm / 0.0207 mrad, after
+    // the transient 0.0020 mm / 0.0194 mrad. (The thesis's SimMechanics-vs-model figures, Fig. 5.6, are
+    // 1.25 mm / 3.25 mrad worst and 0.1 mm / 0.25 mrad steady state; the twin agrees far better.)
     assert!(
-        p_all <= 1.25e-3 && a_all <= 3.25e-3,
+        p_all <= 0.06e-3 && a_all <= 0.06e-3,
         "worst {p_all} m / {a_all} rad"
     );
     assert!(
-        p_late <= 0.1e-3 && a_late <= 0.25e-3,
+        p_late <= 0.006e-3 && a_late <= 0.06e-3,
         "after transient {p_late} m / {a_late} rad"
     );
-    assert!(gap <= 10e-6, "loop-closure gap {gap} m");
+    // Measured 9.2e-17 m: the projection closes the loops to round-off (the solver alone leaves ≈ 49 µm).
+    // A bound of 3× round-off would test the float rounding, not the projection: 1 pm.
+    assert!(gap <= 1e-12, "loop-closure gap {gap} m");
     // The robots really moved: the comparison is not trivially satisfied at rest.
     assert_eq!(diffs.len(), 4000);
     let excursion = worst(&|d| d.excursion, 0.0);
+    println!("largest excursion {:.2} mm", excursion * 1e3);
+    // Measured 19.8 mm.
     assert!(excursion > 0.01, "platform moved only {excursion} m");
 }
 
@@ -114,16 +121,18 @@ fn projection_closes_the_loops_without_changing_the_motion() {
         da * 1e3,
         gap_open * 1e6
     );
+    // Measured 0.0206 mm / 0.0170 mrad (bounds 1.5× and 3×); without the projection the gap is 49.4 µm
+    // (bound: a third of it).
     assert!(
         dp < 0.03e-3 && da < 0.05e-3,
         "projection changed the motion: {dp} m / {da} rad"
     );
     assert!(
-        gap_open > 10e-6,
+        gap_open > 15e-6,
         "4 iterations alone already close the loops ({gap_open} m)"
     );
     assert!(
-        gap_fast > 10e-6,
+        gap_fast > 15e-6,
         "worst gap of the pair must be the unprojected one"
     );
 }

@@ -5,12 +5,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rss6_core::{KinematicParams, PoseBox, Vec6, N_KIN_ERRORS};
 
-/// Table 4.2 standard deviations: 1 mm for positions and lengths, 5e-5 rad/bit for η, 0.05 rad for Δθ.
-pub const SIGMA_LENGTH: f64 = 1e-3;
-/// σ of Δη (rad/bit), Table 4.2.
-pub const SIGMA_ETA: f64 = 5e-5;
-/// σ of Δθ (rad), Table 4.2.
-pub const SIGMA_DTHETA: f64 = 0.05;
+pub use rss6_core::thesis::{SIGMA_DTHETA, SIGMA_ETA, SIGMA_LENGTH};
 
 /// A deterministic RNG.
 pub fn rng(seed: u64) -> ChaCha8Rng {

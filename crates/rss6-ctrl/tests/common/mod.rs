@@ -14,7 +14,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rss6_core::{jacobian_theta, DynamicParams, KinematicParams, Vec6, N_KIN_ERRORS};
+use rss6_core::{jacobian_theta, thesis, DynamicParams, KinematicParams, Vec6, N_KIN_ERRORS};
 use rss6_ctrl::{DsmcGains, PidGains, Scheme, ServoConfig, Trajectory};
 use rss6_exp::servo::{track, Controller, ServoSpec, Tuning};
 use rss6_exp::{Convention, Externals, Flow, Observer, Record, View};
@@ -38,7 +38,7 @@ pub fn model_sim(
     seed: u64,
     latency_ticks: u64,
 ) -> ModelSim {
-    let mut cfg = SimConfig::new(kp_true, dp, PidGains::nominal());
+    let mut cfg = SimConfig::new(kp_true, dp, PidGains::tuned());
     cfg.seed = seed;
     cfg.cmm = CmmConfig::table_4_1();
     if !noise.camera {
@@ -76,15 +76,15 @@ pub fn rig(
     View::new(sim, ext, KinematicParams::nominal(), Convention::Drive)
 }
 
-/// Table 4.2 error sizes drawn once (seeded): positions/lengths 1 mm, η 5e-5 rad/bit, Δθ 0.05 rad.
+/// Table 4.2 error sizes drawn once (seeded).
 pub fn table_4_2_errors(seed: u64) -> [f64; N_KIN_ERRORS] {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut b = [0.0; N_KIN_ERRORS];
     for (k, x) in b.iter_mut().enumerate() {
         let sd = match k {
-            0..=47 => 1e-3,
-            48..=53 => 5e-5,
-            _ => 0.05,
+            0..=47 => thesis::SIGMA_LENGTH,
+            48..=53 => thesis::SIGMA_ETA,
+            _ => thesis::SIGMA_DTHETA,
         };
         *x = Normal::new(0.0, sd).unwrap().sample(&mut rng);
     }
@@ -165,7 +165,7 @@ impl Setup {
             noise,
             seconds,
             seed,
-            config: ServoConfig::nominal(),
+            config: ServoConfig::tuned(),
             dsmc: DsmcGains::tuned(),
             latency_ticks: 0,
             monitor: None,

@@ -77,6 +77,7 @@ pub enum LogError {
 const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 const OP_FOOTER: u8 = 0x02;
 const OP_CHUNK: u8 = 0x06;
+const OP_DATA_END: u8 = 0x0F;
 
 /// (bytes up to the end of the last whole record, ends with footer + magic, whole chunks).
 fn scan(path: &str, data: &[u8]) -> Result<(usize, bool, usize), LogError> {
@@ -125,6 +126,21 @@ fn scan(path: &str, data: &[u8]) -> Result<(usize, bool, usize), LogError> {
         };
         if op == OP_CHUNK {
             chunks += 1;
+        }
+        if op == OP_DATA_END {
+            // The data-section CRC covers every byte before this record (0: not computed). The
+            // chunk CRCs cover the chunks; this catches damage in the records between them
+            // (message indexes, metadata).
+            if let Some(b) = data.get(pos + 9..pos + 13) {
+                let saved = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                if saved != 0 && crc32fast::hash(&data[..pos]) != saved {
+                    return Err(LogError::Corrupt {
+                        path: path.to_string(),
+                        offset: pos,
+                        why: "data-section CRC mismatch".into(),
+                    });
+                }
+            }
         }
         pos = end;
         if op == OP_FOOTER {

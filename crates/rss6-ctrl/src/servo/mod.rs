@@ -6,69 +6,33 @@
 //! KCSC/KJSC by holding their latest θ_d. If no frame arrives for 1.5 camera periods the filter predicts
 //! and the controller runs on the prediction; after `stale_after` seconds without a frame, or on any
 //! NaN/∞ input, the servo latches a fault, returns [`CtrlError::Faulted`] and [`Servo::held_command`] is
-//! the last command sent (the drive's PID then holds the robot there).
+//! the last command sent (the drive's PID then holds the robot there). A tick stamped before the
+//! previous one latches [`FaultReason::TimeWentBackwards`]; equal stamps are allowed (a camera frame at
+//! the same instant as the previous filter step is treated as 1 µs later).
 //!
 //! [`run`] drives any [`Plant`] (the analytic model in the tests, the rapier plant, or a real robot behind
-//! a bus) with a [`Trajectory`] for a fixed number of ticks, sending the held command while faulted.
+//! a bus) with a [`crate::Trajectory`] for a fixed number of ticks, sending the held command while faulted.
 
+mod config;
+mod rate_fit;
+mod runner;
+
+pub use self::config::{ServoConfig, HOLD_OFFSET_TIME, POTENTIOMETER_SIGMA_RAD};
+pub use self::runner::{run, Plant, RunSummary, TickRecord};
+
+use self::rate_fit::RateFit;
 use crate::converter::TorqueToPosition;
 use crate::dsmc::Dsmc;
 use crate::error::{all_finite, check_dt, CtrlError, FaultLatch, FaultReason, Result};
-use crate::kalman::{KalmanConfig, PoseEstimate, PoseKalman};
+use crate::kalman::{PoseEstimate, PoseKalman};
 use crate::kcsc::Kcsc;
 use crate::kjsc::Kjsc;
-use crate::pid::PidGains;
-use crate::safety::{CommandGuard, CommandLimits};
-use crate::trajectory::{Reference, Trajectory};
+use crate::safety::CommandGuard;
+use crate::trajectory::Reference;
 use rss6_core::{ik, jacobian_theta, KinematicParams, Mat6, Vec6};
 
-/// Running sums of a least-squares line θ(t) = a + b t per joint (t relative to the last frame).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct RateFit {
-    n: f64,
-    st: f64,
-    stt: f64,
-    sy: Vec6,
-    sty: Vec6,
-    last: Vec6,
-}
-
-impl RateFit {
-    /// Adds a sample if the reading changed (the potentiometers update every other joint tick).
-    fn add(&mut self, t: f64, theta: &Vec6) {
-        if self.n > 0.0 && *theta == self.last {
-            return;
-        }
-        self.last = *theta;
-        self.n += 1.0;
-        self.st += t;
-        self.stt += t * t;
-        self.sy += theta;
-        self.sty += theta * t;
-    }
-
-    /// Slope b per joint (rad/s) and Σ(t − t̄)² (s²), if at least 3 samples spread in time.
-    fn slope(&self) -> Option<(Vec6, f64)> {
-        let sxx = self.stt - self.st * self.st / self.n.max(1.0);
-        if self.n < 3.0 || sxx <= 0.0 {
-            return None;
-        }
-        let b = (self.sty - self.sy * (self.st / self.n)) / sxx;
-        Some((b, sxx))
-    }
-
-    fn clear(&mut self) {
-        let last = self.last;
-        *self = RateFit::default();
-        self.last = last;
-    }
-}
-
-/// Time constant (s) of the average of θ_pot − IK(χ_m) used by [`ServoConfig::hold_compensation`].
-pub const HOLD_OFFSET_TIME: f64 = 0.3;
-
 /// The camera-rate controller inside a [`Servo`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 #[allow(clippy::large_enum_variant)]
 pub enum Scheme {
     /// DSMC (eq. 6.25) + torque-to-position converter.
@@ -90,93 +54,6 @@ impl Scheme {
     }
 }
 
-/// Rates, limits and the drive's PID as seen by the servo.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ServoConfig {
-    /// Joint-loop period (s), 1e-3.
-    pub joint_dt: f64,
-    /// Nominal camera period (s), 0.033.
-    pub frame_period: f64,
-    /// Fault if no frame for this long (s).
-    pub stale_after: f64,
-    /// Camera latency L (s, ≥ 0): a frame arriving at t was exposed at t − L. The filter runs on exposure
-    /// times and the controllers get its estimate extrapolated by L (Φ(L), third-order model).
-    pub camera_latency: f64,
-    /// Stroke and rate limits of the joint commands.
-    pub limits: CommandLimits,
-    /// Kalman filter tuning.
-    pub kalman: KalmanConfig,
-    /// Feed the DSMC's model-predicted acceleration ([`crate::DsmcOutput::accel_model`]) to the filter as a
-    /// known input ([`PoseKalman::set_input`]); ignored for KCSC/KJSC, which do not compute one.
-    pub kalman_model_input: bool,
-    /// DSMC only: every joint tick send τ_a + H (θ − θ̂) instead of the held τ_a, with θ the latest
-    /// potentiometer angles, H the model's joint-space hold stiffness at the start pose
-    /// ([`Dsmc::hold_stiffness`]) and θ̂ the potentiometer angles the robot would read at the estimate χ_m
-    /// the DSMC was evaluated at (IK(χ_m) plus the average of θ − IK(raw frame) over
-    /// [`HOLD_OFFSET_TIME`]). On the 6-RSS a held τ_a does not hold the generalized force: under gravity
-    /// the platform tilts away at ≈ 14/s between frames, and the model evaluated at a noisy χ_m turns
-    /// camera noise into torque noise through the same stiffness. The compensation takes the pose
-    /// dependence from the potentiometers instead (docs/control.md, "Held torque between frames").
-    pub hold_compensation: bool,
-    /// Also feed the filter the pose rate the potentiometers measured over each camera frame: the
-    /// least-squares slope of the joint angles since the previous frame, mapped by J_θ⁻¹ at the estimate
-    /// ([`PoseKalman::update_rate`]). `None` = camera only (the thesis filter); `Some(σ)` with σ the 1σ
-    /// noise of one potentiometer reading in rad (Table 4.1: 0.2233 bit × η ≈ 1.7e-4 rad). Needs
-    /// `kalman.steady_state = false`.
-    pub potentiometer_rate: Option<f64>,
-    /// Relative error of the potentiometer rate per axis, added to its variance as (scale_error · rate)²:
-    /// an uncalibrated scale η (Table 4.2: 5e-5 of π/4096 rad/bit ≈ 6.5 %) and geometry errors, plus a
-    /// margin (default 0.2).
-    pub potentiometer_rate_scale_error: Vec6,
-    /// Gains of the drive's built-in PID (what the converter inverts).
-    pub pid: PidGains,
-    /// Torque limit of the drive's PID (N·m).
-    pub torque_limit: f64,
-}
-
-impl ServoConfig {
-    /// 1 kHz joint loop, 30 Hz camera without latency, stale after 0.2 s, nominal limits, thesis Kalman tuning, nominal
-    /// drive PID with a 30 N·m limit.
-    pub fn nominal() -> Self {
-        ServoConfig {
-            joint_dt: 1e-3,
-            frame_period: 0.033,
-            stale_after: 0.2,
-            camera_latency: 0.0,
-            limits: CommandLimits::nominal(),
-            kalman: KalmanConfig::thesis(),
-            kalman_model_input: false,
-            potentiometer_rate: None,
-            potentiometer_rate_scale_error: Vec6::repeat(0.2),
-            hold_compensation: false,
-            pid: PidGains::nominal(),
-            torque_limit: 30.0,
-        }
-    }
-}
-
-impl ServoConfig {
-    /// The low-noise DSMC servo (docs/control.md, "Kalman filter in the loop"): [`Self::nominal`] with
-    /// [`KalmanConfig::low_noise`], the DSMC's model acceleration as the filter's known input
-    /// (`kalman_model_input`), the joint-rate hold compensation (`hold_compensation`) and the
-    /// potentiometer rate as a second filter measurement (`potentiometer_rate` = Table 4.1's 0.2233 bit ×
-    /// π/4096 rad/bit, scale error 0.2 for x, y, z and 0.12 for α, β, γ). Use with [`crate::DsmcGains::low_noise`]. KCSC and KJSC
-    /// ignore the DSMC-only options but would get the smoother filter: keep them on [`Self::nominal`].
-    pub fn low_noise() -> Self {
-        ServoConfig {
-            kalman: KalmanConfig::low_noise(),
-            kalman_model_input: true,
-            hold_compensation: true,
-            potentiometer_rate: Some(POTENTIOMETER_SIGMA_RAD),
-            potentiometer_rate_scale_error: Vec6::new(0.2, 0.2, 0.2, 0.12, 0.12, 0.12),
-            ..Self::nominal()
-        }
-    }
-}
-
-/// Table 4.1 potentiometer noise in rad: 0.2233 bit × η = π/4096 rad/bit.
-pub const POTENTIOMETER_SIGMA_RAD: f64 = 0.2233 * core::f64::consts::PI / 4096.0;
-
 /// What one tick produced.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServoTick {
@@ -190,8 +67,9 @@ pub struct ServoTick {
     pub dsmc: Option<(Vec6, Vec6)>,
 }
 
-/// Kalman filter + camera-rate controller + converter + command guard (Fig. 6.2).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Kalman filter + camera-rate controller + converter + command guard (Fig. 6.2). `Clone`, not `Copy`:
+/// `let s = servo;` moves the controller instead of silently forking it.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Servo {
     kp_nominal: KinematicParams,
     config: ServoConfig,
@@ -208,6 +86,7 @@ pub struct Servo {
     ls: RateFit,
     last_frame_t: f64,
     last_kalman_t: f64,
+    last_tick_t: f64,
     started: bool,
     fault: FaultLatch,
 }
@@ -270,6 +149,7 @@ impl Servo {
         } else {
             Vec6::zeros()
         };
+        let held_theta_d = guard.last_command();
         Ok(Servo {
             hold_h,
             theta_frame: theta0,
@@ -283,9 +163,10 @@ impl Servo {
             guard,
             held_tau: Vec6::zeros(),
             held_sliding: Vec6::zeros(),
-            held_theta_d: guard.last_command(),
+            held_theta_d,
             last_frame_t: t0,
             last_kalman_t: t0 - config.camera_latency,
+            last_tick_t: t0,
             started: false,
             fault: FaultLatch::default(),
         })
@@ -338,7 +219,7 @@ impl Servo {
         let est = self.kalman.estimate();
         let j = jacobian_theta(&self.kp_nominal, &est.pose).map_err(FaultReason::Model)?;
         let Some(j_inv) = j.try_inverse() else {
-            return Err(FaultReason::NonFiniteCommand);
+            return Err(FaultReason::SingularJacobian);
         };
         // The slope is the mean rate over the window (middle at t − half); the filter's state is at the
         // exposure time t − L.
@@ -434,6 +315,7 @@ impl Servo {
         self.ls.clear();
         self.last_frame_t = t;
         self.last_kalman_t = t - self.config.camera_latency;
+        self.last_tick_t = t;
         self.started = false;
         self.fault.clear();
         Ok(())
@@ -450,6 +332,11 @@ impl Servo {
         if !t.is_finite() {
             return Err(self.trip(FaultReason::NonFiniteReference));
         }
+        if t < self.last_tick_t {
+            let by = self.last_tick_t - t;
+            return Err(self.trip(FaultReason::TimeWentBackwards { by }));
+        }
+        self.last_tick_t = t;
         let theta = self.kp_nominal.theta_from_reading(kappa);
         if !all_finite(theta.as_slice()) {
             return Err(self.trip(FaultReason::NonFiniteJoint));
@@ -519,6 +406,7 @@ impl Servo {
                 let r = match e {
                     CtrlError::Faulted(r) => r,
                     CtrlError::Core(c) => FaultReason::Model(c),
+                    CtrlError::SingularJacobian => FaultReason::SingularJacobian,
                     _ => FaultReason::NonFiniteCommand,
                 };
                 return Err(self.trip(r));
@@ -554,104 +442,4 @@ impl Servo {
             dsmc,
         })
     }
-}
-
-/// A robot (real or simulated) as the servo sees it. Joint commands are in the nominal joint convention.
-pub trait Plant {
-    /// The plant's own error type (bus error, simulation failure …).
-    type Error;
-    /// Sends one joint command and advances one joint-loop tick (1 kHz).
-    fn step_joint_command(&mut self, theta_cmd: &Vec6) -> core::result::Result<(), Self::Error>;
-    /// The camera pose χ̄_E of the end-effector in the base frame (m, rad) if a frame arrived since the
-    /// last call, else `None`. (A plant whose camera reports ᶜχ_t converts with ᴼχ_C and ᴱχ_t first.)
-    fn camera(&mut self) -> Option<Vec6>;
-    /// The latest potentiometer readings κ (bits).
-    fn potentiometers(&self) -> Vec6;
-    /// Plant time (s).
-    fn time(&self) -> f64;
-}
-
-/// What [`run`] shows the observer after every tick.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TickRecord {
-    /// Time at the start of the tick (s).
-    pub t: f64,
-    /// The reference used.
-    pub reference: Reference,
-    /// The camera frame consumed this tick, if any.
-    pub camera: Option<Vec6>,
-    /// The command sent (rad).
-    pub theta_cmd: Vec6,
-    /// The servo's output, or `None` while faulted.
-    pub tick: Option<ServoTick>,
-    /// The servo's latched fault, if any.
-    pub fault: Option<FaultReason>,
-}
-
-/// Summary of a [`run`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RunSummary {
-    /// Ticks executed.
-    pub ticks: u32,
-    /// Camera frames consumed.
-    pub frames: u32,
-    /// Time and reason of the first fault, if any.
-    pub first_fault: Option<(f64, FaultReason)>,
-}
-
-/// Runs `servo` on `plant` for `ticks` joint-loop ticks following `trajectory` (sampled at plant time
-/// minus `t0`). While the servo is faulted the held command keeps being sent. `observe` sees every tick
-/// and the plant after the command was applied. Stops early only on a plant error.
-pub fn run<P, T, F>(
-    plant: &mut P,
-    servo: &mut Servo,
-    trajectory: &T,
-    t0: f64,
-    ticks: u32,
-    mut observe: F,
-) -> core::result::Result<RunSummary, P::Error>
-where
-    P: Plant,
-    T: Trajectory + ?Sized,
-    F: FnMut(&TickRecord, &P),
-{
-    let mut summary = RunSummary {
-        ticks: 0,
-        frames: 0,
-        first_fault: None,
-    };
-    for _ in 0..ticks {
-        let t = plant.time();
-        let reference = trajectory.sample(t - t0);
-        let camera = plant.camera();
-        let kappa = plant.potentiometers();
-        let result = servo.tick(t, &reference, camera.as_ref(), &kappa);
-        let (theta_cmd, tick) = match result {
-            Ok(o) => (o.theta_cmd, Some(o)),
-            Err(_) => (servo.held_command(), None),
-        };
-        if camera.is_some() && tick.is_some() {
-            summary.frames += 1;
-        }
-        let fault = servo.fault();
-        if summary.first_fault.is_none() {
-            if let Some(r) = fault {
-                summary.first_fault = Some((t, r));
-            }
-        }
-        plant.step_joint_command(&theta_cmd)?;
-        summary.ticks += 1;
-        observe(
-            &TickRecord {
-                t,
-                reference,
-                camera,
-                theta_cmd,
-                tick,
-                fault,
-            },
-            plant,
-        );
-    }
-    Ok(summary)
 }

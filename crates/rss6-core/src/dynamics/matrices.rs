@@ -1,0 +1,292 @@
+//! The matrix path: M, C, G, τ_f in twist coordinates (eq. 3.41, 3.47) and in χ coordinates (eq. 6.2,
+//! 6.4), all terms in one pass ([`dynamics_terms`]), and the energies used by the tests.
+
+use super::newton_euler::twist_force;
+use super::{check_finite, joint_friction, link_transverse_inertia, platform_inertia};
+use super::{wrench_axial_inertia, GRAVITY};
+use crate::error::Result;
+use crate::jacobian::LegGeometry;
+use crate::leg_jacobians::{leg_kin, leg_static, LegKin};
+use crate::params::{DynamicParams, KinematicParams};
+use crate::pose::{twist_jacobian, twist_jacobian_dot};
+use crate::types::{Mat6, Vec3, Vec6, LEGS};
+
+// ---------------------------------------------------------------------------------------------
+// Matrix path: M, C, G in twist coordinates.
+
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TwistTerms {
+    pub(super) m: Mat6,
+    pub(super) c: Mat6,
+    pub(super) g: Vec6,
+    pub(super) theta_dot: Vec6,
+}
+
+/// Twist-coordinate mass matrix M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i) (eq. 3.47).
+pub(super) fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Result<Mat6> {
+    let mut m = Mat6::zeros();
+    for k in 0..3 {
+        m[(k, k)] = dp.platform.mass;
+    }
+    m.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&platform_inertia(&geom.rot, &dp.platform));
+    for i in 0..LEGS {
+        let k = leg_static(geom, i)?;
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        // J_auᵀ J_au = |ŝ × c_w|² J_ad,iᵀ J_ad,i: the wrench is one rank-1 term.
+        let iw = wb.mass * k.s_cw.norm_squared() + wrench_axial_inertia(wb);
+        m += k.r * k.r.transpose() * iw
+            + k.jbu.transpose() * k.jbu * lb.mass
+            + k.jbd.transpose() * k.jbd * link_transverse_inertia(lb);
+    }
+    Ok(m)
+}
+
+/// M, C (twist coordinates) and G from the per-leg Jacobian blocks.
+pub(super) fn twist_terms(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    v: &Vec6,
+    g: &Vec3,
+) -> Result<TwistTerms> {
+    let ip = platform_inertia(&geom.rot, &dp.platform);
+    let mut m = Mat6::zeros();
+    let mut c = Mat6::zeros();
+    for k in 0..3 {
+        m[(k, k)] = dp.platform.mass;
+    }
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&ip);
+    let omega = Vec3::new(v[3], v[4], v[5]);
+    c.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(omega.cross_matrix() * ip));
+    let gp = -g * dp.platform.mass;
+    let mut gv = Vec6::new(gp[0], gp[1], gp[2], 0.0, 0.0, 0.0);
+    let mut theta_dot = Vec6::zeros();
+    for i in 0..LEGS {
+        let k: LegKin = leg_kin(geom, i, v)?;
+        theta_dot[i] = k.theta_dot;
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        let (mw, iw) = (wb.mass, wrench_axial_inertia(wb));
+        let (ml, il) = (lb.mass, link_transverse_inertia(lb));
+        m += k.jau.transpose() * k.jau * mw
+            + k.r * k.r.transpose() * iw
+            + k.jbu.transpose() * k.jbu * ml
+            + k.jbd.transpose() * k.jbd * il;
+        c += k.jau.transpose() * k.jau_dot * mw
+            + k.r * k.r_dot.transpose() * iw
+            + k.jbu.transpose() * k.jbu_dot * ml
+            + k.jbd.transpose() * k.jbd_dot * il;
+        gv -= k.jau.transpose() * g * mw + k.jbu.transpose() * g * ml;
+    }
+    Ok(TwistTerms {
+        m,
+        c,
+        g: gv,
+        theta_dot,
+    })
+}
+
+/// Mass matrix M̃(χ) (eq. 6.2, χ coordinates), 6 × 6, symmetric positive definite in the workspace.
+/// Units: kg (translation block), kg·m (coupling), kg·m² (rotation block).
+///
+/// Bodies (13): the platform (centre of mass E, inertia R·diag(I_x, I_y, I_z)·Rᵀ, [`platform_inertia`]);
+/// wrench i (centre of mass at the midpoint of B_i T_i, only I_z about the axis through it parallel
+/// to ŝ enters, [`wrench_axial_inertia`]); link i (centre of mass at the midpoint of T_i A_i, no spin
+/// about its axis (Assumption 2), only the transverse moment (I_x + I_y)/2 enters,
+/// [`link_transverse_inertia`]). M̃ = J_sᵀ M J_s with M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i)
+/// (eq. 3.47); see `docs/dynamics.md`.
+///
+/// ```
+/// use rss6_core::{mass_matrix, home_pose, DynamicParams, KinematicParams};
+/// let m = mass_matrix(&KinematicParams::nominal(), &DynamicParams::nominal(), &home_pose()).unwrap();
+/// assert!((m - m.transpose()).amax() < 1e-12);
+/// assert!(m.cholesky().is_some());
+/// ```
+pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let m = twist_mass_matrix(&geom, dp)?;
+    let js = twist_jacobian(pose);
+    Ok(js.transpose() * m * js)
+}
+
+/// Coriolis and centrifugal matrix C̃(χ, χ̇) (eq. 6.2): the velocity force is C̃·χ̇, and
+/// xᵀ(dM̃/dt − 2C̃)x = 0 (Property 2), indeed dM̃/dt = C̃ + C̃ᵀ.
+///
+/// C̃ = J_sᵀ M J̇_s + J_sᵀ (C_p + Σ J_kᵀ M_k J̇_k) J_s with C_p = `[0 0; 0 [ω]× I_p]`. Unlike eq. 6.2 as
+/// printed, the legs' J_a,iᵀ M_w,i J_a,i J̇_s terms (and the links') are kept: d(J_a,i J_s)/dt needs
+/// them, and without them Property 2 fails whenever the Euler angles move.
+pub fn coriolis(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+) -> Result<Mat6> {
+    check_finite(pose_dot.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let js = twist_jacobian(pose);
+    let v = js * pose_dot;
+    let t = twist_terms(&geom, dp, &v, &GRAVITY)?;
+    Ok(js.transpose() * (t.m * twist_jacobian_dot(pose, pose_dot) + t.c * js))
+}
+
+/// Gravity vector G̃(χ) = ∂V/∂χ (eq. 6.2) for g = [`GRAVITY`]. N (first 3), N·m (last 3).
+pub fn gravity(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Vec6> {
+    gravity_with(kp, dp, pose, &GRAVITY)
+}
+
+/// G̃(χ) for an arbitrary gravity vector `g` (m/s², base frame), e.g. a tilted base.
+pub fn gravity_with(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let (f, _, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
+    Ok(twist_jacobian(pose).transpose() * f)
+}
+
+/// Friction τ̃_f = J_sᵀ J_adᵀ [f_c,i sign(θ̇_i) + f_v,i θ̇_i] (eq. 6.4), θ̇ = J_θ χ̇.
+pub fn friction(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+) -> Result<Vec6> {
+    check_finite(pose_dot.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let j_theta = geom.j_theta()?;
+    Ok(j_theta.transpose() * joint_friction(dp, &(j_theta * pose_dot)))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Twist-coordinate form (eq. 3.41, 3.47, 3.48): τ_g = J_adᵀ τ_a = M v̇_E + C v_E + G + τ_f.
+
+/// Mass matrix M(χ) of eq. 3.41/3.47 in twist coordinates v_E = [Ė; ω]: M̃ = J_sᵀ M J_s.
+pub fn mass_matrix_twist(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    twist_mass_matrix(&LegGeometry::at_pose(kp, pose)?, dp)
+}
+
+/// Coriolis matrix C(χ, v_E) of eq. 3.41/3.47 for the twist `v_e` = [Ė; ω] (m/s, rad/s):
+/// C = C_p + Σ (J_a,iᵀ M_w,i J̇_a,i + J_b,iᵀ M_l,i J̇_b,i). dM/dt − 2C is skew-symmetric.
+pub fn coriolis_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Mat6> {
+    check_finite(v_e.as_slice())?;
+    Ok(twist_terms(&LegGeometry::at_pose(kp, pose)?, dp, v_e, &GRAVITY)?.c)
+}
+
+/// Gravity G(χ) of eq. 3.41/3.47 in twist coordinates (N, N·m) for gravity `g` (m/s²): G̃ = J_sᵀ G.
+pub fn gravity_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    Ok(twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?.0)
+}
+
+/// Friction τ_f = J_adᵀ [f_c,i sign(θ̇_i) + f_v,i θ̇_i] of eq. 3.48 for the twist `v_e` (θ̇ = J_ad v_E).
+pub fn friction_twist(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    v_e: &Vec6,
+) -> Result<Vec6> {
+    check_finite(v_e.as_slice())?;
+    let j_ad = LegGeometry::at_pose(kp, pose)?.j_ad()?;
+    Ok(j_ad.transpose() * joint_friction(dp, &(j_ad * v_e)))
+}
+
+/// Every term of eq. 6.1–6.4 at one state, computed in one pass (for model-based controllers).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DynamicsTerms {
+    /// M̃(χ) (eq. 6.2).
+    pub m: Mat6,
+    /// C̃(χ, χ̇) (eq. 6.2), velocity force C̃χ̇.
+    pub c: Mat6,
+    /// G̃(χ) (eq. 6.2).
+    pub g: Vec6,
+    /// τ̃_f(χ, χ̇) (eq. 6.4).
+    pub f: Vec6,
+    /// J_ad (eq. 3.30): θ̇ = J_ad v_E.
+    pub j_ad: Mat6,
+    /// J_s (eq. 3.23): v_E = J_s χ̇.
+    pub j_s: Mat6,
+    /// J_θ = J_ad J_s (eq. 5.3): θ̇ = J_θ χ̇.
+    pub j_theta: Mat6,
+}
+
+/// M̃, C̃, G̃, τ̃_f, J_ad, J_s, J_θ at (χ, χ̇) with g = [`GRAVITY`], one IK for all.
+pub fn dynamics_terms(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+) -> Result<DynamicsTerms> {
+    dynamics_terms_with_gravity(kp, dp, pose, pose_dot, &GRAVITY)
+}
+
+/// [`dynamics_terms`] with an arbitrary gravity vector `g` (m/s², base frame).
+pub fn dynamics_terms_with_gravity(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    g: &Vec3,
+) -> Result<DynamicsTerms> {
+    check_finite(pose_dot.as_slice())?;
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let j_s = twist_jacobian(pose);
+    let v = j_s * pose_dot;
+    let t = twist_terms(&geom, dp, &v, g)?;
+    let j_ad = geom.j_ad()?;
+    let j_theta = j_ad * j_s;
+    let js_t = j_s.transpose();
+    Ok(DynamicsTerms {
+        m: js_t * t.m * j_s,
+        c: js_t * (t.m * twist_jacobian_dot(pose, pose_dot) + t.c * j_s),
+        g: js_t * t.g,
+        f: j_theta.transpose() * joint_friction(dp, &t.theta_dot),
+        j_ad,
+        j_s,
+        j_theta,
+    })
+}
+
+/// Kinetic energy T = ½ χ̇ᵀ M̃ χ̇ (J).
+pub fn kinetic_energy(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+) -> Result<f64> {
+    check_finite(pose_dot.as_slice())?;
+    Ok(0.5 * pose_dot.dot(&(mass_matrix(kp, dp, pose)? * pose_dot)))
+}
+
+/// Potential energy V = −Σ m_k gᵀ c_k of the 13 bodies (J), zero at the base plane for g = [`GRAVITY`].
+/// Body centres of mass: E, the midpoints of B_i T_i and of T_i A_i. G̃ = ∂V/∂χ.
+pub fn potential_energy_with_gravity(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    g: &Vec3,
+) -> Result<f64> {
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let e = Vec3::new(pose[0], pose[1], pose[2]);
+    let mut v = -dp.platform.mass * g.dot(&e);
+    for i in 0..LEGS {
+        let cw = (geom.b[i] + geom.t[i]) * 0.5;
+        let cl = (geom.t[i] + geom.a[i]) * 0.5;
+        v -= dp.wrenches[i].mass * g.dot(&cw) + dp.links[i].mass * g.dot(&cl);
+    }
+    Ok(v)
+}

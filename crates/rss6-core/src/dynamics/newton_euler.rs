@@ -1,0 +1,264 @@
+//! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
+//! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
+
+use super::matrices::twist_mass_matrix;
+use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
+use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
+use crate::error::{CoreError, Result, SingularKind};
+use crate::jacobian::LegGeometry;
+use crate::leg_jacobians::leg_m;
+use crate::params::{DynamicParams, KinematicParams};
+use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
+use crate::types::{Mat6, Vec3, Vec6, LEGS};
+
+// ---------------------------------------------------------------------------------------------
+// Vector (Newton–Euler) path: body accelerations of one leg.
+
+/// Accelerations of one leg's bodies for twist v and twist rate v̇.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LegAcc {
+    /// Row i of J_ad.
+    pub(crate) r: Vec6,
+    pub(crate) theta_dot: f64,
+    pub(crate) theta_ddot: f64,
+    pub(crate) w: Vec3,
+    pub(crate) l: Vec3,
+    pub(crate) a: Vec3,
+    pub(crate) inv_l2: f64,
+    /// ŝ × c_w (c_w = w/2).
+    pub(crate) s_cw: Vec3,
+    /// c̈_w (wrench centre-of-mass acceleration).
+    pub(crate) cw_acc: Vec3,
+    /// c̈_l (link centre-of-mass acceleration).
+    pub(crate) cl_acc: Vec3,
+    /// ω̇_2.
+    pub(crate) omega2_dot: Vec3,
+}
+
+impl LegAcc {
+    /// J_bd,iᵀ u for a 3-vector u (no matrix formed).
+    #[inline]
+    pub(crate) fn jbd_t(&self, u: &Vec3) -> Vec6 {
+        let p = u.cross(&self.l);
+        let ap = self.a.cross(&p);
+        let k = z_triple(&p, &self.w);
+        (Vec6::new(p[0], p[1], p[2], ap[0], ap[1], ap[2]) + self.r * k) * self.inv_l2
+    }
+
+    /// Generalised force of a force f at the link's centre of mass: J_buᵀ f.
+    #[inline]
+    pub(crate) fn jbu_t(&self, f: &Vec3) -> Vec6 {
+        let cl = self.l * 0.5;
+        self.r * z_triple(&self.w, f) + self.jbd_t(&cl.cross(f))
+    }
+}
+
+#[inline(always)]
+pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
+    let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
+    let e_dot = Vec3::new(v[0], v[1], v[2]);
+    let omega = Vec3::new(v[3], v[4], v[5]);
+    let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
+    let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
+    let m = leg_m(&w, &l)?;
+    let inv_m = 1.0 / m;
+    let al = a.cross(&l);
+    let r = Vec6::new(l[0], l[1], l[2], al[0], al[1], al[2]) * inv_m;
+    let theta_dot = r.dot(v);
+    let s_w = z_cross(&w);
+    let w_dot = s_w * theta_dot;
+    let a_dot = omega.cross(&a);
+    let l_dot = e_dot + a_dot - w_dot;
+    let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
+    let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
+    // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
+    let theta_ddot =
+        r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
+    // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
+    let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
+    let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
+    let inv_l2 = 1.0 / l.norm_squared();
+    // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
+    let omega2 = l.cross(&l_dot) * inv_l2;
+    let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * (2.0 * l.dot(&l_dot) * inv_l2);
+    Ok(LegAcc {
+        r,
+        theta_dot,
+        theta_ddot,
+        w,
+        l,
+        a,
+        inv_l2,
+        s_cw: s_w * 0.5,
+        cw_acc: t_acc * 0.5,
+        cl_acc: t_acc + l_acc * 0.5,
+        omega2_dot,
+    })
+}
+
+/// Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g): the twist-space generalised force, i.e. J_adᵀ(τ_a − τ_f).
+/// Also returns θ̇ and J_adᵀ (its columns are the rows J_ad,i).
+pub(super) fn twist_force(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    v: &Vec6,
+    v_dot: &Vec6,
+    g: &Vec3,
+) -> Result<(Vec6, Vec6, Mat6)> {
+    let omega = Vec3::new(v[3], v[4], v[5]);
+    let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
+    let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
+    let ip = platform_inertia(&geom.rot, &dp.platform);
+    let f_lin = (e_ddot - g) * dp.platform.mass;
+    let f_ang = ip * omega_dot + omega.cross(&(ip * omega));
+    let mut f = Vec6::new(f_lin[0], f_lin[1], f_lin[2], f_ang[0], f_ang[1], f_ang[2]);
+    let mut theta_dot = Vec6::zeros();
+    let mut j_ad_t = Mat6::zeros();
+    for i in 0..LEGS {
+        let k = leg_acc(geom, i, v, v_dot)?;
+        theta_dot[i] = k.theta_dot;
+        j_ad_t.set_column(i, &k.r);
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        let q_w = wb.mass * k.s_cw.dot(&(k.cw_acc - g)) + wrench_axial_inertia(wb) * k.theta_ddot;
+        let f_l = (k.cl_acc - g) * lb.mass;
+        let n_l = k.omega2_dot * link_transverse_inertia(lb);
+        let cl = k.l * 0.5;
+        f += k.r * (q_w + z_triple(&k.w, &f_l)) + k.jbd_t(&(cl.cross(&f_l) + n_l));
+    }
+    Ok((f, theta_dot, j_ad_t))
+}
+
+/// Solves A x = b (6 × 6) by Gaussian elimination with partial pivoting on the stack; `None` if a pivot
+/// is zero or not finite. (nalgebra's `lu().solve()` does the same with copies of A and b; this is
+/// cheaper, and the solve is ~10 % of an inverse-dynamics call.)
+pub(super) fn solve6(mut a: Mat6, mut b: Vec6) -> Option<Vec6> {
+    for k in 0..6 {
+        let (mut p, mut max) = (k, a[(k, k)].abs());
+        for r in k + 1..6 {
+            let v = a[(r, k)].abs();
+            if v > max {
+                (p, max) = (r, v);
+            }
+        }
+        if max == 0.0 || !max.is_finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(k, p);
+            b.swap_rows(k, p);
+        }
+        let inv = 1.0 / a[(k, k)];
+        for r in k + 1..6 {
+            let f = a[(r, k)] * inv;
+            for c in k + 1..6 {
+                a[(r, c)] -= f * a[(k, c)];
+            }
+            b[r] -= f * b[k];
+        }
+    }
+    let mut x = Vec6::zeros();
+    for k in (0..6).rev() {
+        let mut s = b[k];
+        for c in k + 1..6 {
+            s -= a[(k, c)] * x[c];
+        }
+        x[k] = s / a[(k, k)];
+    }
+    Some(x)
+}
+
+/// Solves J_adᵀ x = f (x = actuator torques that produce twist-space force f).
+pub(super) fn solve_j_ad_t(j_ad_t: &Mat6, f: &Vec6) -> Result<Vec6> {
+    let x = solve6(*j_ad_t, *f).ok_or(CoreError::Singular(SingularKind::TypeII))?;
+    check_finite(x.as_slice()).map_err(|_| CoreError::Singular(SingularKind::TypeII))?;
+    Ok(x)
+}
+
+/// Actuator torques τ_a (N·m) for the motion (χ, χ̇, χ̈) (m, rad; /s; /s²), solving
+/// J_sᵀ J_adᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3) with g = [`GRAVITY`].
+///
+/// Errors: IK errors, [`CoreError::Singular`] (type I or II), [`CoreError::NonFinite`].
+///
+/// ```
+/// use rss6_core::*;
+/// let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+/// let pose = Vec6::new(0.01, -0.01, 0.12, 0.02, 0.0, -0.03);
+/// let (pd, pdd) = (Vec6::new(0.1, 0.0, 0.0, 0.0, 0.5, 0.0), Vec6::new(0.0, 0.0, 1.0, 2.0, 0.0, 0.0));
+/// let tau = inverse_dynamics(&kp, &dp, &pose, &pd, &pdd).unwrap();
+/// // the forward dynamics gives the acceleration back
+/// let acc = forward_dynamics(&kp, &dp, &pose, &pd, &tau).unwrap();
+/// assert!((acc - pdd).amax() < 1e-9);
+/// // and J_θᵀ τ_a = M̃χ̈ + C̃χ̇ + G̃ + τ̃_f (eq. 6.1, 6.3)
+/// let t = dynamics_terms(&kp, &dp, &pose, &pd).unwrap();
+/// let rhs = t.m * pdd + t.c * pd + t.g + t.f;
+/// assert!((t.j_theta.transpose() * tau - rhs).amax() < 1e-9 * rhs.amax());
+/// ```
+pub fn inverse_dynamics(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+) -> Result<Vec6> {
+    inverse_dynamics_with_gravity(kp, dp, pose, pose_dot, pose_ddot, &GRAVITY)
+}
+
+/// [`inverse_dynamics`] with an arbitrary gravity vector `g` (m/s², base frame).
+pub fn inverse_dynamics_with_gravity(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_state(pose_dot, pose_ddot)?;
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let (f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, g)?;
+    Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
+}
+
+/// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
+/// torques τ_a (N·m), with g = [`GRAVITY`]. Solves M̃χ̈ = J_θᵀ τ_a − C̃χ̇ − G̃ − τ̃_f by Cholesky.
+///
+/// Errors: IK errors, [`CoreError::Singular`] (type I; `Matrix` if M is not positive definite, which
+/// only happens for non-physical Ξ; `Euler` at |β| = π/2), [`CoreError::NonFinite`].
+pub fn forward_dynamics(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+) -> Result<Vec6> {
+    forward_dynamics_with_gravity(kp, dp, pose, pose_dot, tau_a, &GRAVITY)
+}
+
+/// [`forward_dynamics`] with an arbitrary gravity vector `g` (m/s², base frame).
+pub fn forward_dynamics_with_gravity(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    g: &Vec3,
+) -> Result<Vec6> {
+    check_state(pose_dot, tau_a)?;
+    check_finite(g.as_slice())?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let js = twist_jacobian(pose);
+    let v = js * pose_dot;
+    let m = twist_mass_matrix(&geom, dp)?;
+    // Velocity and gravity forces at zero twist acceleration.
+    let (bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
+    let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
+    let v_dot = m
+        .cholesky()
+        .ok_or(CoreError::Singular(SingularKind::Matrix))?
+        .solve(&rhs);
+    let chi_ddot =
+        twist_jacobian_inverse(pose)? * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
+    check_finite(chi_ddot.as_slice())?;
+    Ok(chi_ddot)
+}
