@@ -27,7 +27,7 @@ fn truth() -> LoopParams {
     dp.viscous = [0.08, 0.1, 0.09, 0.07, 0.11, 0.1];
     LoopParams {
         dynamics: dp,
-        pid: PidGains::nominal(),
+        pid: PidGains::tuned(),
     }
 }
 

@@ -1,6 +1,9 @@
 //! A documented simulated truth shaped like the thesis's Table 5.2.
 
 use super::closed_loop::LoopParams;
+use rss6_core::thesis::{
+    TABLE_5_2_COULOMB, TABLE_5_2_PID_IDENTIFIED, TABLE_5_2_PID_INITIAL, TABLE_5_2_VISCOUS,
+};
 use rss6_core::{Body, DynamicParams, LEGS};
 use rss6_ctrl::PidGains;
 
@@ -25,17 +28,17 @@ const LINKS: [[f64; 3]; LEGS] = [
     [1.33, 30.7e-5, 49.7e-5],
     [1.34, 47.0e-5, 50.9e-5],
 ];
-/// Table 5.2's friction in the drive's units: f_c,i and f_v,i.
-const COULOMB: [f64; LEGS] = [0.104, 0.111, 0.0336, 0.147, 0.104, 0.0828];
-const VISCOUS: [f64; LEGS] = [0.148, 0.187, 0.0993, 0.854, 0.0803, 0.0349];
+/// (Table 5.2's identified masses and inertias are not in `rss6_core::thesis`; its friction and
+/// PID gains are.)
 
-/// The factor from the thesis's drive units to SI: its nominal l_p = 10 corresponds to rss6's
-/// 400 N·m/rad ([`PidGains::nominal`]), so one drive torque unit is taken as 40 N·m.
-pub const DRIVE_UNIT_TO_NM: f64 = PidGains::nominal().lp / 10.0;
+/// The factor from the thesis's drive units to SI: its initial l_p = 10 corresponds to rss6's
+/// 400 N·m/rad ([`PidGains::tuned`]), so one drive torque unit is taken as 40 N·m.
+pub const DRIVE_UNIT_TO_NM: f64 = PidGains::tuned().lp / TABLE_5_2_PID_INITIAL[0];
 
 /// The simulated truth of the identification demos and tests: Table 5.2's identified masses and
 /// inertias, its friction scaled by [`DRIVE_UNIT_TO_NM`], and the drive PID gains moved from the
-/// nominal SI gains by Table 5.2's identified/initial ratios (l_p × 1.05, l_i × 0.95, l_d × 1.64).
+/// tuned SI gains ([`PidGains::tuned`]) by Table 5.2's identified/initial ratios (l_p × 1.05,
+/// l_i × 0.95, l_d × 1.64).
 /// Table 5.2's platform moments meet the triangle inequalities (16.1 + 14.4 ≥ 33.7 does **not**
 /// hold, so I_z is lowered to I_x + I_y − 0.1·10⁻² = 30.4·10⁻²: the one change, for a physical
 /// platform).
@@ -48,16 +51,18 @@ pub fn table_5_2_truth() -> LoopParams {
         dp.wrenches[i] = Body::new(WRENCHES[i][0], w.inertia[0], w.inertia[1], WRENCHES[i][1]);
         let l = dp.links[i];
         dp.links[i] = Body::new(LINKS[i][0], LINKS[i][1], LINKS[i][2], l.inertia[2]);
-        dp.coulomb[i] = COULOMB[i] * DRIVE_UNIT_TO_NM;
-        dp.viscous[i] = VISCOUS[i] * DRIVE_UNIT_TO_NM;
+        dp.coulomb[i] = TABLE_5_2_COULOMB[i] * DRIVE_UNIT_TO_NM;
+        dp.viscous[i] = TABLE_5_2_VISCOUS[i] * DRIVE_UNIT_TO_NM;
     }
-    let n = PidGains::nominal();
+    let n = PidGains::tuned();
+    let r: [f64; 3] =
+        core::array::from_fn(|k| TABLE_5_2_PID_IDENTIFIED[k] / TABLE_5_2_PID_INITIAL[k]);
     LoopParams {
         dynamics: dp,
         pid: PidGains {
-            lp: n.lp * 1.05,
-            li: n.li * 0.95,
-            ld: n.ld * 1.64,
+            lp: n.lp * r[0],
+            li: n.li * r[1],
+            ld: n.ld * r[2],
         },
     }
 }
