@@ -28,8 +28,8 @@ const LINKS: [[f64; 3]; LEGS] = [
     [1.33, 30.7e-5, 49.7e-5],
     [1.34, 47.0e-5, 50.9e-5],
 ];
-/// (Table 5.2's identified masses and inertias are not in `rss6_core::thesis`; its friction and
-/// PID gains are.)
+// (Table 5.2's identified masses and inertias are not in `rss6_core::thesis`; its friction and
+// PID gains are.)
 
 /// The factor from the thesis's drive units to SI: its initial l_p = 10 corresponds to rss6's
 /// 400 N·m/rad ([`PidGains::tuned`]), so one drive torque unit is taken as 40 N·m.
