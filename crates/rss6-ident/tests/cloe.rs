@@ -103,7 +103,7 @@ fn noise_free_cloe_recovers_the_truth_where_the_loop_is_differentiable() {
         res.cost_history[0],
         res.cost_history.last().unwrap()
     );
-    // Measured: 1e-10 after 8 iterations (quadratic convergence); the bound.
+    // Measured: 1.6e-9 after 10 iterations (quadratic convergence); the bound.
     assert!(worst < 1e-6, "{worst}");
     assert_eq!(N_A, 67);
 }

@@ -76,7 +76,10 @@ fn the_lean_loop_gives_the_experiment_layers_chi_s_on_the_twin() {
 fn sensitivities_match_central_differences() {
     let a = truth();
     let exc = excitation();
-    let cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    // The torque clamp off: its switching (the derivative kick at each frame) is a non-smooth event
+    // that limits the central-difference reference's step (docs/identification.md).
+    cfg.torque_limit = 1e4;
     // A spread of columns: platform m, Ix, Iz; wrench 1 m and Iz; link 2 m and Ix; fc3, fv4; gains.
     let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
     let run = simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap();
@@ -86,11 +89,12 @@ fn sensitivities_match_central_differences() {
     // The FD reference has two errors: rounding, amplified by the loop (∝ 1/h), and for larger h
     // steps that move a Coulomb sign(θ̇) event (the discrete loop is not differentiable there;
     // its exact derivative almost everywhere ignores them). So each column is compared with the
-    // best of three relative steps. Measured (release): best errors 2e-8 … 2.2e-7.
+    // best of four relative steps. Measured (release): best errors 7.6e-9 … 5.0e-7 (the bound,
+    // the 1e-6, is 2× the worst).
     for (c, &col) in cols.iter().enumerate() {
         let an = jac.column(c);
         let mut best = f64::INFINITY;
-        for rel_h in [1e-4, 1e-5, 1e-6] {
+        for rel_h in [1e-3, 1e-4, 1e-5, 1e-6] {
             let h = rel_h * base[col].abs().max(1e-6);
             let sim = |d: f64| {
                 let mut x = base;
