@@ -9,7 +9,7 @@
 //! Symbols follow the thesis: ᴼχ_C is the sensor (camera) pose in the base frame ("sensor_in_base"),
 //! ᴱχ_t the target (reflector) frame in the end-effector frame ("target_in_effector"), ᶜχ_t the
 //! measured target pose in the sensor frame, κ potentiometer readings (bits), b the 60 kinematic error
-//! parameters in DESIGN.md order. Units are SI (m, rad). See `docs/calibration.md`.
+//! parameters in docs/architecture.md order. Units are SI (m, rad). See `docs/calibration.md`.
 #![forbid(unsafe_code)]
 #![allow(non_snake_case)]
 
@@ -28,7 +28,8 @@ mod validate;
 pub use crate::calibrate::{
     gauge_directions, implicit, implicit_with_progress, min_configurations, parameter_vector,
     residual_norm_sum, residuals_and_jacobian, rpba, rpba_with_progress, CalibrationOptions,
-    CalibrationResult, DroppedConfiguration, JacobianMode, Progress,
+    CalibrationResult, Convergence, DroppedConfiguration, JacobianMode, MeasurementNoise, Progress,
+    RejectedConfiguration,
 };
 pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,
@@ -42,7 +43,7 @@ pub use crate::model::{
     gauge_aligned_error, parameter_names, parameter_scale, GAUGE_DESCRIPTIONS, N_GAUGE,
     SIGMA_DTHETA, SIGMA_ETA, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION, SIGMA_LENGTH,
 };
-pub use crate::plant::{plant_nominal_target, random_plant, sim_source};
+pub use crate::plant::{plant_nominal_target, plant_with_kinematics, random_plant, sim_source};
 pub use crate::selection::{
     observability_index, select_configurations, select_configurations_with, stroke, stroke_with,
     SelectionOptions, SelectionReport, StrokeOptions,

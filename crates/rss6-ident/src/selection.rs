@@ -218,6 +218,7 @@ fn nominal_data(kp: &KinematicParams, thetas: &[Vec6]) -> Result<CalibrationData
             sensor_pose: Some(cam.into()),
             kappa_samples: 1,
             camera_frames: 1,
+            ..ConfigurationData::default()
         });
     }
     Ok(data)

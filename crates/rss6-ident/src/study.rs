@@ -106,6 +106,11 @@ pub fn run_robot_with_source(
         &sensor_guess,
         &CalibrationOptions {
             fix_sensor_pose: true,
+            // ᴼχ_C held at a guess that is off by Table 4.2's external sizes cannot explain the data to
+            // within the noise (fit statistic 6–40 on the analytic generator): the thesis's setting is
+            // misspecified by design, so this variant is evaluated without the consistency check.
+            max_fit_statistic: f64::INFINITY,
+            max_rejections: 0,
             ..solver
         },
     )?;

@@ -121,6 +121,7 @@ impl PyCalibrationData {
                 },
                 kappa_samples: 1,
                 camera_frames: u32::from(!s.iter().any(|x| x.is_nan())),
+                ..ConfigurationData::default()
             })
             .collect();
         Ok(PyCalibrationData {

@@ -12,13 +12,15 @@
 //! Parameters are scaled by their Table 4.2 σ, and steps are restricted to the complement of the 10
 //! gauge directions (see [`crate::model`]): the minimum-norm fix of the frame choice.
 
+mod noise;
 mod options;
 mod problem;
 mod result;
 mod solver;
 
-pub use options::{CalibrationOptions, JacobianMode, Progress};
-pub use result::{CalibrationResult, DroppedConfiguration};
+pub use noise::MeasurementNoise;
+pub use options::{CalibrationOptions, Convergence, JacobianMode, Progress};
+pub use result::{CalibrationResult, DroppedConfiguration, RejectedConfiguration};
 
 use crate::data::CalibrationData;
 use crate::error::{IdentError, Method, Result};
@@ -114,8 +116,8 @@ pub fn residual_norm_sum(
 ) -> Result<f64> {
     let layout = Layout::new(method, *kp);
     let x = layout.pack(kp, sensor, target);
-    let (kappa, cam, _) = usable(data);
-    if kappa.len() < 2 {
+    let u = usable(data, false);
+    if u.len() < 2 {
         return Err(IdentError::InvalidInput("no usable configurations".into()));
     }
     let opts = CalibrationOptions {
@@ -123,7 +125,7 @@ pub fn residual_norm_sum(
         leg_weight: 1.0,
         ..CalibrationOptions::default()
     };
-    let mut p = Problem::new(layout, kappa, cam, &opts);
+    let mut p = Problem::new(layout, u.kappa, u.cam, &opts);
     let e = p
         .eval(&x, false)
         .map_err(|(config, source)| IdentError::Fk { config, source })?;
@@ -135,7 +137,7 @@ pub fn residual_norm_sum(
 }
 
 /// Residuals and Jacobian of `method` at parameter vector `x` (see [`parameter_vector`]) for the
-/// usable configurations of `data`, with the default weights. Exposed for identifiability studies and
+/// usable configurations of `data`, with the fixed Table 4.1 weights (no noise whitening). Exposed for identifiability studies and
 /// for checking the analytic Jacobian against eq. 4.25.
 pub fn residuals_and_jacobian(
     method: Method,
@@ -152,15 +154,15 @@ pub fn residuals_and_jacobian(
             layout.n()
         )));
     }
-    let (kappa, cam, used) = usable(data);
-    if kappa.len() < 2 {
+    let u = usable(data, false);
+    if u.len() < 2 {
         return Err(IdentError::InvalidInput(
             "fewer than 2 usable configurations".into(),
         ));
     }
-    let mut p = Problem::new(layout, kappa, cam, &CalibrationOptions::default());
+    let mut p = Problem::new(layout, u.kappa, u.cam, &CalibrationOptions::default());
     p.eval_full(x, mode).map_err(|(l, source)| IdentError::Fk {
-        config: used[l],
+        config: u.index[l],
         source,
     })
 }
@@ -208,8 +210,8 @@ mod tests {
                 (&xg - &x).amax() > 1e-3,
                 "the gauge must actually move the parameters"
             );
-            let (kappa, cam, _) = usable(&data);
-            let mut p = Problem::new(layout, kappa, cam, &CalibrationOptions::default());
+            let u = usable(&data, false);
+            let mut p = Problem::new(layout, u.kappa, u.cam, &CalibrationOptions::default());
             let r = p.eval(&x, false).unwrap().r;
             let rg = p.eval(&xg, false).unwrap().r;
             assert!(

@@ -1,5 +1,6 @@
 //! The least-squares problem of each method: residuals Φ and their Jacobian at a parameter vector.
 
+use super::noise::{implicit_whitening, rpba_whitening, NoiseInput, Whitening};
 use super::options::{CalibrationOptions, JacobianMode};
 use crate::closure::{fk_reading, fk_with_derivative, leg_closure, FkDerivative, Mat6x60};
 use crate::data::CalibrationData;
@@ -19,12 +20,17 @@ pub(super) struct Problem {
     guesses: Vec<Vec6>,
     pose_weights: Vec6,
     leg_weight: f64,
+    /// Noise whitening of the residuals ([`Problem::weigh_by_noise`]); replaces the fixed weights.
+    white: Option<Whitening>,
+    /// RPBA: the FK derivatives of the last evaluation with a Jacobian (reused by the noise model).
+    last_fk: Vec<FkDerivative>,
 }
 
 /// A failed evaluation: the (usable-list) index of the configuration and the kinematics error.
 pub(super) type EvalError = (usize, CoreError);
 
 impl Problem {
+    /// The problem of the configurations (`kappa`, `cam`) with the fixed weights of `opts`.
     pub(super) fn new(
         layout: Layout,
         kappa: Vec<Vec6>,
@@ -49,6 +55,60 @@ impl Problem {
             guesses: vec![home_pose(); m],
             pose_weights: Vec6::from(opts.pose_weights),
             leg_weight: opts.leg_weight,
+            white: None,
+            last_fk: Vec::new(),
+        }
+    }
+
+    /// Weighs the residuals by the inverse square root of their covariance under `noise`, evaluated at
+    /// `x` (call after an evaluation at `x`, so the FK warm starts are there); `counts` are the samples
+    /// averaged (κ, camera) per configuration. `false` if the covariance is not positive definite.
+    pub(super) fn weigh_by_noise(
+        &mut self,
+        x: &DVector<f64>,
+        noise: &super::MeasurementNoise,
+        counts: &[(f64, f64)],
+    ) -> bool {
+        let kp = self.layout.kp(x);
+        let input = NoiseInput {
+            kp: &kp,
+            sensor: self.layout.sensor(x).unwrap_or_else(home_pose),
+            target: self.layout.target(x),
+            kappa: &self.kappa,
+            cam: &self.cam,
+            guesses: &self.guesses,
+            fk: (self.last_fk.len() == self.kappa.len()).then_some(self.last_fk.as_slice()),
+            counts,
+        };
+        let white = match self.layout.method {
+            Method::Rpba => rpba_whitening(&input, noise),
+            Method::Implicit => implicit_whitening(&input, noise),
+        };
+        self.pose_weights = Vec6::repeat(1.0);
+        self.leg_weight = 1.0;
+        self.white = white;
+        self.white.is_some()
+    }
+
+    /// Applies the noise weighting to residuals and a Jacobian evaluated before it was set.
+    pub(super) fn whiten(&self, r: &mut DVector<f64>, j: &mut DMatrix<f64>) {
+        if let Some(w) = &self.white {
+            w.vector(r);
+            w.matrix(j);
+        }
+    }
+
+    /// Per residual block (RPBA: configurations 1.., implicit: all), r_lᵀΣ_ll⁻¹r_l / 6 of the raw
+    /// residual; `None` without noise weighting.
+    pub(super) fn normalized_blocks(&self, raw: &DVector<f64>) -> Option<Vec<f64>> {
+        self.white.as_ref().map(|w| w.normalized_blocks(raw))
+    }
+
+    /// Index in the usable list of the configuration of residual block `k`.
+    pub(super) fn block_configuration(&self, k: usize) -> usize {
+        match self.layout.method {
+            Method::Rpba => k + 1,
+            Method::Implicit => k,
         }
     }
 
@@ -59,15 +119,24 @@ impl Problem {
         }
     }
 
+    /// Weighted residuals (and Jacobian if `jac`) at `x`, with the raw residual kept.
     pub(super) fn eval(
         &mut self,
         x: &DVector<f64>,
         jac: bool,
     ) -> core::result::Result<Eval, EvalError> {
-        match self.layout.method {
-            Method::Rpba => self.eval_rpba(x, jac),
-            Method::Implicit => Ok(self.eval_implicit(x, jac)),
+        let mut e = match self.layout.method {
+            Method::Rpba => self.eval_rpba(x, jac)?,
+            Method::Implicit => self.eval_implicit(x, jac),
+        };
+        if let Some(w) = &self.white {
+            e.raw = Some(e.r.clone());
+            w.vector(&mut e.r);
+            if let Some(j) = e.j.as_mut() {
+                w.matrix(j);
+            }
         }
+        Ok(e)
     }
 
     fn eval_rpba(&mut self, x: &DVector<f64>, jac: bool) -> core::result::Result<Eval, EvalError> {
@@ -122,7 +191,10 @@ impl Problem {
                     .copy_from(&(-(wd * xi_t)));
             }
         }
-        Ok(Eval { r, j })
+        if jac {
+            self.last_fk = fks;
+        }
+        Ok(Eval { r, j, raw: None })
     }
 
     fn eval_implicit(&mut self, x: &DVector<f64>, jac: bool) -> Eval {
@@ -155,7 +227,7 @@ impl Problem {
                     .copy_from(&(c.d_xi * (-adjoint(&m_oe)) * et * w));
             }
         }
-        Eval { r, j }
+        Eval { r, j, raw: None }
     }
 
     /// Residuals and Jacobian with the requested Jacobian mode.
@@ -189,24 +261,59 @@ impl Problem {
     }
 }
 
+/// One evaluation: weighted residuals, their Jacobian, and (with noise weighting) the raw residuals.
 pub(super) struct Eval {
     pub(super) r: DVector<f64>,
     pub(super) j: Option<DMatrix<f64>>,
+    pub(super) raw: Option<DVector<f64>>,
 }
 
-/// κ, ᶜχ_t and data indices of the configurations without a defect.
-pub(super) fn usable(data: &CalibrationData) -> (Vec<Vec6>, Vec<Vec6>, Vec<usize>) {
-    let mut kappa = Vec::new();
-    let mut cam = Vec::new();
-    let mut idx = Vec::new();
+/// The configurations a problem is built from.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Usable {
+    pub(super) kappa: Vec<Vec6>,
+    pub(super) cam: Vec<Vec6>,
+    /// Data index of each.
+    pub(super) index: Vec<usize>,
+    /// Samples averaged (κ, camera) of each.
+    pub(super) counts: Vec<(f64, f64)>,
+}
+
+impl Usable {
+    pub(super) fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Removes usable configuration `l`.
+    pub(super) fn remove(&mut self, l: usize) {
+        self.kappa.remove(l);
+        self.cam.remove(l);
+        self.index.remove(l);
+        self.counts.remove(l);
+    }
+}
+
+/// The configurations without a defect (and, unless `include_faulty`, without a failed collection
+/// check).
+pub(super) fn usable(data: &CalibrationData, include_faulty: bool) -> Usable {
+    let mut u = Usable::default();
     for (i, c) in data.configurations.iter().enumerate() {
-        if c.defect().is_none() {
+        let excluded = if include_faulty {
+            c.defect()
+        } else {
+            c.exclusion()
+        };
+        if excluded.is_none() {
             if let Some(p) = c.sensor_pose_vec() {
-                kappa.push(c.kappa_vec());
-                cam.push(p);
-                idx.push(i);
+                u.kappa.push(c.kappa_vec());
+                u.cam.push(p);
+                u.index.push(i);
+                u.counts.push((
+                    f64::from(c.kappa_samples.max(1)),
+                    f64::from(c.camera_frames.max(1)),
+                ));
             }
         }
     }
-    (kappa, cam, idx)
+    u
 }

@@ -1,5 +1,6 @@
 //! What a calibration returns.
 
+use super::options::Convergence;
 use crate::error::Method;
 use rss6_core::{KinematicParams, Vec6, N_KIN_ERRORS};
 
@@ -21,7 +22,7 @@ pub struct CalibrationResult {
     pub params: KinematicParams,
     /// The parameters the calibration started from (the nominal model; b is relative to them).
     pub reference: KinematicParams,
-    /// Calibrated error vector b relative to the parameters passed in (DESIGN.md order).
+    /// Calibrated error vector b relative to the parameters passed in (docs/architecture.md order).
     pub errors: [f64; N_KIN_ERRORS],
     /// Calibrated ᴱχ_t (m, rad).
     pub target_in_effector: Vec6,
@@ -46,4 +47,28 @@ pub struct CalibrationResult {
     pub dropped: Vec<DroppedConfiguration>,
     /// Indices of the configurations used.
     pub used: Vec<usize>,
+    /// Gross outliers rejected by the solver, in the order rejected.
+    pub rejected: Vec<RejectedConfiguration>,
+    /// Normalised residual r_lᵀΣ_ll⁻¹r_l/6 of every used configuration at the solution, as (data
+    /// index, value); ≈ 1 when the noise explains it. RPBA's reference configuration 0 has none (it is
+    /// in every other residual). Empty without noise weighting.
+    pub normalized_residuals: Vec<(usize, f64)>,
+    /// Fit statistic: weighted cost per degree of freedom, χ²/(equations − free parameters); ≈ 1 when
+    /// the model explains the data to within the noise model. NaN without noise weighting.
+    pub fit_statistic: f64,
+    /// Degrees of freedom of the fit statistic (equations − identifiable parameters).
+    pub degrees_of_freedom: usize,
+    /// How the final Levenberg–Marquardt iteration ended.
+    pub convergence: Convergence,
+}
+
+/// A configuration the solver rejected as a gross outlier.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RejectedConfiguration {
+    /// Index in [`crate::CalibrationData::configurations`].
+    pub index: usize,
+    /// Its normalised residual when it was rejected.
+    pub normalized_residual: f64,
+    /// The threshold it exceeded (`outlier_threshold` × the robust scale of that fit).
+    pub threshold: f64,
 }

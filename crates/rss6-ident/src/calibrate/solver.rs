@@ -2,21 +2,17 @@
 //! identifiability checks before and after.
 
 use super::min_configurations;
-use super::options::{CalibrationOptions, Progress};
-use super::problem::{usable, EvalError, Problem};
-use super::result::{CalibrationResult, DroppedConfiguration};
+use super::options::{CalibrationOptions, Convergence, Progress};
+use super::problem::{usable, EvalError, Problem, Usable};
+use super::result::{CalibrationResult, DroppedConfiguration, RejectedConfiguration};
 use crate::data::CalibrationData;
 use crate::error::{IdentError, Method, Result};
 use crate::model::{Layout, GAUGE_DESCRIPTIONS, N_GAUGE};
 use nalgebra::{DMatrix, DVector};
-use rss6_core::Vec6;
 
-/// The usable configurations of a problem and where they came from.
+/// The usable configurations of a problem and those left out.
 struct Selected {
-    kappa: Vec<Vec6>,
-    cam: Vec<Vec6>,
-    /// Data index of each usable configuration.
-    used: Vec<usize>,
+    usable: Usable,
     dropped: Vec<DroppedConfiguration>,
 }
 
@@ -77,28 +73,30 @@ fn too_few(layout: &Layout, got: usize) -> Result<()> {
     Ok(())
 }
 
-/// Configurations with a defect (NaN, missing frames) are dropped; a bad reference is an error.
-fn select(layout: &Layout, data: &CalibrationData) -> Result<Selected> {
+/// Configurations with a defect (NaN, missing frames) or, unless `opts.include_faulty`, a failed
+/// collection check are dropped; a bad reference is an error.
+fn select(layout: &Layout, data: &CalibrationData, opts: &CalibrationOptions) -> Result<Selected> {
     let mut dropped = Vec::new();
     for (i, c) in data.configurations.iter().enumerate() {
-        if let Some(reason) = c.defect() {
+        let excluded = if opts.include_faulty {
+            c.defect()
+        } else {
+            c.exclusion()
+        };
+        if let Some(reason) = excluded {
             if i == 0 && layout.method == Method::Rpba {
                 return Err(IdentError::BadReference(reason));
             }
             dropped.push(DroppedConfiguration { index: i, reason });
         }
     }
-    let (kappa, cam, used) = usable(data);
-    too_few(layout, used.len())?;
-    Ok(Selected {
-        kappa,
-        cam,
-        used,
-        dropped,
-    })
+    let usable = usable(data, opts.include_faulty);
+    too_few(layout, usable.len())?;
+    Ok(Selected { usable, dropped })
 }
 
-/// Builds the problem and evaluates it at `x0`; configurations where FK fails at the start are dropped.
+/// Builds the problem and evaluates it at `x0`; configurations where FK fails at the start are
+/// dropped. With a noise model the residuals are then weighted by it.
 fn start(
     layout: Layout,
     sel: &mut Selected,
@@ -106,24 +104,35 @@ fn start(
     opts: &CalibrationOptions,
 ) -> Result<(Problem, DVector<f64>, DMatrix<f64>)> {
     loop {
-        let mut p = Problem::new(layout, sel.kappa.clone(), sel.cam.clone(), opts);
+        let u = &sel.usable;
+        let mut p = Problem::new(layout, u.kappa.clone(), u.cam.clone(), opts);
         match p.eval_full(x0, opts.jacobian) {
-            Ok((r, j)) => return Ok((p, r, j)),
+            Ok((r, j)) => {
+                let Some(noise) = &opts.noise else {
+                    return Ok((p, r, j));
+                };
+                if !p.weigh_by_noise(x0, noise, &u.counts) {
+                    return Err(IdentError::InvalidInput(
+                        "the noise model gives a singular residual covariance (a zero σ?)".into(),
+                    ));
+                }
+                let (mut r, mut j) = (r, j);
+                p.whiten(&mut r, &mut j);
+                return Ok((p, r, j));
+            }
             Err((l, e)) => {
                 if l == 0 && layout.method == Method::Rpba {
                     return Err(IdentError::Fk {
-                        config: sel.used[0],
+                        config: u.index[0],
                         source: e,
                     });
                 }
                 sel.dropped.push(DroppedConfiguration {
-                    index: sel.used[l],
+                    index: u.index[l],
                     reason: format!("forward kinematics failed at the starting parameters: {e}"),
                 });
-                sel.kappa.remove(l);
-                sel.cam.remove(l);
-                sel.used.remove(l);
-                too_few(&layout, sel.used.len())?;
+                sel.usable.remove(l);
+                too_few(&layout, sel.usable.len())?;
             }
         }
     }
@@ -182,6 +191,7 @@ struct LmEnd {
     j: DMatrix<f64>,
     cost_history: Vec<f64>,
     accepted: usize,
+    convergence: Convergence,
 }
 
 /// Levenberg–Marquardt from (`x`, `r`, `j`) with Marquardt's diagonal damping.
@@ -199,6 +209,7 @@ fn levenberg_marquardt(
     let mut cost_history = vec![cost];
     let mut lambda = opts.initial_damping;
     let mut accepted = 0;
+    let mut convergence = Convergence::IterationLimit;
     for iteration in 1..=opts.max_iterations {
         let jr = red.reduce(&j);
         let a = jr.transpose() * &jr;
@@ -230,9 +241,12 @@ fn levenberg_marquardt(
                 cost,
                 damping: lambda,
             });
-            if decrease <= opts.cost_tolerance * cost.max(f64::MIN_POSITIVE)
-                || z.norm() <= opts.step_tolerance
-            {
+            if decrease <= opts.cost_tolerance * cost.max(f64::MIN_POSITIVE) {
+                convergence = Convergence::CostTolerance;
+                break;
+            }
+            if z.norm() <= opts.step_tolerance {
+                convergence = Convergence::StepTolerance;
                 break;
             }
         } else {
@@ -243,6 +257,7 @@ fn levenberg_marquardt(
                 damping: lambda,
             });
             if lambda > 1e12 {
+                convergence = Convergence::NoFurtherDecrease;
                 break;
             }
         }
@@ -252,6 +267,7 @@ fn levenberg_marquardt(
         j,
         cost_history,
         accepted,
+        convergence,
     })
 }
 
@@ -299,7 +315,118 @@ fn identifiability(
     }
 }
 
-/// Calibrates `layout`'s parameters from `data`, starting at `x0`.
+/// The fit at the end of one solve: per-block normalised residuals and the fit statistic.
+struct Fit {
+    /// (usable index, r_lᵀΣ_ll⁻¹r_l/6) per residual block.
+    blocks: Vec<(usize, f64)>,
+    chi2: f64,
+    dof: usize,
+}
+
+impl Fit {
+    fn statistic(&self) -> f64 {
+        if self.blocks.is_empty() {
+            f64::NAN
+        } else {
+            self.chi2 / self.dof.max(1) as f64
+        }
+    }
+
+    /// max(1, median/0.891): the normalised residuals' scale relative to the noise model (0.891 is
+    /// the median of χ²₆/6), so model errors that affect every configuration do not make outliers.
+    fn scale(&self) -> f64 {
+        let mut v: Vec<f64> = self.blocks.iter().map(|b| b.1).collect();
+        v.sort_by(f64::total_cmp);
+        let median = v.get(v.len() / 2).copied().unwrap_or(0.0);
+        (median / 0.891).max(1.0)
+    }
+
+    /// Usable indices of the blocks, worst first.
+    fn worst_first(&self) -> Vec<(usize, f64)> {
+        let mut v = self.blocks.clone();
+        v.sort_by(|a, b| b.1.total_cmp(&a.1));
+        v
+    }
+}
+
+fn assess(problem: &mut Problem, end: &LmEnd, free: usize) -> core::result::Result<Fit, EvalError> {
+    let e = problem.eval(&end.x, false)?;
+    let blocks = match e.raw.as_ref().and_then(|raw| problem.normalized_blocks(raw)) {
+        Some(z) => z
+            .into_iter()
+            .enumerate()
+            .map(|(k, v)| (problem.block_configuration(k), v))
+            .collect(),
+        None => Vec::new(),
+    };
+    Ok(Fit {
+        blocks,
+        chi2: e.r.norm_squared(),
+        dof: e.r.len().saturating_sub(free),
+    })
+}
+
+/// The configurations to blame for a bad fit: the rejected ones and the 5 worst, as data indices.
+fn blame(fit: &Fit, used: &[usize], rejected: &[RejectedConfiguration]) -> Vec<usize> {
+    let mut v: Vec<usize> = fit
+        .worst_first()
+        .iter()
+        .take(5)
+        .map(|&(l, _)| used[l])
+        .collect();
+    v.extend(rejected.iter().map(|r| r.index));
+    v
+}
+
+/// The error for a fit that cannot be trusted, or `None`.
+fn verdict(
+    method: Method,
+    fit: &Fit,
+    end: &LmEnd,
+    used: &[usize],
+    rejected: &[RejectedConfiguration],
+    opts: &CalibrationOptions,
+) -> Option<IdentError> {
+    let start = end.cost_history.first().copied().unwrap_or(f64::NAN);
+    let last = end.cost_history.last().copied().unwrap_or(f64::NAN);
+    let why = if !end.convergence.converged() {
+        format!(
+            "Levenberg–Marquardt did not converge in {} iterations (cost {start:.4e} → {last:.4e})",
+            opts.max_iterations
+        )
+    } else if !(last <= start) {
+        format!("the model explains the data worse than the start (cost {start:.4e} → {last:.4e})")
+    } else if opts.noise.is_some() && !(fit.statistic() <= opts.max_fit_statistic) {
+        format!(
+            "the fit is inconsistent with the noise model after rejecting {} configuration(s) \
+             (statistic > {}; the normalised residuals scale is {:.3})",
+            rejected.len(),
+            opts.max_fit_statistic,
+            fit.scale()
+        )
+    } else {
+        return None;
+    };
+    Some(IdentError::Calibration {
+        method,
+        why,
+        configurations: blame(fit, used, rejected),
+        parameters: Vec::new(),
+        fit_statistic: fit.statistic(),
+    })
+}
+
+/// The gross outlier of a fit, if any: (usable index, normalised residual, threshold).
+fn outlier(fit: &Fit, opts: &CalibrationOptions) -> Option<(usize, f64, f64)> {
+    let threshold = opts.outlier_threshold * fit.scale();
+    fit.worst_first()
+        .first()
+        .filter(|w| w.1 > threshold)
+        .map(|&(l, z)| (l, z, threshold))
+}
+
+/// Calibrates `layout`'s parameters from `data`, starting at `x0`: solve, reject the worst gross
+/// outlier and solve again from `x0` (at most `opts.max_rejections` times), then check the fit.
 pub(super) fn solve(
     layout: Layout,
     data: &CalibrationData,
@@ -314,37 +441,58 @@ pub(super) fn solve(
         ));
     }
     layout.kp(&x0).validate()?;
-    let mut sel = select(&layout, data)?;
-    let (mut problem, r, j) = start(layout, &mut sel, &x0, opts)?;
-    let red = Reduction::new(
-        &layout,
-        &x0,
-        opts.fix_sensor_pose && method == Method::Implicit,
-    );
-    check_rank(&layout, &red, &j, opts)?;
-    let end = levenberg_marquardt(&mut problem, &red, x0, r, j, opts, progress).map_err(
-        |(l, source)| IdentError::Fk {
-            config: sel.used[l],
+    let mut sel = select(&layout, data, opts)?;
+    let red = Reduction::new(&layout, &x0, opts.fix_sensor_pose && method == Method::Implicit);
+    let mut rejected: Vec<RejectedConfiguration> = Vec::new();
+    loop {
+        let (mut problem, r, j) = start(layout, &mut sel, &x0, opts)?;
+        check_rank(&layout, &red, &j, opts)?;
+        let fk_error = |(l, source): EvalError| IdentError::Fk {
+            config: sel.usable.index[l],
             source,
-        },
-    )?;
-    let id = identifiability(&layout, &red, &end.j, opts);
-    let x = end.x;
-    Ok(CalibrationResult {
-        method,
-        params: layout.kp(&x),
-        reference: layout.reference,
-        errors: layout.errors(&x),
-        target_in_effector: layout.target(&x),
-        sensor_in_base: layout.sensor(&x),
-        cost_history: end.cost_history,
-        rank: id.rank,
-        parameter_count: layout.n(),
-        unidentifiable: id.unidentifiable,
-        gauge_directions: id.gauge_directions,
-        singular_values: id.singular_values,
-        iterations: end.accepted,
-        dropped: sel.dropped,
-        used: sel.used,
-    })
+        };
+        let end = levenberg_marquardt(&mut problem, &red, x0.clone(), r, j, opts, progress)
+            .map_err(fk_error)?;
+        let fit = assess(&mut problem, &end, red.q.ncols()).map_err(fk_error)?;
+        if rejected.len() < opts.max_rejections {
+            if let Some((l, z, threshold)) = outlier(&fit, opts) {
+                rejected.push(RejectedConfiguration {
+                    index: sel.usable.index[l],
+                    normalized_residual: z,
+                    threshold,
+                });
+                sel.usable.remove(l);
+                too_few(&layout, sel.usable.len())?;
+                continue;
+            }
+        }
+        let used = sel.usable.index.clone();
+        if let Some(e) = verdict(method, &fit, &end, &used, &rejected, opts) {
+            return Err(e);
+        }
+        let id = identifiability(&layout, &red, &end.j, opts);
+        let x = &end.x;
+        return Ok(CalibrationResult {
+            method,
+            params: layout.kp(x),
+            reference: layout.reference,
+            errors: layout.errors(x),
+            target_in_effector: layout.target(x),
+            sensor_in_base: layout.sensor(x),
+            rank: id.rank,
+            parameter_count: layout.n(),
+            unidentifiable: id.unidentifiable,
+            gauge_directions: id.gauge_directions,
+            singular_values: id.singular_values,
+            iterations: end.accepted,
+            dropped: sel.dropped,
+            normalized_residuals: fit.blocks.iter().map(|&(l, z)| (used[l], z)).collect(),
+            fit_statistic: fit.statistic(),
+            degrees_of_freedom: fit.dof,
+            convergence: end.convergence,
+            cost_history: end.cost_history,
+            used,
+            rejected,
+        });
+    }
 }
