@@ -49,6 +49,8 @@ fn main() {
             s
         })
         .collect();
-    for s in out { print!("{s}"); }
+    for s in out {
+        print!("{s}");
+    }
     println!("{:.1} s", t.elapsed().as_secs_f64());
 }

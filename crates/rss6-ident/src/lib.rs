@@ -45,12 +45,14 @@ pub use crate::model::{
 };
 pub use crate::plant::{plant_nominal_target, plant_with_kinematics, random_plant, sim_source};
 pub use crate::selection::{
-    observability_index, select_configurations, select_configurations_with, stroke, stroke_with,
-    SelectionOptions, SelectionReport, StrokeOptions,
+    observability_index, select_configurations, select_configurations_with, stroke, stroke_margin,
+    stroke_with, SelectionOptions, SelectionReport, StrokeOptions,
 };
 
 pub use crate::study::{
-    mean_p95, run_plant_robot, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow,
+    mean_p95, run_plant_robot, run_plant_robustness, run_robot, run_robot_with_source, run_study,
+    MethodOutcome, Outcome, RobotDraw, RobustnessRow, StudyOptions, StudyRow, TABLE_4_5_IMPLICIT,
+    TABLE_4_5_RPBA,
 };
 pub use crate::validate::{
     relative_pose_errors, result_relative_pose_errors, test_configurations, RelativePoseErrors,

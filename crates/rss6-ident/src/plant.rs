@@ -38,7 +38,11 @@ pub fn sim_source<S: RobotSim + rss6_exp::Robot>(
     let kappa0 = nominal.reading_from_theta(&Vec6::zeros());
     let pose0 = truth.pose_from_reading(&kappa0, &rss6_core::home_pose())?;
     sim.reset(&pose0).map_err(sim_error)?;
-    Ok(DwellSession::new(sim, Vec6::zeros(), DwellSpec::checked(nominal)))
+    Ok(DwellSession::new(
+        sim,
+        Vec6::zeros(),
+        DwellSpec::checked(nominal),
+    ))
 }
 
 /// A rapier plant whose kinematics are drawn with Table 4.2 errors around `nominal` and whose external

@@ -422,6 +422,7 @@ fn selection_returns_the_initial_configuration_first_and_raises_o1() {
         start: 13,
         candidates: 150,
         stroke: Some(s),
+        ..SelectionOptions::default()
     };
     for method in [Method::Rpba, Method::Implicit] {
         let rep = select_configurations_with(&kp, method, 3, &opts).unwrap();

@@ -320,6 +320,7 @@ pub(crate) fn select_configurations<'py>(
         start,
         candidates,
         stroke,
+        ..SelectionOptions::default()
     };
     let rep = py
         .detach(move || rss6_ident::select_configurations_with(&k, m, seed, &opts))

@@ -43,7 +43,10 @@ impl MeasurementNoise {
 
     /// Diagonal covariance of a dwell's mean ᶜχ_t (m², rad²) from `n` frames.
     fn pose_var(&self, n: f64) -> Vec6 {
-        let (p, a) = (self.position * self.position / n, self.angle * self.angle / n);
+        let (p, a) = (
+            self.position * self.position / n,
+            self.angle * self.angle / n,
+        );
         Vec6::new(p, p, p, a, a, a)
     }
 }
@@ -175,9 +178,8 @@ pub(super) fn rpba_whitening(
     let mut own = Vec::with_capacity(m - 1);
     for l in 1..m {
         let (cl, fl) = (input.cam[l], fks[l].pose);
-        let model = |f0: &Vec6, fl: &Vec6| {
-            isometry_to_pose(&((iso(f0) * mt).inverse() * iso(fl) * mt))
-        };
+        let model =
+            |f0: &Vec6, fl: &Vec6| isometry_to_pose(&((iso(f0) * mt).inverse() * iso(fl) * mt));
         let rel = |c0: &Vec6, cl: &Vec6| isometry_to_pose(&(iso(c0).inverse() * iso(cl)));
         let pp = model(&f0, &fl);
         let rel_l = rel(&c0, &cl);

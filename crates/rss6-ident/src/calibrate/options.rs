@@ -42,9 +42,11 @@ pub struct CalibrationOptions {
     /// Default `false`: they are left out and listed in [`super::CalibrationResult::dropped`].
     pub include_faulty: bool,
     /// A configuration is a gross outlier when its normalised residual (r_lᵀΣ_ll⁻¹r_l/6, ≈ 1 for
-    /// noise alone) exceeds `outlier_threshold` × the robust scale max(1, median/0.891) (0.891 is the
-    /// median of χ²₆/6). Default 9: χ²₆ > 54 has probability 4·10⁻¹⁰ under the noise model.
+    /// noise alone) exceeds `outlier_threshold` and `outlier_ratio` × the median normalised residual.
+    /// Default 9: χ²₆ > 54 has probability 4·10⁻¹⁰ under the noise model.
     pub outlier_threshold: f64,
+    /// See `outlier_threshold`. Default 10: the worst configuration must stand out from the rest.
+    pub outlier_ratio: f64,
     /// Most gross outliers rejected (one per refit, worst first). Default 3.
     pub max_rejections: usize,
     /// Largest fit statistic (weighted cost per degree of freedom) accepted after rejection; above it
@@ -76,6 +78,7 @@ impl Default for CalibrationOptions {
             leg_weight: 1.0 / sp,
             include_faulty: false,
             outlier_threshold: 9.0,
+            outlier_ratio: 10.0,
             max_rejections: 3,
             max_fit_statistic: 10.0,
             rank_tolerance: 1e-9,

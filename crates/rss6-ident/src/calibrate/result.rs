@@ -69,6 +69,7 @@ pub struct RejectedConfiguration {
     pub index: usize,
     /// Its normalised residual when it was rejected.
     pub normalized_residual: f64,
-    /// The threshold it exceeded (`outlier_threshold` × the robust scale of that fit).
+    /// The threshold it exceeded: max(`outlier_threshold`, `outlier_ratio` × the median normalised
+    /// residual of that fit).
     pub threshold: f64,
 }

@@ -332,13 +332,11 @@ impl Fit {
         }
     }
 
-    /// max(1, median/0.891): the normalised residuals' scale relative to the noise model (0.891 is
-    /// the median of χ²₆/6), so model errors that affect every configuration do not make outliers.
-    fn scale(&self) -> f64 {
+    /// The median normalised residual (≈ 0.891, the median of χ²₆/6, when the noise model holds).
+    fn median(&self) -> f64 {
         let mut v: Vec<f64> = self.blocks.iter().map(|b| b.1).collect();
         v.sort_by(f64::total_cmp);
-        let median = v.get(v.len() / 2).copied().unwrap_or(0.0);
-        (median / 0.891).max(1.0)
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
     }
 
     /// Usable indices of the blocks, worst first.
@@ -351,7 +349,11 @@ impl Fit {
 
 fn assess(problem: &mut Problem, end: &LmEnd, free: usize) -> core::result::Result<Fit, EvalError> {
     let e = problem.eval(&end.x, false)?;
-    let blocks = match e.raw.as_ref().and_then(|raw| problem.normalized_blocks(raw)) {
+    let blocks = match e
+        .raw
+        .as_ref()
+        .and_then(|raw| problem.normalized_blocks(raw))
+    {
         Some(z) => z
             .into_iter()
             .enumerate()
@@ -399,10 +401,10 @@ fn verdict(
     } else if opts.noise.is_some() && !(fit.statistic() <= opts.max_fit_statistic) {
         format!(
             "the fit is inconsistent with the noise model after rejecting {} configuration(s) \
-             (statistic > {}; the normalised residuals scale is {:.3})",
+             (statistic > {}; median normalised residual {:.3})",
             rejected.len(),
             opts.max_fit_statistic,
-            fit.scale()
+            fit.median()
         )
     } else {
         return None;
@@ -416,9 +418,14 @@ fn verdict(
     })
 }
 
-/// The gross outlier of a fit, if any: (usable index, normalised residual, threshold).
+/// The gross outlier of a fit, if any: (usable index, normalised residual, threshold). A χ² test
+/// that only fires on a configuration that stands out: above `outlier_threshold` and above
+/// `outlier_ratio` × the median (a gross error smears into every residual of a least-squares fit,
+/// while a model error or scrambled data raise them all alike: those are left to the fit statistic).
 fn outlier(fit: &Fit, opts: &CalibrationOptions) -> Option<(usize, f64, f64)> {
-    let threshold = opts.outlier_threshold * fit.scale();
+    let threshold = opts
+        .outlier_threshold
+        .max(opts.outlier_ratio * fit.median());
     fit.worst_first()
         .first()
         .filter(|w| w.1 > threshold)
@@ -442,7 +449,11 @@ pub(super) fn solve(
     }
     layout.kp(&x0).validate()?;
     let mut sel = select(&layout, data, opts)?;
-    let red = Reduction::new(&layout, &x0, opts.fix_sensor_pose && method == Method::Implicit);
+    let red = Reduction::new(
+        &layout,
+        &x0,
+        opts.fix_sensor_pose && method == Method::Implicit,
+    );
     let mut rejected: Vec<RejectedConfiguration> = Vec::new();
     loop {
         let (mut problem, r, j) = start(layout, &mut sel, &x0, opts)?;
