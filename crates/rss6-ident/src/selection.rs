@@ -201,6 +201,9 @@ impl Default for SelectionOptions {
 /// whose offset and gain errors are `k_sigma` × Table 4.2's σ: each end θ_e moves to the θ with
 /// |θ| + k·√(σ_Δθ² + (σ_η·|θ|/η)²) = |θ_e| (η: the mean nominal gain of `kp`).
 pub fn stroke_margin(kp: &KinematicParams, stroke: (f64, f64), k_sigma: f64) -> (f64, f64) {
+    if k_sigma <= 0.0 {
+        return stroke;
+    }
     let eta = kp.eta.iter().map(|e| e.abs()).sum::<f64>() / LEGS as f64;
     let widen = |t: f64| {
         let rel = crate::model::SIGMA_ETA * t / eta;

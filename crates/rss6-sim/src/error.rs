@@ -63,6 +63,5 @@ impl From<CoreError> for SimError {
     }
 }
 
-
 /// Result alias of the crate.
 pub type Result<T> = std::result::Result<T, SimError>;

@@ -95,7 +95,8 @@ impl DwellChecks {
             let (joint, error) = (0..LEGS)
                 .map(|i| (i, kappa[i] - cmd[i]))
                 .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
-            if !(error.abs() <= self.reach_tolerance) {
+            // NaN fails the check too
+            if error.abs() > self.reach_tolerance || error.is_nan() {
                 return Some(DwellFault::Unreached {
                     joint,
                     error_bits: error,
@@ -134,7 +135,7 @@ impl DwellChecks {
         channels
             .into_iter()
             .map(|(channel, s, sigma)| (channel, s, sigma, s / sigma))
-            .filter(|(_, _, _, ratio)| !(*ratio <= self.rest_factor))
+            .filter(|(_, _, _, ratio)| *ratio > self.rest_factor || ratio.is_nan())
             .max_by(|a, b| a.3.total_cmp(&b.3))
             .map(|(channel, scatter, sigma, _)| DwellFault::Moving {
                 channel,

@@ -176,8 +176,8 @@ pub(super) fn rpba_whitening(
     let mut g0 = DMatrix::zeros(n, 12);
     let mut sigma = DMatrix::zeros(n, n);
     let mut own = Vec::with_capacity(m - 1);
-    for l in 1..m {
-        let (cl, fl) = (input.cam[l], fks[l].pose);
+    for (l, fk_l) in fks.iter().enumerate().skip(1) {
+        let (cl, fl) = (input.cam[l], fk_l.pose);
         let model =
             |f0: &Vec6, fl: &Vec6| isometry_to_pose(&((iso(f0) * mt).inverse() * iso(fl) * mt));
         let rel = |c0: &Vec6, cl: &Vec6| isometry_to_pose(&(iso(c0).inverse() * iso(cl)));
@@ -188,7 +188,7 @@ pub(super) fn rpba_whitening(
         let d_f0 = jac6(&f0, &|f| pose_difference(&rel_l, &model(f, &fl)));
         let d_fl = jac6(&fl, &|f| pose_difference(&rel_l, &model(&f0, f)));
         let d_k0 = d_f0 * dk0;
-        let d_kl = d_fl * fk_kappa_derivative(input.kp, &fks[l].d_b);
+        let d_kl = d_fl * fk_kappa_derivative(input.kp, &fk_l.d_b);
         let row = 6 * (l - 1);
         g0.view_mut((row, 0), (6, 6)).copy_from(&d_c0);
         g0.view_mut((row, 6), (6, 6)).copy_from(&d_k0);

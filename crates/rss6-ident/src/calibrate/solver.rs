@@ -396,9 +396,11 @@ fn verdict(
             "Levenberg–Marquardt did not converge in {} iterations (cost {start:.4e} → {last:.4e})",
             opts.max_iterations
         )
-    } else if !(last <= start) {
+    } else if last > start || last.is_nan() {
         format!("the model explains the data worse than the start (cost {start:.4e} → {last:.4e})")
-    } else if opts.noise.is_some() && !(fit.statistic() <= opts.max_fit_statistic) {
+    } else if opts.noise.is_some()
+        && (fit.statistic() > opts.max_fit_statistic || fit.statistic().is_nan())
+    {
         format!(
             "the fit is inconsistent with the noise model after rejecting {} configuration(s) \
              (statistic > {}; median normalised residual {:.3})",
