@@ -1,5 +1,5 @@
-//! Criterion benches of the rss6-ident calibration (target: RPBA with 66 parameters and 22
-//! configurations ≤ 100 ms).
+//! Criterion benches of the rss6-ident calibration (target, issue 12: RPBA with 66 parameters and
+//! 22 configurations ≤ 10 ms, noise weighting and outlier handling included).
 //!
 //! `cargo bench -p rss6-benches --bench calibration -- --warm-up-time 1 --measurement-time 2`
 #![allow(missing_docs, clippy::unwrap_used)]

@@ -99,8 +99,13 @@ def _calibrate_log(args: argparse.Namespace, path: str, plant: Robot | None = No
     cost = result.cost_history
     print(
         f"{result.method}: {result.iterations} LM steps, cost {cost[0]:.4g} -> {cost[-1]:.4g}, "
-        f"rank {result.rank}/{result.parameter_count}"
+        f"rank {result.rank}/{result.parameter_count}, fit statistic {result.fit_statistic:.3f} "
+        f"(≈ 1 when the model explains the data; {result.degrees_of_freedom} degrees of freedom)"
     )
+    for index, z in result.rejected:
+        print(f"  configuration {index} rejected as a gross outlier (normalised residual {z:.3g})")
+    for index, why in result.dropped:
+        print(f"  configuration {index} left out of the fit: {why}")
     u = result.unidentifiable
     if u:
         print(f"  {len(u)} parameters not identifiable from these data: {', '.join(u[:6])}, …")

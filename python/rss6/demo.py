@@ -101,6 +101,12 @@ class CalibrationSummary:
     rms_calibrated: F64
     thesis_rpba: F64
     result: _rss6.CalibrationResult | None = field(default=None, repr=False, compare=False)
+    #: weighted cost per degree of freedom (≈ 1 when the model explains the data to within the noise)
+    fit_statistic: float = float("nan")
+    #: configurations the solver rejected as gross outliers: (index, normalised residual)
+    rejected: list[tuple[int, float]] = field(default_factory=list)
+    #: configurations left out before the fit (failed collection checks, defects): (index, reason)
+    dropped: list[tuple[int, str]] = field(default_factory=list)
 
     def text(self) -> str:
         lo, hi = self.stroke
@@ -377,6 +383,9 @@ def _calibrate(
         rms_calibrated=np.asarray(cal["rms"], dtype=np.float64),
         thesis_rpba=np.asarray(calibrate.THESIS_TABLE_4_5["RPBA"], dtype=np.float64),
         result=result,
+        fit_statistic=result.fit_statistic,
+        rejected=list(result.rejected),
+        dropped=list(result.dropped),
     )
     return summary, result, sensor_est, [toml, fig]
 

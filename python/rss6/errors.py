@@ -95,7 +95,14 @@ class SimulationError(Rss6Error):
 
 
 class CalibrationError(Rss6Error):
-    """Calibration could not produce a trustworthy answer (``rss6_ident`` errors)."""
+    """Calibration could not produce a trustworthy answer (``rss6_ident`` errors).
+
+    When the solver ran but its model cannot be trusted (after rejecting gross outliers the fit is
+    still inconsistent with the noise model, it did not converge, or it explains the data worse than
+    the start) the attributes are ``configurations`` (indices responsible, worst first),
+    ``parameters`` (comma-separated names, rank problems) and ``fit_statistic`` (weighted cost per
+    degree of freedom, ≈ 1 for a consistent fit).
+    """
 
 
 class IdentificationError(Rss6Error):

@@ -23,6 +23,23 @@ pub enum ExpError {
     /// The robot (a real one, or one implemented outside Rust) reported an error.
     #[error("robot: {0}")]
     Robot(String),
+    /// The robot could not assemble at calibration configuration `index` (the simulation came apart
+    /// or the kinematics failed while moving there or dwelling).
+    #[error("the robot cannot assemble at configuration {index}: {why}")]
+    CannotAssemble {
+        /// Configuration index (order of visit; 0 = initial).
+        index: usize,
+        /// What failed.
+        why: String,
+    },
+    /// No camera frame arrived during the dwell at configuration `index`: the camera lost the target.
+    #[error("the camera lost the target at configuration {index} (no frame during the dwell ending at t = {time:.3} s)")]
+    TargetLost {
+        /// Configuration index (order of visit; 0 = initial).
+        index: usize,
+        /// Robot time (s) at the end of the dwell.
+        time: f64,
+    },
     /// The observer stopped the run (Ctrl-C, a progress callback that raised, a cancelled study).
     #[error("stopped by the observer at t = {time:.3} s")]
     Stopped {

@@ -62,6 +62,13 @@ fn a_run_reads_back_as_written() {
         sensor_pose: Some([0.1, 0.2, 2.0, 0.1, -0.2, 0.3]),
         kappa_samples: 1000,
         camera_frames: 60,
+        kappa_std: Some([0.22, 0.21, 0.23, 0.2, 0.24, 0.25]),
+        sensor_pose_std: Some([9e-6, 1e-5, 1.1e-5, 4e-4, 5e-4, 4.5e-4]),
+        fault: Some(rss6_exp::dwell::DwellFault::Unreached {
+            joint: 2,
+            error_bits: -453.25,
+            tolerance_bits: 2.0,
+        }),
     };
     w.write_dwell(3, [0.1, 0.499], &data).unwrap();
     assert!(w.write("no_such_stream", 0.0, &Vec6::zeros()).is_err());

@@ -9,7 +9,12 @@
 //! ```text
 //! cargo run --release -p rss6-ident --example calibration_study [-- --robots 24 --seed 0 --dwell-ms 2000]
 //! cargo run --release -p rss6-ident --example calibration_study -- --plant 4   # on the rapier plant
+//! cargo run --release -p rss6-ident --example calibration_study -- --robustness 50   # issue 12
 //! ```
+//! `--robustness N` runs N rapier-plant robots, a third of them rejection-sampled with max |Δθ| ≥ 5°
+//! and a sixth with link/wrench length errors at 2–3σ, and reports for RPBA and implicit calibration
+//! how many met their Table 4.5 row, met it after configurations were left out, raised a typed error,
+//! or returned a model that misses Table 4.5 without an error (a silent failure).
 //! Prints the actuator stroke (§4.4.1), the selected configuration sets (§4.4.2), the identifiability
 //! report, and the mean / 95th percentile over robots of Tables 4.3, 4.4 and 4.5.
 
@@ -20,7 +25,11 @@ use rss6_ident::{
     collect, mean_p95, rpba, run_study, select_configurations_with, stroke, AnalyticRobot,
     CalibrationOptions, Method, NoiseModel, SelectionOptions, StudyOptions, StudyRow, TrueRobot,
 };
-use rss6_ident::{plant_nominal_target, run_plant_robot, NOMINAL_TARGET_IN_EFFECTOR};
+use rss6_ident::{
+    observability_index, plant_nominal_target, run_plant_robot, run_plant_robustness,
+    MethodOutcome, Outcome, RobotDraw, RobustnessRow, NOMINAL_TARGET_IN_EFFECTOR,
+    TABLE_4_5_IMPLICIT, TABLE_4_5_RPBA,
+};
 use std::time::Instant;
 
 fn arg(name: &str, default: u64) -> u64 {
@@ -66,6 +75,52 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sel_i.last_improvement,
         t.elapsed().as_secs_f64()
     );
+
+    println!(
+        "    margin {}σ: configurations drawn in ({:.1}°, {:.1}°) and feasible on {} prior robots",
+        sel.margin_sigma,
+        sel_r.inner_stroke.0.to_degrees(),
+        sel_r.inner_stroke.1.to_degrees(),
+        sel.prior_robots
+    );
+    if arg("--no-margin-compare", 0) == 0 {
+        let none = SelectionOptions {
+            margin_sigma: 0.0,
+            prior_robots: 0,
+            ..sel
+        };
+        let r0 = select_configurations_with(&nominal, Method::Rpba, seed, &none)?;
+        let i0 = select_configurations_with(&nominal, Method::Implicit, seed, &none)?;
+        println!(
+            "    without the margin: RPBA {} + initial, O1 = {:.4}; implicit {} + initial, O1 = {:.4} \
+             (O1 cost of the margin: RPBA {:.1} %, implicit {:.1} %)",
+            r0.thetas.len() - 1,
+            r0.index,
+            i0.thetas.len() - 1,
+            i0.index,
+            100.0 * (1.0 - sel_r.index / r0.index),
+            100.0 * (1.0 - sel_i.index / i0.index)
+        );
+        let _ = observability_index;
+    }
+
+    let robustness = arg("--robustness", 0) as usize;
+    if robustness > 0 {
+        let opts = StudyOptions {
+            robots: robustness,
+            seed,
+            rpba_thetas: sel_r.thetas.clone(),
+            implicit_thetas: sel_i.thetas.clone(),
+            dwell,
+            noise: NoiseModel::default(),
+            test_configurations: 100,
+            stroke: s,
+            solver: CalibrationOptions::default(),
+            target_nominal: plant_nominal_target().into(),
+        };
+        robustness_study(&nominal, &opts);
+        return Ok(());
+    }
 
     // Identifiability report on one robot.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -241,4 +296,106 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("  (thesis Table 4.5 orders the angles γ, β, α; here they are listed as α, β, γ)");
     let _ = Vec6::zeros();
     Ok(())
+}
+
+fn robustness_study(nominal: &KinematicParams, opts: &StudyOptions) {
+    let n = opts.robots;
+    let large = n.div_ceil(3);
+    let long = n / 6;
+    let draw = |r: usize| {
+        if r < large {
+            RobotDraw::LargeOffsets {
+                min_offset: 5f64.to_radians(),
+            }
+        } else if r < large + long {
+            RobotDraw::LongLengths { lo: 2.0, hi: 3.0 }
+        } else {
+            RobotDraw::Prior
+        }
+    };
+    let t = Instant::now();
+    let rows: Vec<RobustnessRow> = (0..n)
+        .into_par_iter()
+        .map(|r| {
+            let row = run_plant_robustness(nominal, opts, r, draw(r));
+            eprintln!("robot {r} done ({:.0} s)", t.elapsed().as_secs_f64());
+            row
+        })
+        .collect();
+    println!(
+        "\nRobustness study (issue 12) on the rapier plant: {n} robots ({large} with max |Δθ| ≥ 5°, {long} with \
+         link/wrench length errors at 2–3σ), {} s dwells, {} test configurations ({:.0} s)",
+        opts.dwell,
+        opts.test_configurations,
+        t.elapsed().as_secs_f64()
+    );
+    let axes = ["x", "y", "z", "α", "β", "γ"];
+    let show = |m: &MethodOutcome, table: &[f64; 6]| -> String {
+        let w = m
+            .worst_axis(table)
+            .map(|(k, v)| format!("worst {} at {:.2} × Table 4.5", axes[k], v))
+            .unwrap_or_default();
+        let o = match &m.outcome {
+            Outcome::Met => "met".to_string(),
+            Outcome::RejectedThenMet { dropped, rejected } => {
+                format!("met after leaving out {dropped:?} / rejecting {rejected:?}")
+            }
+            Outcome::Error(e) => format!("ERROR: {e}"),
+            Outcome::Silent => "SILENT FAILURE".to_string(),
+        };
+        format!("{o}; fit {:.2}; {w}", m.fit_statistic)
+    };
+    for row in &rows {
+        println!(
+            "  robot {:2} {:<40} max|Δθ| {:4.1}°  max|Δl| {:3.1}σ\n      RPBA: {}\n      implicit: {}",
+            row.robot,
+            format!("{:?}", row.draw),
+            row.max_offset.to_degrees(),
+            row.max_length_sigma,
+            show(&row.rpba, &TABLE_4_5_RPBA),
+            show(&row.implicit, &TABLE_4_5_IMPLICIT)
+        );
+    }
+    for (name, table, get) in [
+        (
+            "RPBA",
+            &TABLE_4_5_RPBA,
+            (|r: &RobustnessRow| &r.rpba) as fn(&RobustnessRow) -> &MethodOutcome,
+        ),
+        ("implicit", &TABLE_4_5_IMPLICIT, |r: &RobustnessRow| {
+            &r.implicit
+        }),
+    ] {
+        let count =
+            |f: &dyn Fn(&Outcome) -> bool| rows.iter().filter(|r| f(&get(r).outcome)).count();
+        let met = count(&|o| matches!(o, Outcome::Met));
+        let rej = count(&|o| matches!(o, Outcome::RejectedThenMet { .. }));
+        let err = count(&|o| matches!(o, Outcome::Error(_)));
+        let silent = count(&|o| matches!(o, Outcome::Silent));
+        let worst = rows
+            .iter()
+            .filter_map(|r| get(r).worst_axis(table).map(|w| (r.robot, w)))
+            .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1));
+        let mut per_axis = [0usize; 6];
+        for r in &rows {
+            if let Some((k, _)) = get(r).worst_axis(table) {
+                per_axis[k] += 1;
+            }
+        }
+        let fits: Vec<f64> = rows
+            .iter()
+            .map(|r| get(r).fit_statistic)
+            .filter(|v| v.is_finite())
+            .collect();
+        let (fm, f95) = mean_p95(&fits);
+        println!(
+            "{name}: met {met}, left-out/rejected then met {rej}, typed error {err}, silent failures {silent} \
+             (of {n}); worst axis per robot {:?} over [x y z α β γ]; overall worst: robot {:?} axis {} at {:.2} × \
+             Table 4.5; fit statistic mean {fm:.2} / p95 {f95:.2}",
+            per_axis,
+            worst.map(|w| w.0),
+            worst.map(|w| axes[w.1 .0]).unwrap_or("-"),
+            worst.map(|w| w.1 .1).unwrap_or(f64::NAN)
+        );
+    }
 }

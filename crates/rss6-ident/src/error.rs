@@ -67,6 +67,26 @@ pub enum IdentError {
         #[source]
         source: CoreError,
     },
+    /// The calibration ran but its model cannot be trusted: after rejecting gross outliers the fit is
+    /// still inconsistent with the noise model, the solver did not converge, or the model explains
+    /// the data worse than the starting one. Names the configurations (and parameters) responsible.
+    #[error(
+        "{method} calibration failed: {why}; fit statistic {fit_statistic:.3}{}{}",
+        fmt_list(", configurations", configurations),
+        fmt_list(", parameters", parameters)
+    )]
+    Calibration {
+        /// The method.
+        method: Method,
+        /// What is wrong.
+        why: String,
+        /// Data indices of the configurations responsible (worst first; rejected ones included).
+        configurations: Vec<usize>,
+        /// Parameters responsible (rank problems), if any.
+        parameters: Vec<String>,
+        /// Weighted cost per degree of freedom at the end (≈ 1 for a consistent fit).
+        fit_statistic: f64,
+    },
     /// Inconsistent or non-finite input (parameters, options, shapes).
     #[error("invalid input: {0}")]
     InvalidInput(String),
@@ -102,6 +122,15 @@ pub enum IdentError {
     /// A robot data source failed.
     #[error("robot source: {0}")]
     Source(String),
+}
+
+fn fmt_list<T: core::fmt::Display>(label: &str, items: &[T]) -> String {
+    if items.is_empty() {
+        String::new()
+    } else {
+        let v: Vec<String> = items.iter().map(ToString::to_string).collect();
+        format!("{label} {}", v.join(", "))
+    }
 }
 
 /// Shorthand for results of this crate.

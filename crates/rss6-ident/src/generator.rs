@@ -174,6 +174,16 @@ impl RobotSource for AnalyticRobot {
             sensor_pose: Some(cam.into()),
             kappa_samples: n_k as u32,
             camera_frames: n_c as u32,
+            // the scatter a robot at rest shows: one sample's noise
+            kappa_std: Some([self.noise.kappa; 6]),
+            sensor_pose_std: Some(core::array::from_fn(|k| {
+                if k < 3 {
+                    self.noise.position
+                } else {
+                    self.noise.angle
+                }
+            })),
+            fault: None,
         })
     }
 }

@@ -30,7 +30,8 @@ mod validate;
 pub use crate::calibrate::{
     gauge_directions, implicit, implicit_with_progress, min_configurations, parameter_vector,
     residual_norm_sum, residuals_and_jacobian, rpba, rpba_with_progress, CalibrationOptions,
-    CalibrationResult, DroppedConfiguration, JacobianMode, Progress,
+    CalibrationResult, Convergence, DroppedConfiguration, JacobianMode, MeasurementNoise, Progress,
+    RejectedConfiguration,
 };
 pub use crate::cloe::{
     cloe, parameter_names as loop_parameter_names, simulate as simulate_loop, table_5_2_truth,
@@ -52,14 +53,16 @@ pub use crate::model::{
     gauge_aligned_error, parameter_names, parameter_scale, GAUGE_DESCRIPTIONS, N_GAUGE,
     SIGMA_DTHETA, SIGMA_ETA, SIGMA_EXT_ANGLE, SIGMA_EXT_POSITION, SIGMA_LENGTH,
 };
-pub use crate::plant::{plant_nominal_target, random_plant, sim_source};
+pub use crate::plant::{plant_nominal_target, plant_with_kinematics, random_plant, sim_source};
 pub use crate::selection::{
-    observability_index, select_configurations, select_configurations_with, stroke, stroke_with,
-    SelectionOptions, SelectionReport, StrokeOptions,
+    observability_index, select_configurations, select_configurations_with, stroke, stroke_margin,
+    stroke_with, SelectionOptions, SelectionReport, StrokeOptions,
 };
 
 pub use crate::study::{
-    mean_p95, run_plant_robot, run_robot, run_robot_with_source, run_study, StudyOptions, StudyRow,
+    mean_p95, run_plant_robot, run_plant_robustness, run_robot, run_robot_with_source, run_study,
+    MethodOutcome, Outcome, RobotDraw, RobustnessRow, StudyOptions, StudyRow, TABLE_4_5_IMPLICIT,
+    TABLE_4_5_RPBA,
 };
 pub use crate::validate::{
     relative_pose_errors, result_relative_pose_errors, test_configurations, RelativePoseErrors,

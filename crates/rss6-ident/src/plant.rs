@@ -28,7 +28,8 @@ impl TrueRobot {
 
 /// Wraps `sim` for [`crate::collect`]: resets it at rest where the true robot sits under the
 /// nominal-convention command θ = 0 (so the first configuration needs no jump), and returns the
-/// adapter, which starts from that command.
+/// adapter, which starts from that command and checks every dwell ([`DwellSpec::checked`] in the
+/// convention of `nominal`).
 pub fn sim_source<S: RobotSim + rss6_exp::Robot>(
     mut sim: S,
     nominal: &KinematicParams,
@@ -37,7 +38,11 @@ pub fn sim_source<S: RobotSim + rss6_exp::Robot>(
     let kappa0 = nominal.reading_from_theta(&Vec6::zeros());
     let pose0 = truth.pose_from_reading(&kappa0, &rss6_core::home_pose())?;
     sim.reset(&pose0).map_err(sim_error)?;
-    Ok(DwellSession::new(sim, Vec6::zeros(), DwellSpec::default()))
+    Ok(DwellSession::new(
+        sim,
+        Vec6::zeros(),
+        DwellSpec::checked(nominal),
+    ))
 }
 
 /// A rapier plant whose kinematics are drawn with Table 4.2 errors around `nominal` and whose external
@@ -49,8 +54,19 @@ pub fn random_plant(
     seed: u64,
 ) -> Result<(DwellSession<Plant>, TrueRobot)> {
     let drawn = TrueRobot::draw(nominal, rng);
+    plant_with_kinematics(nominal, &drawn.kp, rng, seed)
+}
+
+/// [`random_plant`] with given true kinematics `kp` (e.g. drawn by rejection sampling); the external
+/// poses are drawn from `rng`.
+pub fn plant_with_kinematics(
+    nominal: &KinematicParams,
+    kp: &KinematicParams,
+    rng: &mut impl Rng,
+    seed: u64,
+) -> Result<(DwellSession<Plant>, TrueRobot)> {
     let mut cfg = SimConfig::new(
-        drawn.kp,
+        *kp,
         rss6_core::DynamicParams::nominal(),
         rss6_ctrl::PidGains::tuned(),
     );

@@ -174,6 +174,15 @@ pub struct SelectionOptions {
     pub candidates: usize,
     /// Stroke (rad); `None` computes it with [`stroke`].
     pub stroke: Option<(f64, f64)>,
+    /// Margin for the uncertainty of the true robot, in Table 4.2 σ (default 3; 0 = none). The true
+    /// joint angle under a command θ (drive convention) is θ + Δθ_err + Δη_err·κ, so configurations
+    /// are drawn from the stroke shrunk by `margin_sigma`·√(σ_Δθ² + (σ_η·θ/η)²) at each end (see
+    /// [`stroke_margin`]), and each candidate must also satisfy the stroke constraints on
+    /// `prior_robots` robots drawn from Table 4.2 (lengths and positions included), at the joint
+    /// angles the command gives them.
+    pub margin_sigma: f64,
+    /// Robots drawn from Table 4.2 on which every candidate must be feasible (default 8; 0 = none).
+    pub prior_robots: usize,
 }
 
 impl Default for SelectionOptions {
@@ -182,8 +191,37 @@ impl Default for SelectionOptions {
             start: 13,
             candidates: 5000,
             stroke: None,
+            margin_sigma: 3.0,
+            prior_robots: 8,
         }
     }
+}
+
+/// The stroke (lo, hi) (rad) shrunk so that a command inside it stays inside `stroke` on a true robot
+/// whose offset and gain errors are `k_sigma` × Table 4.2's σ: each end θ_e moves to the θ with
+/// |θ| + k·√(σ_Δθ² + (σ_η·|θ|/η)²) = |θ_e| (η: the mean nominal gain of `kp`).
+pub fn stroke_margin(kp: &KinematicParams, stroke: (f64, f64), k_sigma: f64) -> (f64, f64) {
+    if k_sigma <= 0.0 {
+        return stroke;
+    }
+    let eta = kp.eta.iter().map(|e| e.abs()).sum::<f64>() / LEGS as f64;
+    let widen = |t: f64| {
+        let rel = crate::model::SIGMA_ETA * t / eta;
+        t + k_sigma * (crate::model::SIGMA_DTHETA.powi(2) + rel * rel).sqrt()
+    };
+    let shrink = |end: f64| {
+        let (mut lo, mut hi) = (0.0, end.abs());
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if widen(mid) <= end.abs() {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo.copysign(end)
+    };
+    (shrink(stroke.0), shrink(stroke.1))
 }
 
 /// Result of the configuration selection.
@@ -197,8 +235,10 @@ pub struct SelectionReport {
     pub iterations: usize,
     /// Iteration of the last improvement.
     pub last_improvement: usize,
-    /// Stroke used (rad).
+    /// Stroke (rad) before the margin.
     pub stroke: (f64, f64),
+    /// The range configurations were drawn from: the stroke shrunk by the margin (rad).
+    pub inner_stroke: (f64, f64),
 }
 
 /// Exact (noise-free) data of the nominal model at joint vectors `thetas`.
@@ -218,6 +258,7 @@ fn nominal_data(kp: &KinematicParams, thetas: &[Vec6]) -> Result<CalibrationData
             sensor_pose: Some(cam.into()),
             kappa_samples: 1,
             camera_frames: 1,
+            ..ConfigurationData::default()
         });
     }
     Ok(data)
@@ -346,10 +387,25 @@ pub fn select_configurations_with(
     let dh = det_home(kp)?;
     let sopts = StrokeOptions::default();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let inner = stroke_margin(kp, stroke, opts.margin_sigma.max(0.0));
+    let mut prior_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5E1E_C7ED);
+    let prior = (0..opts.prior_robots)
+        .map(|_| {
+            let t = crate::generator::TrueRobot::draw(kp, &mut prior_rng).kp;
+            det_home(&t).map(|d| (t, d))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // the command θ (in `kp`'s convention) moves robot `t` to t.θ(κ(θ))
+    let feasible_on_prior = |th: &Vec6| {
+        prior.iter().all(|(t, d)| {
+            let th_t = t.theta_from_reading(&kp.reading_from_theta(th));
+            check_point(t, &th_t, &home_pose(), *d, &sopts).is_ok()
+        })
+    };
     let draw = |rng: &mut ChaCha8Rng| -> Result<(Vec6, DMatrix<f64>)> {
         for _ in 0..1000 {
-            let th = Vec6::from_fn(|_, _| rng.random_range(stroke.0..stroke.1));
-            if check_point(kp, &th, &home_pose(), dh, &sopts).is_ok() {
+            let th = Vec6::from_fn(|_, _| rng.random_range(inner.0..inner.1));
+            if check_point(kp, &th, &home_pose(), dh, &sopts).is_ok() && feasible_on_prior(&th) {
                 if let Ok(g) = blocks.gram(&th) {
                     return Ok((th, g));
                 }
@@ -412,5 +468,6 @@ pub fn select_configurations_with(
         iterations: opts.candidates,
         last_improvement,
         stroke,
+        inner_stroke: inner,
     })
 }

@@ -106,6 +106,11 @@ pub fn run_robot_with_source(
         &sensor_guess,
         &CalibrationOptions {
             fix_sensor_pose: true,
+            // ᴼχ_C held at a guess that is off by Table 4.2's external sizes cannot explain the data to
+            // within the noise (fit statistic 6–40 on the analytic generator): the thesis's setting is
+            // misspecified by design, so this variant is evaluated without the consistency check.
+            max_fit_statistic: f64::INFINITY,
+            max_rejections: 0,
             ..solver
         },
     )?;
@@ -246,4 +251,233 @@ pub fn mean_p95(values: &[f64]) -> (f64, f64) {
     v.sort_by(|a, b| a.total_cmp(b));
     let rank = ((0.95 * v.len() as f64).ceil() as usize).clamp(1, v.len());
     (mean, v[rank - 1])
+}
+
+/// How a robot of the robustness study is drawn (Table 4.2 sizes throughout).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RobotDraw {
+    /// A plain draw from Table 4.2.
+    Prior,
+    /// Rejection-sampled until max_i |Δθ_i| ≥ `min_offset` (rad).
+    LargeOffsets {
+        /// Smallest accepted max |Δθ| (rad).
+        min_offset: f64,
+    },
+    /// A plain draw whose 12 link and wrench length errors are then set to ±U(`lo`, `hi`)·σ.
+    LongLengths {
+        /// Smallest |error| (σ units).
+        lo: f64,
+        /// Largest |error| (σ units).
+        hi: f64,
+    },
+}
+
+/// Table 4.5 of the thesis, [x, y, z, α, β, γ] (m, rad): RPBA's row.
+pub const TABLE_4_5_RPBA: [f64; 6] = [0.053e-3, 0.039e-3, 0.018e-3, 6.7e-5, 1.6e-4, 9.7e-5];
+/// Table 4.5 of the thesis, implicit calibration's row.
+pub const TABLE_4_5_IMPLICIT: [f64; 6] = [3.1e-3, 4.9e-3, 4.2e-3, 9.6e-4, 7.9e-4, 1.2e-3];
+
+/// What one calibration of the robustness study ended with.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// A model at or below the method's Table 4.5 row in every axis, with no configuration left out.
+    Met,
+    /// Configurations were left out (collection checks, FK failures) or rejected as outliers, then
+    /// the model met Table 4.5.
+    RejectedThenMet {
+        /// Data indices dropped before the fit.
+        dropped: Vec<usize>,
+        /// Data indices rejected by the solver.
+        rejected: Vec<usize>,
+    },
+    /// A typed error (collection or calibration) that names the cause.
+    Error(String),
+    /// A model returned without an error that does not meet Table 4.5: a silent failure.
+    Silent,
+}
+
+/// One method's result on one robot of the robustness study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodOutcome {
+    /// The outcome.
+    pub outcome: Outcome,
+    /// RMS relative pose errors [x, y, z, α, β, γ] (m, rad) of the returned model, if any.
+    pub rms: Option<[f64; 6]>,
+    /// Fit statistic of the returned model (NaN on error).
+    pub fit_statistic: f64,
+}
+
+impl MethodOutcome {
+    /// The axis with the largest RMS / Table 4.5 ratio and that ratio.
+    pub fn worst_axis(&self, table: &[f64; 6]) -> Option<(usize, f64)> {
+        self.rms.map(|r| {
+            (0..6)
+                .map(|k| (k, r[k] / table[k]))
+                .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
+        })
+    }
+}
+
+/// One robot of the robustness study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobustnessRow {
+    /// Robot index.
+    pub robot: usize,
+    /// How it was drawn.
+    pub draw: RobotDraw,
+    /// max_i |Δθ_i − Δθ_nom,i| (rad).
+    pub max_offset: f64,
+    /// max |length error| over links and wrenches (σ units).
+    pub max_length_sigma: f64,
+    /// RPBA.
+    pub rpba: MethodOutcome,
+    /// Implicit (ᴼχ_C estimated).
+    pub implicit: MethodOutcome,
+    /// RMS relative pose errors of the uncalibrated model (m, rad).
+    pub rms_uncalibrated: Option<[f64; 6]>,
+}
+
+fn draw_robot(nominal: &KinematicParams, draw: RobotDraw, rng: &mut ChaCha8Rng) -> KinematicParams {
+    use rand::Rng;
+    use rss6_core::N_KIN_ERRORS;
+    match draw {
+        RobotDraw::Prior => TrueRobot::draw(nominal, rng).kp,
+        RobotDraw::LargeOffsets { min_offset } => loop {
+            let kp = TrueRobot::draw(nominal, rng).kp;
+            let worst = (0..6)
+                .map(|i| (kp.dtheta[i] - nominal.dtheta[i]).abs())
+                .fold(0.0, f64::max);
+            if worst >= min_offset {
+                break kp;
+            }
+        },
+        RobotDraw::LongLengths { lo, hi } => {
+            let kp = TrueRobot::draw(nominal, rng).kp;
+            let mut b: [f64; N_KIN_ERRORS] = kp.errors_from(nominal);
+            for v in b.iter_mut().take(48).skip(36) {
+                let size = rng.random_range(lo..=hi) * crate::model::SIGMA_LENGTH;
+                *v = if rng.random_bool(0.5) { size } else { -size };
+            }
+            nominal.with_errors(&b)
+        }
+    }
+}
+
+fn judge(
+    res: Result<crate::CalibrationResult>,
+    table: &[f64; 6],
+    rel: &dyn Fn(&KinematicParams, &Vec6) -> Result<[f64; 6]>,
+) -> MethodOutcome {
+    let res = match res {
+        Ok(r) => r,
+        Err(e) => {
+            return MethodOutcome {
+                outcome: Outcome::Error(e.to_string()),
+                rms: None,
+                fit_statistic: f64::NAN,
+            }
+        }
+    };
+    let rms = match rel(&res.params, &res.target_in_effector) {
+        Ok(r) => r,
+        Err(e) => {
+            return MethodOutcome {
+                outcome: Outcome::Error(format!("evaluation: {e}")),
+                rms: None,
+                fit_statistic: res.fit_statistic,
+            }
+        }
+    };
+    let met = (0..6).all(|k| rms[k] <= table[k]);
+    let dropped: Vec<usize> = res.dropped.iter().map(|d| d.index).collect();
+    let rejected: Vec<usize> = res.rejected.iter().map(|r| r.index).collect();
+    let outcome = match (met, dropped.is_empty() && rejected.is_empty()) {
+        (false, _) => Outcome::Silent,
+        (true, true) => Outcome::Met,
+        (true, false) => Outcome::RejectedThenMet { dropped, rejected },
+    };
+    MethodOutcome {
+        outcome,
+        rms: Some(rms),
+        fit_statistic: res.fit_statistic,
+    }
+}
+
+/// One robot of the robustness study of issue 12 on the rapier plant: the true kinematics drawn per
+/// `draw`, the data collected with every dwell checked, RPBA and implicit calibration judged against
+/// their Table 4.5 rows on `opts.test_configurations` test configurations.
+pub fn run_plant_robustness(
+    nominal: &KinematicParams,
+    opts: &StudyOptions,
+    robot: usize,
+    draw: RobotDraw,
+) -> RobustnessRow {
+    let seed = opts
+        .seed
+        .wrapping_add(robot as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let kp = draw_robot(nominal, draw, &mut rng);
+    let max_offset = (0..6)
+        .map(|i| (kp.dtheta[i] - nominal.dtheta[i]).abs())
+        .fold(0.0, f64::max);
+    let max_length_sigma = kp.errors_from(nominal)[36..48]
+        .iter()
+        .map(|v| v.abs() / crate::model::SIGMA_LENGTH)
+        .fold(0.0, f64::max);
+    let failed = |e: String| MethodOutcome {
+        outcome: Outcome::Error(e),
+        rms: None,
+        fit_statistic: f64::NAN,
+    };
+    let mut row = RobustnessRow {
+        robot,
+        draw,
+        max_offset,
+        max_length_sigma,
+        rpba: failed(String::new()),
+        implicit: failed(String::new()),
+        rms_uncalibrated: None,
+    };
+    let built = crate::plant::plant_with_kinematics(nominal, &kp, &mut rng, seed ^ 0xDA7A);
+    let (mut source, truth) = match built {
+        Ok(b) => b,
+        Err(e) => {
+            row.rpba = failed(format!("plant: {e}"));
+            row.implicit = failed(format!("plant: {e}"));
+            return row;
+        }
+    };
+    let target0 = Vec6::from(opts.target_nominal);
+    let solver = CalibrationOptions {
+        target_guess: target0.into(),
+        ..opts.solver
+    };
+    let rel = |kp: &KinematicParams, target: &Vec6| {
+        relative_pose_errors(
+            kp,
+            target,
+            &truth,
+            nominal,
+            opts.test_configurations,
+            opts.seed ^ (robot as u64) ^ 0x7E57,
+            opts.stroke,
+        )
+        .map(|e| e.rms)
+    };
+    row.rms_uncalibrated = rel(nominal, &target0).ok();
+    row.rpba = match collect(&mut source, &opts.rpba_thetas, opts.dwell) {
+        Ok(d) => judge(rpba(&d, nominal, &solver), &TABLE_4_5_RPBA, &rel),
+        Err(e) => failed(format!("collection: {e}")),
+    };
+    let sensor_guess = perturb_external(&truth.sensor_in_base, &mut rng);
+    row.implicit = match collect(&mut source, &opts.implicit_thetas, opts.dwell) {
+        Ok(d) => judge(
+            implicit(&d, nominal, &sensor_guess, &solver),
+            &TABLE_4_5_IMPLICIT,
+            &rel,
+        ),
+        Err(e) => failed(format!("collection: {e}")),
+    };
+    row
 }

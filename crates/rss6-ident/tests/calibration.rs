@@ -426,6 +426,9 @@ fn selection_returns_the_initial_configuration_first_and_raises_o1() {
         start: 13,
         candidates: 150,
         stroke: Some(s),
+        // no margin: the comparison with random configurations below is in the same box
+        margin_sigma: 0.0,
+        prior_robots: 0,
     };
     for method in [Method::Rpba, Method::Implicit] {
         let rep = select_configurations_with(&kp, method, 3, &opts).unwrap();
@@ -446,6 +449,29 @@ fn selection_returns_the_initial_configuration_first_and_raises_o1() {
             assert!(rss6_core::fk(&kp, t, &rss6_core::home_pose(), &Default::default()).is_ok());
         }
     }
+}
+
+#[test]
+fn selection_with_margin_stays_inside_the_shrunk_stroke() {
+    let kp = nominal();
+    let s = (-0.5, 0.5);
+    let inner = stroke_margin(&kp, s, 3.0);
+    // 3σ of Δθ alone is 0.15 rad, and η's 6.5 % relative error adds to it at the ends
+    assert!(inner.1 < s.1 - 0.15 && inner.1 > 0.2, "{inner:?}");
+    assert!((inner.0 + inner.1).abs() < 1e-12);
+    assert_eq!(stroke_margin(&kp, s, 0.0), s);
+    let opts = SelectionOptions {
+        start: 13,
+        candidates: 60,
+        stroke: Some(s),
+        ..SelectionOptions::default()
+    };
+    let rep = select_configurations_with(&kp, Method::Rpba, 3, &opts).unwrap();
+    assert_eq!(rep.inner_stroke, inner);
+    assert!(rep
+        .thetas
+        .iter()
+        .all(|t| t.iter().all(|v| *v >= inner.0 && *v <= inner.1)));
 }
 
 #[test]

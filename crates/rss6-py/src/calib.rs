@@ -47,6 +47,23 @@ pub(crate) fn ident_err(e: IdentError) -> PyErr {
             });
             err
         }
+        IdentError::Calibration {
+            configurations,
+            parameters,
+            fit_statistic,
+            ..
+        } => make(
+            "CalibrationError",
+            msg,
+            vec![
+                (
+                    "configurations",
+                    Attr::IL(configurations.iter().map(|&c| c as i64).collect()),
+                ),
+                ("parameters", Attr::S(parameters.join(", "))),
+                ("fit_statistic", Attr::F(fit_statistic)),
+            ],
+        ),
         IdentError::InvalidInput(_) => invalid(msg),
         IdentError::Core(c) => core(c),
         _ => make("CalibrationError", msg, vec![]),
@@ -127,6 +144,7 @@ impl PyCalibrationData {
                 camera_frames: camera_frames
                     .as_ref()
                     .map_or(u32::from(!s.iter().any(|x| x.is_nan())), |c| c[i]),
+                ..ConfigurationData::default()
             })
             .collect();
         Ok(PyCalibrationData {
@@ -286,14 +304,56 @@ impl PyCalibrationResult {
         self.inner.used.clone()
     }
 
+    /// Gross outliers rejected by the solver as (index, normalised residual), in rejection order.
+    #[getter]
+    fn rejected(&self) -> Vec<(usize, f64)> {
+        self.inner
+            .rejected
+            .iter()
+            .map(|r| (r.index, r.normalized_residual))
+            .collect()
+    }
+
+    /// Normalised residual r_lᵀΣ_ll⁻¹r_l/6 per used configuration as (index, value); ≈ 1 for noise.
+    #[getter]
+    fn normalized_residuals(&self) -> Vec<(usize, f64)> {
+        self.inner.normalized_residuals.clone()
+    }
+
+    /// Fit statistic: weighted cost per degree of freedom (≈ 1 when the model explains the data).
+    #[getter]
+    fn fit_statistic(&self) -> f64 {
+        self.inner.fit_statistic
+    }
+
+    /// Degrees of freedom of the fit statistic.
+    #[getter]
+    fn degrees_of_freedom(&self) -> usize {
+        self.inner.degrees_of_freedom
+    }
+
+    /// How Levenberg–Marquardt ended: "cost_tolerance", "step_tolerance", "no_further_decrease" or
+    /// "iteration_limit".
+    #[getter]
+    fn convergence(&self) -> &'static str {
+        match self.inner.convergence {
+            rss6_ident::Convergence::CostTolerance => "cost_tolerance",
+            rss6_ident::Convergence::StepTolerance => "step_tolerance",
+            rss6_ident::Convergence::NoFurtherDecrease => "no_further_decrease",
+            _ => "iteration_limit",
+        }
+    }
+
     fn __repr__(&self) -> String {
         format!(
-            "CalibrationResult({}, {} iterations, rank {}/{}, {} dropped)",
+            "CalibrationResult({}, {} iterations, rank {}/{}, fit statistic {:.3}, {} dropped, {} rejected)",
             self.method(),
             self.inner.iterations,
             self.inner.rank,
             self.inner.parameter_count,
-            self.inner.dropped.len()
+            self.inner.fit_statistic,
+            self.inner.dropped.len(),
+            self.inner.rejected.len()
         )
     }
 }
@@ -325,6 +385,7 @@ pub(crate) fn select_configurations<'py>(
         start,
         candidates,
         stroke,
+        ..SelectionOptions::default()
     };
     let rep = py
         .detach(move || rss6_ident::select_configurations_with(&k, m, seed, &opts))

@@ -63,10 +63,13 @@ pub(crate) fn collect(
             "dwell must be finite and > 0 s, got {dwell}"
         )));
     }
+    // Every dwell is checked (reached the command in the drive's nominal convention, at rest, target
+    // seen); a failing configuration stays in the data with its reason and the solvers leave it out.
     let spec = DwellSpec {
         move_time,
         settle_time,
         kappa_rate,
+        ..DwellSpec::checked(&KinematicParams::nominal())
     };
     if !(move_time.is_finite()
         && move_time > 0.0

@@ -16,6 +16,8 @@ pub(crate) enum Attr {
     I(i64),
     /// A string attribute.
     S(String),
+    /// A list-of-integers attribute.
+    IL(Vec<i64>),
 }
 
 /// Builds an instance of `rss6.errors.<class>` with `msg` and the given attributes.
@@ -30,6 +32,7 @@ pub(crate) fn make(class: &str, msg: impl Into<String>, attrs: Vec<(&'static str
                     Attr::F(x) => exc.setattr(k, x)?,
                     Attr::I(x) => exc.setattr(k, x)?,
                     Attr::S(x) => exc.setattr(k, x)?,
+                    Attr::IL(x) => exc.setattr(k, x)?,
                 }
             }
             Ok(PyErr::from_value(exc))

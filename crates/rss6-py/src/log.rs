@@ -156,6 +156,7 @@ impl PyLogWriter {
             },
             kappa_samples,
             camera_frames,
+            ..ConfigurationData::default()
         };
         self.open()?
             .write_dwell(index, [window.0, window.1], &data)

@@ -245,6 +245,9 @@ pub fn read_log_bytes(path: &str, data: &[u8]) -> Result<RunLog, LogError> {
                                 sensor_pose: d.sensor_pose,
                                 kappa_samples: d.kappa_samples,
                                 camera_frames: d.camera_frames,
+                                kappa_std: d.kappa_std,
+                                sensor_pose_std: d.sensor_pose_std,
+                                fault: d.fault,
                             },
                         });
                     }

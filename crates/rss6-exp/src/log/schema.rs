@@ -51,7 +51,7 @@ pub(crate) const FRAME_TRANSFORM_SCHEMA: &str = r#"{"title":"foxglove.FrameTrans
 
 pub(crate) const VECTOR_SCHEMA: &str = r#"{"title":"rss6.JointVector","description":"One value per leg (1..6) at a time stamp","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"unit":{"type":"string"},"values":{"type":"array","items":{"type":"number"},"minItems":6,"maxItems":6}}}"#;
 
-pub(crate) const DWELL_SCHEMA: &str = r#"{"title":"rss6.Dwell","description":"Means over one calibration dwell at rest","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"index":{"type":"integer"},"window":{"type":"array","items":{"type":"number"},"description":"first and last tick time (s)"},"theta_cmd":{"type":"array","items":{"type":"number"},"description":"rad, drive convention"},"kappa":{"type":"array","items":{"type":"number"},"description":"mean potentiometer readings (bit)"},"sensor_pose":{"type":["array","null"],"items":{"type":"number"},"description":"mean target pose in the sensor frame [x,y,z,alpha,beta,gamma] (m, rad)"},"kappa_samples":{"type":"integer"},"camera_frames":{"type":"integer"}}}"#;
+pub(crate) const DWELL_SCHEMA: &str = r#"{"title":"rss6.Dwell","description":"Means over one calibration dwell at rest","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"index":{"type":"integer"},"window":{"type":"array","items":{"type":"number"},"description":"first and last tick time (s)"},"theta_cmd":{"type":"array","items":{"type":"number"},"description":"rad, drive convention"},"kappa":{"type":"array","items":{"type":"number"},"description":"mean potentiometer readings (bit)"},"sensor_pose":{"type":["array","null"],"items":{"type":"number"},"description":"mean target pose in the sensor frame [x,y,z,alpha,beta,gamma] (m, rad)"},"kappa_samples":{"type":"integer"},"camera_frames":{"type":"integer"},"kappa_std":{"type":["array","null"],"items":{"type":"number"},"description":"sample standard deviation of each potentiometer over the dwell (bit)"},"sensor_pose_std":{"type":["array","null"],"items":{"type":"number"},"description":"sample standard deviation of each sensor pose component over the dwell (m, rad)"},"fault":{"type":["object","null"],"description":"the collection check the configuration failed: kind unreached (joint, error_bits, tolerance_bits) or moving (channel, scatter, tolerance); null if it passed or was not checked"}}}"#;
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub(crate) struct Stamp {
@@ -156,4 +156,10 @@ pub(crate) struct DwellMessage {
     pub(crate) sensor_pose: Option<[f64; 6]>,
     pub(crate) kappa_samples: u32,
     pub(crate) camera_frames: u32,
+    #[serde(default)]
+    pub(crate) kappa_std: Option<[f64; 6]>,
+    #[serde(default)]
+    pub(crate) sensor_pose_std: Option<[f64; 6]>,
+    #[serde(default)]
+    pub(crate) fault: Option<crate::dwell::DwellFault>,
 }

@@ -224,6 +224,9 @@ impl LogWriter {
                 sensor_pose: data.sensor_pose,
                 kappa_samples: data.kappa_samples,
                 camera_frames: data.camera_frames,
+                kappa_std: data.kappa_std,
+                sensor_pose_std: data.sensor_pose_std,
+                fault: data.fault.clone(),
             },
         )
         .map_err(|e| ExpError::Mcap(e.to_string()))?;

@@ -4,16 +4,20 @@
 //! every finite frame of it with [`crate::PoseMean`]. Logged collections carry these means
 //! ([`crate::log`]), so a log and a live run give the same numbers.
 
+mod check;
+
+pub use check::{DriveConvention, DwellChecks, DwellFault, RestChannel, Scatter};
+
 use crate::error::{ExpError, Result};
 use crate::observer::{Flow, Observer, Progress};
 use crate::pose_mean::PoseMean;
 use crate::record::{Phase, Record};
 use crate::robot::Robot;
-use rss6_core::{Vec6, LEGS};
+use rss6_core::{KinematicParams, Vec6, LEGS};
 use serde::{Deserialize, Serialize};
 
 /// One calibration configuration: the means over a dwell at rest.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct ConfigurationData {
     /// Commanded joint angles θ_cmd in the drive's (nominal) joint convention (rad).
     pub theta_cmd: [f64; LEGS],
@@ -26,6 +30,17 @@ pub struct ConfigurationData {
     pub kappa_samples: u32,
     /// Number of camera frames averaged.
     pub camera_frames: u32,
+    /// Sample standard deviation of each potentiometer over the dwell (bit); `None` if not recorded.
+    #[serde(default)]
+    pub kappa_std: Option<[f64; LEGS]>,
+    /// Sample standard deviation of each component of ᶜχ_t over the dwell (m, rad); `None` if not
+    /// recorded or fewer than 2 frames.
+    #[serde(default)]
+    pub sensor_pose_std: Option<[f64; 6]>,
+    /// The collection check this configuration failed ([`DwellChecks`]), or `None` (passed, or not
+    /// checked). Such a configuration is kept in the data and left out of calibrations by default.
+    #[serde(default)]
+    pub fault: Option<DwellFault>,
 }
 
 impl ConfigurationData {
@@ -49,6 +64,13 @@ impl ConfigurationData {
             Some(p) if p.iter().any(|v| !v.is_finite()) => Some("non-finite sensor pose".into()),
             Some(_) => None,
         }
+    }
+
+    /// Why this configuration is left out of a calibration by default: its [`Self::defect`], or the
+    /// collection check it failed ([`Self::fault`]); `None` if it is usable.
+    pub fn exclusion(&self) -> Option<String> {
+        self.defect()
+            .or_else(|| self.fault.as_ref().map(ToString::to_string))
     }
 }
 
@@ -80,20 +102,33 @@ pub struct DwellSpec {
     pub settle_time: f64,
     /// Potentiometer sampling rate during the dwell (Hz); thesis §4.5: 500 Hz.
     pub kappa_rate: f64,
+    /// Collection checks of every dwell; `None` records the means unchecked.
+    pub checks: Option<DwellChecks>,
 }
 
 impl Default for DwellSpec {
-    /// 1 s move, 0.5 s settle, 500 Hz potentiometer sampling.
+    /// 1 s move, 0.5 s settle, 500 Hz potentiometer sampling, the default [`DwellChecks`] (at rest,
+    /// target seen; the reach check needs the drive's convention, see [`DwellSpec::checked`]).
     fn default() -> Self {
         DwellSpec {
             move_time: 1.0,
             settle_time: 0.5,
             kappa_rate: 500.0,
+            checks: Some(DwellChecks::default()),
         }
     }
 }
 
 impl DwellSpec {
+    /// The default spec with every check, the reach check in the convention of `drive` (the
+    /// nominal model the drive was set up with).
+    pub fn checked(drive: &KinematicParams) -> Self {
+        DwellSpec {
+            checks: Some(DwellChecks::with_drive(drive)),
+            ..Self::default()
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         let ok = self.move_time.is_finite()
             && self.move_time > 0.0
@@ -177,6 +212,7 @@ impl<R: Robot> DwellSession<R> {
         let mut kappa = Vec6::zeros();
         let mut kappa_samples = 0u32;
         let mut poses = PoseMean::default();
+        let mut scatter = Scatter::default();
         let mut window = [f64::NAN; 2];
         for k in 0..ticks(dwell).max(1) {
             let t = self.robot.time();
@@ -188,18 +224,32 @@ impl<R: Robot> DwellSession<R> {
             if k % every == 0 {
                 kappa += kappa_now;
                 kappa_samples += 1;
+                scatter.add_kappa(&kappa_now);
             }
             if let Some(p) = frame {
                 poses.add(&p);
+                scatter.add_pose(&p);
             }
         }
-        let data = ConfigurationData {
+        let mut data = ConfigurationData {
             theta_cmd: (*theta_cmd).into(),
             kappa: (kappa / f64::from(kappa_samples.max(1))).into(),
             sensor_pose: poses.mean().map(Into::into),
             kappa_samples,
             camera_frames: poses.count(),
+            kappa_std: Some(scatter.kappa_std()),
+            sensor_pose_std: scatter.pose_std(),
+            fault: None,
         };
+        if let Some(checks) = &self.spec.checks {
+            if poses.count() == 0 && checks.abort_on_lost_target {
+                return Err(ExpError::TargetLost {
+                    index,
+                    time: self.robot.time(),
+                });
+            }
+            data.fault = checks.judge(&data.theta_cmd, &data.kappa, &scatter);
+        }
         self.index += 1;
         if observer.dwell(index, window, &data) == Flow::Stop {
             return Err(ExpError::Stopped {
@@ -220,7 +270,9 @@ impl<R: Robot> DwellSession<R> {
         let t = self.robot.time();
         let kappa = self.robot.potentiometers();
         let truth = self.robot.true_state();
-        self.robot.step_joint_command(cmd)?;
+        self.robot
+            .step_joint_command(cmd)
+            .map_err(|e| cannot_assemble(e, phase))?;
         let frame = self.robot.camera();
         let after = self.robot.potentiometers();
         let mut r = Record::new(t, phase, kappa, *cmd);
@@ -233,6 +285,23 @@ impl<R: Robot> DwellSession<R> {
             });
         }
         Ok((after, frame.filter(|p| p.iter().all(|v| v.is_finite()))))
+    }
+}
+
+/// A robot that fails mid-configuration (diverged, came apart, kinematics failed) could not assemble
+/// at that configuration: say which.
+fn cannot_assemble(e: ExpError, phase: Phase) -> ExpError {
+    let index = match phase {
+        Phase::Move { index } | Phase::Settle { index } | Phase::Dwell { index } => index,
+        _ => return e,
+    };
+    match e {
+        ExpError::Sim(rss6_sim::SimError::Diverged { .. } | rss6_sim::SimError::Core(_))
+        | ExpError::Core(_) => ExpError::CannotAssemble {
+            index,
+            why: e.to_string(),
+        },
+        other => other,
     }
 }
 
