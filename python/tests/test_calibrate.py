@@ -81,6 +81,20 @@ def test_rpba_recovers_the_robot(setup):
     assert np.linalg.norm(rms[3:]) < np.linalg.norm(bound[3:]), (rms, bound)
 
 
+def test_an_exception_in_the_rpba_progress_callback_reaches_the_caller(setup):
+    _, _, data, _ = setup
+    calls: list[int] = []
+
+    def stop(iteration: int, cost: float) -> None:
+        calls.append(iteration)
+        if iteration >= 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        calibrate.rpba(data, NOMINAL, progress=stop)
+    assert calls[-1] == 2  # no callback after the one that raised
+
+
 def test_implicit_runs_from_a_rough_sensor_pose(setup):
     plant, _, data, _ = setup
     guess = calibrate.draw_external(plant.truth()["sensor_in_base"], seed=1)

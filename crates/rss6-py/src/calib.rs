@@ -408,7 +408,9 @@ fn options(
 }
 
 /// RPBA (eq. 4.16–4.21) from `data` starting at `kp`: 60 kinematic + 6 external (ᴱχ_t) parameters,
-/// Levenberg–Marquardt with analytic Jacobians. `progress(iteration, cost)` per iteration.
+/// Levenberg–Marquardt with analytic Jacobians. `progress(iteration, cost)` per iteration; an
+/// exception it raises (or Ctrl-C) is raised once the solve (milliseconds) has returned, and no further
+/// callback is made.
 #[pyfunction]
 #[pyo3(signature = (data, kp, *, max_iterations=60, target_guess=None, progress=None))]
 pub(crate) fn rpba(
@@ -421,18 +423,20 @@ pub(crate) fn rpba(
 ) -> PyResult<PyCalibrationResult> {
     let opts = options(max_iterations, target_guess)?;
     let (d, k) = (&data.inner, kp.inner);
-    let r = py
-        .detach(|| {
-            rss6_ident::rpba_with_progress(d, &k, &opts, &mut |p| {
-                if let Some(cb) = &progress {
-                    Python::attach(|py| {
-                        let _ = cb.call1(py, (p.iteration, p.cost));
-                    });
-                }
-            })
+    let mut interrupt = crate::exp::Interrupt::default();
+    let r = py.detach(|| {
+        rss6_ident::rpba_with_progress(d, &k, &opts, &mut |p| {
+            if let Some(cb) = &progress {
+                interrupt.call(|py| cb.call1(py, (p.iteration, p.cost)).map(|_| ()));
+            }
         })
-        .map_err(ident_err)?;
-    Ok(PyCalibrationResult { inner: r })
+    });
+    if let Some(e) = interrupt.take() {
+        return Err(e);
+    }
+    Ok(PyCalibrationResult {
+        inner: r.map_err(ident_err)?,
+    })
 }
 
 /// Implicit calibration (eq. 4.10–4.15) from `data` starting at `kp` and the rough sensor pose
