@@ -126,6 +126,13 @@ class CalibrationSummary:
         lines.append(
             f"   {'thesis RPBA':13s} " + " ".join(f"{v * 1e3:8.4f}" for v in self.thesis_rpba)
         )
+        rejected = ", ".join(f"{k} (normalised residual {z:.3g})" for k, z in self.rejected)
+        left_out = ", ".join(f"{k} ({why})" for k, why in self.dropped)
+        lines.append(
+            f"   fit statistic {self.fit_statistic:.3f} (weighted cost per degree of freedom, ≈ 1 when "
+            f"the model explains the data to the noise); rejected: {rejected or 'none'}; "
+            f"left out: {left_out or 'none'}"
+        )
         return "\n".join(lines)
 
 
