@@ -26,6 +26,7 @@ import canopen
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rss6.can.busio import BridgeNetwork, BusLog, BusWatch
 from rss6.can.load import MAX_LOAD, BusLoad, bus_load, check_bus_load
 from rss6.can.protocol import (
     BRIDGE_NODE_ID,
@@ -103,63 +104,6 @@ class Reading:
     fault: str | None
 
 
-class _BusLog(can.Listener):
-    """python-can's ``Logger`` for one channel, fed the received frames by the notifier and the
-    sent ones by :class:`_BridgeNetwork` (a bus does not receive its own frames), under a lock."""
-
-    def __init__(self, path: str):
-        self.logger = can.Logger(path)
-        self._lock = threading.Lock()
-
-    def on_message_received(self, msg: can.Message) -> None:
-        with self._lock:
-            self.logger.on_message_received(msg)
-
-    def stop(self) -> None:
-        with self._lock:
-            self.logger.stop()
-
-
-class _BridgeNetwork(canopen.Network):
-    """A canopen network that also logs what it sends (the bus log holds both directions)."""
-
-    def __init__(self, bus: can.BusABC):
-        super().__init__(bus)
-        self.log: _BusLog | None = None
-
-    def send_message(self, can_id: int, data: bytes, remote: bool = False) -> None:
-        super().send_message(can_id, data, remote)
-        if self.log is not None:
-            self.log.on_message_received(
-                can.Message(
-                    timestamp=time.time(),
-                    arbitration_id=can_id,
-                    data=bytes(data),
-                    is_extended_id=can_id > 0x7FF,
-                    is_remote_frame=remote,
-                    is_rx=False,
-                )
-            )
-
-
-class _BusWatch(can.Listener):
-    """On a network's notifier: counts frames and turns error frames into bridge faults."""
-
-    def __init__(self, bridge: Bridge, channel: int):
-        self.bridge, self.channel = bridge, channel
-        self.frames = 0
-
-    def on_message_received(self, msg: can.Message) -> None:
-        if msg.is_error_frame:
-            self.bridge._event(f"error frame on channel {self.channel}")
-        with self.bridge._arrived:  # after canopen's handlers: the frame is fully processed
-            self.frames += 1
-            self.bridge._arrived.notify_all()
-
-    def on_error(self, exc: Exception) -> None:
-        self.bridge._event(f"receive error on channel {self.channel}: {exc}")
-
-
 class Bridge:
     """Six drives behind one bus or two (``bus_or_buses``: a python-can bus or a list, one per
     channel; node ids split in contiguous groups, e.g. 1–3 and 4–6), configured by ``config``.
@@ -203,7 +147,7 @@ class Bridge:
         self.jump_counts = cfg.v_max * cfg.dt * cpr
         self.noise_counts = cfg.noise_bits * self.map.counts_per_bit
         eds = cfg.eds if cfg.eds is not None else str(eds_path())
-        self.networks = [_BridgeNetwork(bus) for bus in self.buses]
+        self.networks = [BridgeNetwork(bus) for bus in self.buses]
         for net in self.networks:
             net.NOTIFIER_CYCLE = 0.05  # the notifier thread notices stop() within 50 ms, not 1 s
         self.nodes: list[canopen.RemoteNode] = []
@@ -228,8 +172,8 @@ class Bridge:
         self.nodes = [self.nodes[k] for k in order]
         self.ids = [self.ids[k] for k in order]
         self._net_of = [self._net_of[k] for k in order]
-        self.watches: list[_BusWatch] = []
-        self.loggers: list[_BusLog] = []
+        self.watches: list[BusWatch] = []
+        self.loggers: list[BusLog] = []
         self._periodic: list[Any] = []
         self._connected = False
         self.enabled = False
@@ -264,7 +208,7 @@ class Bridge:
         for ch, net in enumerate(self.networks):
             net.connect()
             assert net.notifier is not None
-            watch = _BusWatch(self, ch)
+            watch = BusWatch(self, ch)
             net.notifier.add_listener(watch)
             self.watches.append(watch)
             if self.config.log is not None:
@@ -272,7 +216,7 @@ class Bridge:
                 if len(self.networks) > 1:
                     stem, dot, ext = path.rpartition(".")
                     path = f"{stem}.ch{ch}.{ext}" if dot else f"{path}.ch{ch}"
-                log = _BusLog(path)
+                log = BusLog(path)
                 net.notifier.add_listener(log)
                 net.log = log
                 self.loggers.append(log)
