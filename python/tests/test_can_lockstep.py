@@ -216,3 +216,19 @@ def test_enable_without_drives_names_the_failure() -> None:
                 bridge.step(np.zeros(6))
     finally:
         bus.shutdown()
+
+
+def test_calibration_dwells_through_the_bridge_equal_the_plant() -> None:
+    """calibrate.collect drives the bridge's robot through the compiled dwell runner (the Robot
+    adapter); the means equal those on the plant up to the count quantisation (measured: 0.0016 bit,
+    0.46 µm; bounds ≈ 3×)."""
+    thetas = np.array([np.zeros(6), np.full(6, 0.05), 0.05 * np.array([1, -1, 1, -1, 1, -1])])
+    kw = {"dwell": 0.5, "move_time": 0.5, "settle_time": 0.3}
+    with rcan.simulated_robot(_plant()) as robot:
+        bus = rss6.calibrate.collect(robot, thetas, **kw)
+        assert robot.fault is None
+    direct = _plant()
+    direct.reset(rss6.home_pose())  # as often as simulated_robot reset its plant
+    ref = rss6.calibrate.collect(direct, thetas, **kw)
+    assert np.abs(bus.kappa - ref.kappa).max() < 5e-3
+    assert np.abs(bus.sensor_pose - ref.sensor_pose).max() < 1.5e-6
