@@ -7,7 +7,7 @@ use rss6_core::{KinematicParams, Vec6, N_KIN_ERRORS};
 /// A configuration left out of the estimate, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DroppedConfiguration {
-    /// Index in [`CalibrationData::configurations`].
+    /// Index in [`crate::CalibrationData::configurations`].
     pub index: usize,
     /// Reason (missing frames, NaN, FK failure …).
     pub reason: String,
