@@ -14,7 +14,7 @@
 //! A relative step in ψ is a relative change of the quantity, so relative standard deviations come
 //! straight from the covariance of ψ.
 
-use super::closed_loop::{LoopParams, N_A};
+use super::config::{LoopParams, N_A};
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
 use rss6_core::LEGS;

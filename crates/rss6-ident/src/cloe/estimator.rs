@@ -17,7 +17,8 @@
 //! to rounding). Otherwise [`IdentError::NotConverged`]
 //! with the cost history.
 
-use super::closed_loop::{simulate, LoopConfig, LoopParams, LoopRun};
+use super::closed_loop::simulate;
+use super::config::{LoopConfig, LoopParams, LoopRun};
 use super::consistent::{Consistent, N_PSI};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;

@@ -3,13 +3,13 @@
 //! physically consistent parametrisation, and the Levenberg–Marquardt estimator on them.
 
 mod closed_loop;
+mod config;
 mod consistent;
 mod estimator;
 mod truth;
 
-pub use closed_loop::{
-    parameter_names, simulate, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A,
-};
+pub use closed_loop::simulate;
+pub use config::{parameter_names, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 pub use consistent::{Consistent, N_PSI};
 pub use estimator::{cloe, CloeData, CloeOptions, CloeResult};
 pub use truth::{table_5_2_truth, DRIVE_UNIT_TO_NM};

@@ -1,6 +1,6 @@
 //! A documented simulated truth shaped like the thesis's Table 5.2.
 
-use super::closed_loop::LoopParams;
+use super::config::LoopParams;
 use rss6_core::thesis::{
     TABLE_5_2_COULOMB, TABLE_5_2_PID_IDENTIFIED, TABLE_5_2_PID_INITIAL, TABLE_5_2_VISCOUS,
 };

@@ -1,0 +1,175 @@
+//! What defines a simulation of the identification loop besides the reference: its configuration
+//! ([`LoopConfig`]), the identification vector A ([`LoopParams`], eq. 5.6) and what a run returns
+//! ([`LoopRun`]).
+
+use crate::error::{IdentError, Result};
+use nalgebra::DMatrix;
+use rss6_core::{DynamicParams, KinematicParams, Vec3, Vec6, GRAVITY, LEGS, N_DYN};
+use rss6_ctrl::{CartesianPidGains, PidGains};
+
+/// Length of the identification vector A = [Ξ (64); l_p, l_i, l_d] (eq. 5.6).
+pub const N_A: usize = N_DYN + 3;
+
+/// Everything about the loop except A: the model's kinematics, the drive's convention, the outer
+/// loop's gains and the timing. Mirrors `rss6_exp::IdentSpec` plus the twin's `SimConfig`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopConfig {
+    /// The model's (calibrated) kinematics: dynamics model, potentiometers and the visual PID's J_θ.
+    pub kp: KinematicParams,
+    /// The drive's joint convention (nominal η, Δθ).
+    pub drive: KinematicParams,
+    /// The outer visual PID's gains (thesis: k_p = 0.3, k_i = 2.4, k_d = 0.001).
+    pub gains: CartesianPidGains,
+    /// Joint-loop period (s), 1e-3.
+    pub dt: f64,
+    /// Drive torque limit (N·m).
+    pub torque_limit: f64,
+    /// Potentiometer sampling period (s), 2e-3.
+    pub pot_period: f64,
+    /// Camera frame period (s), 0.033.
+    pub camera_period: f64,
+    /// Camera latency (s), 0 unless measured.
+    pub camera_latency: f64,
+    /// Gravity in the base frame (m/s²).
+    pub gravity: Vec3,
+    /// The pose the robot rests at when the run starts (m, rad).
+    pub start: Vec6,
+    /// Run length (s).
+    pub duration: f64,
+    /// Where the sensitivities evaluate the state Jacobians F_χ, F_χ̇.
+    pub state_jacobians: StateJacobians,
+}
+
+/// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StateJacobians {
+    /// At every RK4 stage: the exact derivative of the discrete loop (24 forward-dynamics calls per
+    /// stage).
+    #[default]
+    Exact,
+    /// Once per tick, at the tick's start, for all four stages (4× fewer calls); an approximation
+    /// of the derivative (error measured in `tests/cloe_loop.rs`), for LM iterations.
+    PerTick,
+}
+
+impl LoopConfig {
+    /// The thesis's loop on `kp` from rest at `start` for `duration` s: nominal drive convention,
+    /// thesis outer gains, 1 kHz, 500 Hz potentiometers, 0.033 s frames without latency, 30 N·m.
+    pub fn new(kp: KinematicParams, start: Vec6, duration: f64) -> Self {
+        LoopConfig {
+            kp,
+            drive: KinematicParams::nominal(),
+            gains: CartesianPidGains::thesis(),
+            dt: 1e-3,
+            torque_limit: 30.0,
+            pot_period: 2e-3,
+            camera_period: 0.033,
+            camera_latency: 0.0,
+            gravity: GRAVITY,
+            start,
+            duration,
+            state_jacobians: StateJacobians::Exact,
+        }
+    }
+
+    pub(super) fn validate(&self) -> Result<()> {
+        let pos = [
+            ("dt", self.dt),
+            ("torque_limit", self.torque_limit),
+            ("pot_period", self.pot_period),
+            ("camera_period", self.camera_period),
+            ("duration", self.duration),
+        ];
+        for (name, v) in pos {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(IdentError::InvalidInput(format!(
+                    "{name} must be finite and > 0, got {v}"
+                )));
+            }
+        }
+        if !(self.camera_latency.is_finite() && self.camera_latency >= 0.0) {
+            return Err(IdentError::InvalidInput(format!(
+                "camera latency must be finite and >= 0, got {}",
+                self.camera_latency
+            )));
+        }
+        self.kp.validate()?;
+        self.drive.validate()?;
+        Ok(())
+    }
+}
+
+/// The identification vector A (eq. 5.6): the dynamic parameters Ξ and the drive PID's gains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopParams {
+    /// Ξ: masses, inertias, friction.
+    pub dynamics: DynamicParams,
+    /// l_p, l_i, l_d of the drive's PID (eq. 5.5).
+    pub pid: PidGains,
+}
+
+impl LoopParams {
+    /// A as a 67-vector [Ξ; l_p, l_i, l_d].
+    pub fn to_vector(&self) -> [f64; N_A] {
+        let mut a = [0.0; N_A];
+        a[..N_DYN].copy_from_slice(&self.dynamics.to_vector());
+        a[N_DYN..].copy_from_slice(&self.pid.to_array());
+        a
+    }
+
+    /// The inverse of [`Self::to_vector`].
+    pub fn from_vector(a: &[f64; N_A]) -> Self {
+        let mut xi = [0.0; N_DYN];
+        xi.copy_from_slice(&a[..N_DYN]);
+        LoopParams {
+            dynamics: DynamicParams::from_vector(&xi),
+            pid: PidGains {
+                lp: a[N_DYN],
+                li: a[N_DYN + 1],
+                ld: a[N_DYN + 2],
+            },
+        }
+    }
+}
+
+/// Names of the 67 entries of A, e.g. "platform.m", "wrench3.Iz", "link1.Ix", "fc2", "fv6", "lp".
+pub fn parameter_names() -> Vec<String> {
+    let mut names = Vec::with_capacity(N_A);
+    let body = |names: &mut Vec<String>, b: &str| {
+        for q in ["m", "Ix", "Iy", "Iz"] {
+            names.push(format!("{b}.{q}"));
+        }
+    };
+    body(&mut names, "platform");
+    for i in 1..=LEGS {
+        body(&mut names, &format!("wrench{i}"));
+    }
+    for i in 1..=LEGS {
+        body(&mut names, &format!("link{i}"));
+    }
+    for i in 1..=LEGS {
+        names.push(format!("fc{i}"));
+    }
+    for i in 1..=LEGS {
+        names.push(format!("fv{i}"));
+    }
+    names.extend(["lp", "li", "ld"].map(String::from));
+    names
+}
+
+/// What one simulation of the loop returns: the camera frames the visual PID consumed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopRun {
+    /// Time (s from the start) of the tick at which each frame was consumed.
+    pub t: Vec<f64>,
+    /// χ_s of each frame (m, rad): the model's pose at the frame's capture.
+    pub chi: Vec<Vec6>,
+    /// ∂χ_s/∂A of the requested columns: rows 6k..6k+6 belong to frame k; `None` without
+    /// sensitivities.
+    pub jacobian: Option<DMatrix<f64>>,
+    /// The active columns of A the Jacobian's columns refer to.
+    pub columns: Vec<usize>,
+    /// Joint-ticks at which the drive's torque was clamped at ±`torque_limit` (the loop is not
+    /// differentiable where the clamp switches).
+    pub saturated: usize,
+}
