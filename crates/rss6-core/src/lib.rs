@@ -26,8 +26,8 @@ pub use crate::dynamics::{
     forward_dynamics_with_gravity, friction, friction_twist, gravity, gravity_twist, gravity_with,
     inverse_dynamics, inverse_dynamics_with_gravity, joint_friction, joint_friction_smooth,
     kinetic_energy, link_transverse_inertia, mass_matrix, mass_matrix_twist, platform_inertia,
-    potential_energy_with_gravity, rk4_step, rk4_step_with_gravity, wrench_axial_inertia,
-    DynamicsTerms, ModelState, GRAVITY,
+    potential_energy_with_gravity, rk4_step, rk4_step_by, rk4_step_with_gravity,
+    wrench_axial_inertia, DynamicsTerms, ModelState, GRAVITY,
 };
 pub use crate::error::{CoreError, Result, SingularKind};
 pub use crate::fk::{fk, fk_theta_newton, FkOptions, FkSolution};

@@ -11,8 +11,8 @@ use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    ik, jacobian_theta, rk4_step_with_gravity, DynamicParams, KinematicParams, ModelState, Vec3,
-    Vec6,
+    forward_dynamics_with_gravity, ik, jacobian_theta, rk4_step_by, rk4_step_with_gravity,
+    DynamicParams, KinematicParams, ModelState, Vec3, Vec6, LEGS,
 };
 
 /// Analytic-model physics.
@@ -20,6 +20,8 @@ use rss6_core::{
 pub struct ModelPhysics {
     kp: KinematicParams,
     dp: DynamicParams,
+    /// ε of the smoothed Coulomb friction (rad/s); 0 = sign.
+    smoothing: f64,
     gravity: Vec3,
     dt: f64,
     state: ModelState,
@@ -43,6 +45,7 @@ impl ModelPhysics {
         ModelPhysics {
             kp: cfg.kinematics,
             dp,
+            smoothing: cfg.friction_smoothing,
             gravity: setup.gravity,
             dt: cfg.dt,
             state: ModelState {
@@ -70,8 +73,21 @@ impl Physics for ModelPhysics {
     }
 
     fn advance(&mut self, tau: &Vec6) -> Result<()> {
-        self.state =
-            rk4_step_with_gravity(&self.kp, &self.dp, &self.state, tau, self.dt, &self.gravity)?;
+        self.state = if self.smoothing > 0.0 {
+            // f_c tanh(θ̇/ε) at every stage: the Coulomb part as a known joint torque on the
+            // friction-free model (the same arithmetic as rss6-ident's CLOE loop).
+            let mut dp_nc = self.dp;
+            dp_nc.coulomb = [0.0; LEGS];
+            let (kp, dp, g, eps) = (&self.kp, &self.dp, &self.gravity, self.smoothing);
+            rk4_step_by(&self.state, self.dt, |p, v| {
+                let theta_dot = jacobian_theta(kp, p)? * v;
+                let tau_eff =
+                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (theta_dot[i] / eps).tanh());
+                forward_dynamics_with_gravity(kp, &dp_nc, p, v, &tau_eff, g)
+            })?
+        } else {
+            rk4_step_with_gravity(&self.kp, &self.dp, &self.state, tau, self.dt, &self.gravity)?
+        };
         self.theta = ik(&self.kp, &self.state.pose)?;
         Ok(())
     }

@@ -47,10 +47,22 @@ pub fn rk4_step_with_gravity(
     dt: f64,
     g: &Vec3,
 ) -> Result<ModelState> {
+    rk4_step_by(state, dt, |p: &Vec6, pd: &Vec6| {
+        forward_dynamics_with_gravity(kp, dp, p, pd, tau_a, g)
+    })
+}
+
+/// One classical RK4 step of χ̈ = f(χ, χ̇) over `dt` (s): the integrator of [`rk4_step`] for any
+/// acceleration function (e.g. forward dynamics with a modified friction law or extra loads).
+///
+/// Errors: [`CoreError::NonFinite`] for a non-finite `dt`; whatever `f` returns.
+pub fn rk4_step_by<F>(state: &ModelState, dt: f64, f: F) -> Result<ModelState>
+where
+    F: Fn(&Vec6, &Vec6) -> Result<Vec6>,
+{
     if !dt.is_finite() {
         return Err(CoreError::NonFinite);
     }
-    let f = |p: &Vec6, pd: &Vec6| forward_dynamics_with_gravity(kp, dp, p, pd, tau_a, g);
     let (p0, v0) = (state.pose, state.pose_dot);
     let a1 = f(&p0, &v0)?;
     let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));

@@ -51,7 +51,7 @@ mod integration;
 mod matrices;
 mod newton_euler;
 
-pub use self::integration::{rk4_step, rk4_step_with_gravity, ModelState};
+pub use self::integration::{rk4_step, rk4_step_by, rk4_step_with_gravity, ModelState};
 pub use self::matrices::{
     coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_gravity, friction,
     friction_twist, gravity, gravity_twist, gravity_with, kinetic_energy, mass_matrix,

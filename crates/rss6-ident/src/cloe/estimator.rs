@@ -66,6 +66,13 @@ pub struct CloeOptions {
     /// When no step lowers Φ: converged if every |cos| between the residual and a Jacobian column
     /// is at most this (first-order optimality), else [`IdentError::NotConverged`].
     pub tol_gradient: f64,
+    /// Standard deviation of a Gaussian prior on every estimated log-parameter, centred at the
+    /// guess (`Some(1.0)`: a factor e). It adds Σ((ψ − ψ_guess)/σ_prior)² to Φ, so a quantity the
+    /// run hardly sees stays near its prior instead of drifting towards 0 or ∞ along a flat
+    /// direction of the noisy cost; a well-identified one (σ ≪ σ_prior) moves by a fraction
+    /// (σ/σ_prior)² of its distance to the guess. `None`: the pure output error of eq. 5.7
+    /// (noise-free checks).
+    pub prior_log_std: Option<f64>,
 }
 
 impl Default for CloeOptions {
@@ -82,6 +89,7 @@ impl Default for CloeOptions {
             max_log_step: 0.5,
             tol_gradient: 1e-4,
             per_tick_jacobians: false,
+            prior_log_std: Some(1.0),
         }
     }
 }
@@ -105,11 +113,11 @@ pub struct CloeResult {
     pub rms_before: Vec6,
     /// RMS of χ_m − χ_s per axis at the estimate (m, rad).
     pub rms_after: Vec6,
-    /// Φ at the start and after every accepted step.
+    /// Φ (with the prior's term, if any) at the start and after every accepted step.
     pub cost_history: Vec<f64>,
     /// Jacobian evaluations (LM iterations).
     pub iterations: usize,
-    /// Φ/(N − p) at the estimate: ≈ 1 when the residual is the camera noise of `noise`; well
+    /// Φ/(N − p) at the estimate (the output error alone, without the prior's term): ≈ 1 when the residual is the camera noise of `noise`; well
     /// above 1 means a model discrepancy (or a minimum the non-smooth loop kept LM from leaving).
     pub reduced_chi2: f64,
     /// Simulations without sensitivities (rejected trial steps included).
@@ -208,6 +216,16 @@ pub fn cloe<T: Trajectory + ?Sized>(
     };
 
     let mut psi: Vec<f64> = cons.psi(guess)?.to_vec();
+    let psi_prior = psi.clone();
+    let prior_w = match options.prior_log_std {
+        None => 0.0,
+        Some(s) if s.is_finite() && s > 0.0 => 1.0 / s,
+        Some(s) => {
+            return Err(IdentError::InvalidInput(format!(
+                "the prior's log-std must be finite and > 0, got {s}"
+            )))
+        }
+    };
     let mut cur = evaluate_with(&psi, true, false, &mut sims)?;
     let rms_before = cur.rms;
     // Identifiability at the guess.
@@ -248,8 +266,28 @@ pub fn cloe<T: Trajectory + ?Sized>(
         .map(|k| names[k].clone())
         .collect();
 
+    // The prior as extra residual rows √w(ψ_guess − ψ) with unit-weight Jacobian rows.
+    let prior_cost = |psi: &[f64]| -> f64 {
+        active
+            .iter()
+            .map(|&j| (prior_w * (psi[j] - psi_prior[j])).powi(2))
+            .sum()
+    };
+    let augment = |g: &DMatrix<f64>, r: &DVector<f64>, psi: &[f64]| {
+        let (n, p) = (g.nrows(), active.len());
+        let extra = if prior_w > 0.0 { p } else { 0 };
+        let mut ga = DMatrix::zeros(n + extra, p);
+        ga.rows_mut(0, n).copy_from(&g.select_columns(&active));
+        let mut ra = DVector::zeros(n + extra);
+        ra.rows_mut(0, n).copy_from(r);
+        for (k, &j) in active.iter().enumerate().take(extra) {
+            ga[(n + k, k)] = prior_w;
+            ra[n + k] = prior_w * (psi_prior[j] - psi[j]);
+        }
+        (ga, ra)
+    };
     let mut lambda = options.lambda0;
-    let mut history = vec![cur.cost];
+    let mut history = vec![cur.cost + prior_cost(&psi)];
     let mut iterations = 1usize;
     let mut converged = false;
     'outer: while iterations <= options.max_iterations {
@@ -257,9 +295,10 @@ pub fn cloe<T: Trajectory + ?Sized>(
             .g
             .as_ref()
             .ok_or_else(|| IdentError::InvalidInput("missing sensitivities".into()))?;
-        let ga = g.select_columns(&active);
+        let (ga, ra) = augment(g, &cur.residual, &psi);
+        let cur_total = cur.cost + prior_cost(&psi);
         let gtg = ga.tr_mul(&ga);
-        let gtr = ga.tr_mul(&cur.residual);
+        let gtr = ga.tr_mul(&ra);
         loop {
             // Marquardt's scaling diag(GᵀG), floored so that nearly flat directions are damped too.
             let top = (0..active.len()).map(|k| gtg[(k, k)]).fold(0.0, f64::max);
@@ -287,15 +326,16 @@ pub fn cloe<T: Trajectory + ?Sized>(
             let rel_step = step.iter().map(|d| d.exp_m1().abs()).fold(0.0, f64::max);
             let next = evaluate_with(&trial, false, false, &mut sims);
             match next {
-                Ok(e) if e.cost < cur.cost => {
-                    let rel_cost = (cur.cost - e.cost) / cur.cost.max(f64::MIN_POSITIVE);
+                Ok(e) if e.cost + prior_cost(&trial) < cur_total => {
+                    let total = e.cost + prior_cost(&trial);
+                    let rel_cost = (cur_total - total) / cur_total.max(f64::MIN_POSITIVE);
                     psi = trial;
-                    history.push(e.cost);
+                    history.push(total);
                     lambda = (lambda / 10.0).max(1e-12);
                     // tol_2 of eq. 5.9, or a step below 1 % of every predicted σ (poorly
                     // identified quantities drift along flat directions without any effect).
                     let sigma_small = {
-                        let dof = (ga.nrows() as f64 - active.len() as f64).max(1.0);
+                        let dof = (cur.residual.len() as f64 - active.len() as f64).max(1.0);
                         gtg.clone().cholesky().is_some_and(|c| {
                             let inv = c.inverse();
                             (0..active.len()).all(|k| {
@@ -314,7 +354,10 @@ pub fn cloe<T: Trajectory + ?Sized>(
                         cur = evaluate_with(&psi, true, false, &mut sims)?;
                         break 'outer;
                     }
-                    cur = evaluate_with(&psi, true, options.per_tick_jacobians, &mut sims)?;
+                    // Near the minimum the per-tick approximation's error (≈ 10⁻³) would make
+                    // convergence linear: exact sensitivities once Φ changes by < 1 %.
+                    let fast = options.per_tick_jacobians && rel_cost > 1e-2;
+                    cur = evaluate_with(&psi, true, fast, &mut sims)?;
                     continue 'outer;
                 }
                 _ => {
@@ -322,7 +365,7 @@ pub fn cloe<T: Trajectory + ?Sized>(
                     if lambda > 1e12 {
                         // No step lowers Φ: a minimum to the precision of Φ if the residual is
                         // orthogonal to every column (first-order optimality), else a failure.
-                        converged = optimal(&ga, &cur.residual, options.tol_gradient)
+                        converged = optimal(&ga, &ra, options.tol_gradient)
                             || cur.cost <= 1e-20 * cur.residual.len() as f64;
                         break 'outer;
                     }
@@ -344,8 +387,9 @@ pub fn cloe<T: Trajectory + ?Sized>(
         .g
         .as_ref()
         .ok_or_else(|| IdentError::InvalidInput("missing sensitivities".into()))?;
-    let ga = g.select_columns(&active);
-    let dof = (ga.nrows() as f64 - active.len() as f64).max(1.0);
+    let n_data = g.nrows();
+    let (ga, _) = augment(g, &cur.residual, &psi);
+    let dof = (n_data as f64 - active.len() as f64).max(1.0);
     let sigma2 = cur.cost / dof;
     let relative_std: Vec<f64> = match ga.tr_mul(&ga).cholesky() {
         Some(c) => {
