@@ -16,7 +16,7 @@
 //! | `base_tilt` | `roll`, `pitch` (rad) | the base is tilted: gravity = R_x(roll)·R_y(pitch)ᵀ·[0, 0, −9.81] in the base frame |
 
 use crate::error::{Result, SimError};
-use rss6_core::{Vec3, LEGS};
+use rss6_core::{Environment, Mat3, PlatformLoad, Vec3, LEGS};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -33,6 +33,14 @@ pub struct Payload {
     pub com: Vec3,
     /// Isotropic moment of inertia about its own centre of mass (kg·m²).
     pub inertia: f64,
+}
+
+impl Payload {
+    /// The payload as the analytic model's load: mass, centre of mass in ΣE and the isotropic
+    /// inertia as a 3 × 3 tensor about its centre of mass.
+    pub fn as_load(&self) -> PlatformLoad {
+        PlatformLoad::new(self.mass, self.com, Mat3::identity() * self.inertia)
+    }
 }
 
 /// Gear backlash between the drive (motor rotor, where the potentiometer sits) and the wrench.
@@ -74,6 +82,18 @@ impl Default for EffectSetup {
             extra_viscous: [0.0; LEGS],
             extra_camera_latency: 0.0,
             backlash: None,
+        }
+    }
+}
+
+impl EffectSetup {
+    /// The environment the analytic model sees: this gravity and the payload (if any) as a
+    /// [`PlatformLoad`] with its full mass, centre-of-mass offset and inertia.
+    pub fn environment(&self) -> Environment {
+        let env = Environment::with_gravity(self.gravity);
+        match self.payload {
+            Some(p) => env.with_load(p.as_load()),
+            None => env,
         }
     }
 }
