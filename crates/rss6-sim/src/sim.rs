@@ -327,7 +327,8 @@ impl<P: Physics> Robot<P> {
             cfg.pot_noise,
             period_ticks,
             ChaCha8Rng::seed_from_u64(cfg.seed),
-        )?;
+        )?
+        .with_drift(setup.dtheta_drift, cfg.dt);
         let mut cam_rng = ChaCha8Rng::seed_from_u64(cfg.seed);
         cam_rng.set_stream(1);
         let cmm = OpticalCmm::new(cfg.cmm.clone(), setup.extra_camera_latency, cam_rng);
