@@ -2,11 +2,11 @@
 //! and its sensitivities against central differences.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use rss6_core::{home_pose, DynamicParams, KinematicParams, Vec6};
+use rss6_core::{home_pose, DynamicParams, KinematicParams, Mat3, PlatformLoad, Vec3, Vec6};
 use rss6_ctrl::PidGains;
 use rss6_exp::{ident, Externals, Record};
 use rss6_ident::{simulate_loop, Excitation, LoopConfig, LoopParams, N_A};
-use rss6_sim::{CmmConfig, ModelSim, RobotSim, SimConfig};
+use rss6_sim::{CmmConfig, EffectSpec, ModelSim, RobotSim, SimConfig};
 
 /// A short, gentle at-rest excitation (3 harmonics of 0.5 Hz, one 2 s period).
 fn excitation() -> Excitation {
@@ -48,6 +48,70 @@ fn the_lean_loop_gives_the_experiment_layers_chi_s_on_the_twin() {
 #[test]
 fn with_a_filtered_derivative_and_smooth_friction_the_lean_loop_equals_the_twin() {
     lean_loop_equals_twin(&realistic_truth(), T_F, EPS);
+}
+
+/// A 2 kg payload at (5, 2, 3) cm in ΣE and a potentiometer offset drifting at 2 mrad/s on joint 2:
+/// the twin's hidden effects and the lean loop's `load` / `offset_drift`.
+#[test]
+fn with_a_payload_and_a_drifting_offset_the_lean_loop_equals_the_twin() {
+    let effects = vec![
+        EffectSpec::new(
+            "payload",
+            &[
+                ("mass", 2.0),
+                ("x", 0.05),
+                ("y", 0.02),
+                ("z", 0.03),
+                ("inertia", 1e-3),
+            ],
+        ),
+        EffectSpec::new("joint_offset_drift", &[("rate", 2e-3), ("joint", 1.0)]),
+    ];
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 2.0);
+    cfg.load = Some(PlatformLoad::new(
+        2.0,
+        Vec3::new(0.05, 0.02, 0.03),
+        Mat3::identity() * 1e-3,
+    ));
+    cfg.offset_drift[1] = 2e-3;
+    let worst = lean_vs_twin(&truth(), &cfg, effects.clone());
+    // Without the effects in the model the gap is the effects' signature (sanity: the test sees them).
+    let plain = LoopConfig::new(KinematicParams::nominal(), home_pose(), 2.0);
+    let gap = lean_vs_twin(&truth(), &plain, effects);
+    println!(
+        "payload + drift: lean vs twin {worst:.2e}, without the effects in the model {gap:.2e}"
+    );
+    assert!(worst < 1e-12, "{worst}");
+    assert!(gap > 1e-5, "{gap}");
+}
+
+fn lean_vs_twin(a: &LoopParams, cfg: &LoopConfig, effects: Vec<EffectSpec>) -> f64 {
+    let exc = excitation();
+    let mut sc = SimConfig::new(KinematicParams::nominal(), a.dynamics, a.pid);
+    sc.effects = effects;
+    sc.pot_noise = 0.0;
+    sc.cmm = CmmConfig {
+        pose_noise: Some([0.0, 0.0]),
+        ..CmmConfig::table_4_1()
+    };
+    let ext = Externals {
+        sensor_in_base: sc.sensor_in_base,
+        target_in_effector: sc.target_in_effector,
+    };
+    let mut twin = ModelSim::new(sc).unwrap();
+    twin.reset(&home_pose()).unwrap();
+    let mut spec = ident::IdentSpec::new(KinematicParams::nominal(), ext);
+    spec.duration = cfg.duration;
+    let mut recs: Vec<Record> = Vec::new();
+    ident::run(&mut twin, &spec, &exc, &mut recs).unwrap();
+    let frames: Vec<Vec6> = recs.iter().filter_map(|r| r.camera).collect();
+    let run = simulate_loop(cfg, a, &exc, None).unwrap();
+    assert_eq!(run.chi.len(), frames.len());
+    run.chi
+        .iter()
+        .zip(&frames)
+        .map(|(c, f)| (c - f).amax())
+        .fold(0.0, f64::max)
 }
 
 fn lean_loop_equals_twin(a: &LoopParams, t_f: f64, eps: f64) {
@@ -104,6 +168,18 @@ fn sensitivities_match_central_differences() {
     // The torque clamp off: its switching (the derivative kick at each frame) is a non-smooth event
     // that limits the central-difference reference's step (docs/identification.md).
     cfg.torque_limit = 1e4;
+    sensitivities_match(&cfg, &truth());
+}
+
+#[test]
+fn with_a_payload_sensitivities_match_central_differences() {
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    cfg.torque_limit = 1e4;
+    cfg.load = Some(PlatformLoad::new(
+        2.0,
+        Vec3::new(0.05, 0.02, 0.03),
+        Mat3::identity() * 1e-3,
+    ));
     sensitivities_match(&cfg, &truth());
 }
 

@@ -40,7 +40,7 @@
 use crate::error::{IdentError, Result};
 use nalgebra::{DMatrix, Dyn, OMatrix, U6};
 use rss6_core::{
-    forward_dynamics_with_gravity, ik, jacobian_theta, mass_matrix, regressor_with_gravity,
+    forward_dynamics_with_env, ik, jacobian_theta, mass_matrix_with_env, regressor_with_gravity,
     DynamicParams, Mat6, Vec6, LEGS, N_DYN,
 };
 use rss6_ctrl::{PidGains, Trajectory};
@@ -156,7 +156,7 @@ impl<'a> Lean<'a> {
         let mut dp_nc = a.dynamics;
         dp_nc.coulomb = [0.0; LEGS];
         let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
-        let theta_meas = pot_angle(cfg, &theta);
+        let theta_meas = pot_angle(cfg, &theta, 0.0);
         let pot_scale = Vec6::from_fn(|i, _| cfg.drive.eta[i] / cfg.kp.eta[i]);
         // The visual PID starts from the drive-convention angle of the first reading.
         let bias = theta_meas;
@@ -244,7 +244,7 @@ impl<'a> Lean<'a> {
             let tick_new = tick + 1;
             if tick_new % self.pot_ticks == 0 {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
-                self.theta_meas = pot_angle(cfg, &theta);
+                self.theta_meas = pot_angle(cfg, &theta, t + cfg.dt);
                 if let Some(s) = self.sens.as_mut() {
                     let j =
                         jacobian_theta(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
@@ -414,6 +414,7 @@ impl<'a> Lean<'a> {
         frozen: Option<(Mat6, Mat6)>,
     ) -> Result<Stage> {
         let cfg = self.cfg;
+        let env = cfg.environment();
         let g = &cfg.gravity;
         let eps = cfg.friction_smoothing;
         // The Coulomb torque f_c tanh(θ̇/ε) (smoothed) as a known joint torque on the friction-free
@@ -425,9 +426,9 @@ impl<'a> Lean<'a> {
             }))
         };
         let a = if eps > 0.0 {
-            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, p, v, &smooth_tau(p, v)?, g)
+            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, p, v, &smooth_tau(p, v)?, &env)
         } else {
-            forward_dynamics_with_gravity(&cfg.kp, &self.dp, p, v, tau, g)
+            forward_dynamics_with_env(&cfg.kp, &self.dp, p, v, tau, &env)
         }
         .map_err(|e| sim_err(t, e))?;
         let Some(s) = self.sens.as_ref() else {
@@ -442,7 +443,7 @@ impl<'a> Lean<'a> {
             } else {
                 tau_eff
             };
-            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, pp, vv, &tau_pv, g)
+            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, pp, vv, &tau_pv, &env)
                 .map_err(|e| sim_err(t, e))
         };
         let (fp, fv) = match frozen {
@@ -465,7 +466,9 @@ impl<'a> Lean<'a> {
                 (fp, fv)
             }
         };
-        let m = mass_matrix(&cfg.kp, &self.dp, p).map_err(|e| sim_err(t, e))?;
+        // With a load on the platform: τ = Γ Ξ + τ_load(χ, χ̇, χ̈), so ∂χ̈/∂Ξ = −M̃_tot⁻¹ J_θᵀ Γ with
+        // the load's inertia in M̃_tot.
+        let m = mass_matrix_with_env(&cfg.kp, &self.dp, p, &env).map_err(|e| sim_err(t, e))?;
         let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
             time: t,
             message: "the mass matrix is not positive definite".into(),
@@ -554,7 +557,7 @@ const MAX_FRICTION_STIFFNESS: f64 = 2.0;
 /// leaves LM stuck). The check is at the start pose, where the run rests.
 fn check_friction_stiffness(cfg: &LoopConfig, dp: &DynamicParams) -> Result<()> {
     let eps = cfg.friction_smoothing;
-    let m = mass_matrix(&cfg.kp, dp, &cfg.start)?;
+    let m = mass_matrix_with_env(&cfg.kp, dp, &cfg.start, &cfg.environment())?;
     let j = jacobian_theta(&cfg.kp, &cfg.start)?;
     let Some(m_inv) = m.try_inverse() else {
         return Err(IdentError::InvalidInput(
@@ -589,10 +592,11 @@ fn check_friction_stiffness(cfg: &LoopConfig, dp: &DynamicParams) -> Result<()> 
 }
 
 /// The drive-convention angle of the noise-free potentiometer reading of θ (eq. 4.2 twice).
-fn pot_angle(cfg: &LoopConfig, theta: &Vec6) -> Vec6 {
+fn pot_angle(cfg: &LoopConfig, theta: &Vec6, t: f64) -> Vec6 {
     let (m, d) = (&cfg.kp, &cfg.drive);
     Vec6::from_fn(|i, _| {
-        let kappa = (theta[i] - m.dtheta[i]) / m.eta[i] + 0.0;
+        // A drifting potentiometer offset (`offset_drift`, rad/s): Δθ_i + rate_i·t.
+        let kappa = (theta[i] - (m.dtheta[i] + cfg.offset_drift[i] * t)) / m.eta[i] + 0.0;
         d.eta[i] * kappa + d.dtheta[i]
     })
 }

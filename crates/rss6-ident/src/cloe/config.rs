@@ -4,7 +4,9 @@
 
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
-use rss6_core::{DynamicParams, KinematicParams, Vec3, Vec6, GRAVITY, LEGS, N_DYN};
+use rss6_core::{
+    DynamicParams, Environment, KinematicParams, PlatformLoad, Vec3, Vec6, GRAVITY, LEGS, N_DYN,
+};
 use rss6_ctrl::{CartesianPidGains, PidGains};
 
 /// Length of the identification vector A = [Ξ (64); l_p, l_i, l_d] (eq. 5.6).
@@ -38,6 +40,11 @@ pub struct LoopConfig {
     pub camera_latency: f64,
     /// Gravity in the base frame (m/s²).
     pub gravity: Vec3,
+    /// A load fixed to the platform (payload: mass, centre-of-mass offset in ΣE, inertia), outside Ξ.
+    pub load: Option<PlatformLoad>,
+    /// Drift rate of each potentiometer offset (rad/s): the reading of joint i uses Δθ_i + rate_i·t
+    /// (t from the start of the run), as the `joint_offset_drift` effect of rss6-sim.
+    pub offset_drift: Vec6,
     /// The pose the robot rests at when the run starts (m, rad).
     pub start: Vec6,
     /// Run length (s).
@@ -75,6 +82,8 @@ impl LoopConfig {
             camera_period: 0.033,
             camera_latency: 0.0,
             gravity: GRAVITY,
+            load: None,
+            offset_drift: Vec6::zeros(),
             start,
             duration,
             state_jacobians: StateJacobians::Exact,
@@ -108,9 +117,28 @@ impl LoopConfig {
                 )));
             }
         }
+        if !self.offset_drift.iter().all(|v| v.is_finite()) {
+            return Err(IdentError::InvalidInput(
+                "offset drift rates must be finite".into(),
+            ));
+        }
+        if !self.gravity.iter().all(|v| v.is_finite()) {
+            return Err(IdentError::InvalidInput("gravity must be finite".into()));
+        }
+        if let Some(load) = &self.load {
+            load.validate()?;
+        }
         self.kp.validate()?;
         self.drive.validate()?;
         Ok(())
+    }
+
+    /// Gravity and the platform load as the dynamics take them.
+    pub fn environment(&self) -> Environment {
+        Environment {
+            gravity: self.gravity,
+            load: self.load,
+        }
     }
 }
 
