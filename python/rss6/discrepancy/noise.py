@@ -115,6 +115,8 @@ class NoiseModel:
 def _acf(phi: tuple[float, ...], nlags: int) -> F64:
     """Autocorrelation ρ_0..ρ_nlags of AR(φ) (statsmodels ``arma_acf``), cached: the tests ask
     for the same model's ACF many times."""
+    if len(phi) <= 1:  # white or AR(1): ρ_h = φ^h
+        return np.asarray((phi[0] if phi else 0.0) ** np.arange(nlags + 1.0), dtype=np.float64)
     from statsmodels.tsa.arima_process import arma_acf
 
     return np.asarray(arma_acf(np.r_[1.0, -np.array(phi)], [1.0], lags=nlags + 1), dtype=np.float64)

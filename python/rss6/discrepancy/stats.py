@@ -73,20 +73,25 @@ def energy_test(r: ArrayLike, noise: NoiseModel, axis: int) -> tuple[float, floa
 def window_test(
     r: ArrayLike, noise: NoiseModel, axis: int, width: int
 ) -> tuple[float, F64, NDArray[np.int64]]:
-    """Energy test on consecutive windows of ``width`` frames (the last one takes the remainder).
+    """Running χ² on consecutive windows of ``width`` frames (the last one takes the remainder):
+    the mean square of the prewhitened residual (:meth:`NoiseModel.whiten`, unit variance under
+    H0) per window is χ²_W/W exactly for a right noise model (F(W, dof) for an estimated σ) — an
+    energy ratio with a Satterthwaite ESS has too light a tail for windows of a few effective
+    samples.
 
-    Returns (p for the axis = min(1, n_windows · min p_w), p per window, window start indices)."""
-    x = np.asarray(r, dtype=np.float64)
-    n = len(x)
+    Returns (p for the axis = min(1, n_windows · min p_w), p per window, window start indices
+    into ``r``)."""
+    u = noise.whiten(r, axis)
+    skip = len(noise.ar[axis])
+    n = len(u)
     width = max(8, min(width, n))
     starts = np.arange(0, max(n - width, 0) + 1, width)
     ends = np.r_[starts[1:], n]
-    c = np.r_[0.0, np.cumsum(x * x)]
+    c = np.r_[0.0, np.cumsum(u * u)]
     length = (ends - starts).astype(np.float64)
-    ratio = (c[ends] - c[starts]) / length / noise.sigma[axis] ** 2
-    nu = np.array([noise.ess(axis, int(k)) for k in length])
-    p = _energy_p(ratio, nu, float(noise.dof[axis]))
-    return float(min(1.0, len(p) * float(p.min()))), p, starts.astype(np.int64)
+    ratio = (c[ends] - c[starts]) / length
+    p = _energy_p(ratio, length, float(noise.dof[axis]))
+    return float(min(1.0, len(p) * float(p.min()))), p, (starts + skip).astype(np.int64)
 
 
 def ljung_box(u: ArrayLike, lags: int, model_df: int = 0) -> tuple[F64, F64]:
@@ -119,11 +124,36 @@ def xcorr(u: F64, v: F64, max_lag: int) -> F64:
     return out / (na * nb)
 
 
+def _bartlett_factor(u: F64, v: F64, lags: int) -> F64:
+    """Bartlett's variance factor 1 + 2 Σ_{k≤lags} ρ_e(k) ρ_v(k) (floored at 1) per column of v:
+    what colour the prewhitening left in both, e = u minus its least-squares fit on the column
+    (so a signature present in u does not inflate its own band)."""
+    uc = u - u.mean()
+    vc = v - v.mean(axis=0)
+    beta = (vc.T @ uc) / np.maximum(np.sum(vc * vc, axis=0), 1e-300)
+    e = uc[:, None] - vc * beta
+    n = len(u)
+
+    def acf(x: F64) -> F64:
+        den = np.maximum(np.sum(x * x, axis=0), 1e-300)
+        return np.array([np.sum(x[k:] * x[: n - k], axis=0) / den for k in range(1, lags + 1)])
+
+    if lags < 1:
+        return np.ones(v.shape[1])
+    return np.asarray(np.maximum(1.0, 1.0 + 2.0 * np.sum(acf(e) * acf(vc), axis=0)))
+
+
 def xcorr_test(
-    r: ArrayLike, signature: ArrayLike, noise: NoiseModel, axis: int, max_lag: int
+    r: ArrayLike,
+    signature: ArrayLike,
+    noise: NoiseModel,
+    axis: int,
+    max_lag: int,
+    bartlett_lags: int = 10,
 ) -> tuple[F64, NDArray[np.int64], F64, F64]:
     """Does residual ``r`` (N,) follow each column of ``signature`` (N,) or (N, S)? Both are
-    prewhitened with ``axis``'s AR filter; returns per column (z at the best lag, that lag in
+    prewhitened with ``axis``'s AR filter, whose imperfections (an estimated colour) are covered by
+    Bartlett's formula over ``bartlett_lags``; returns per column (z at the best lag, that lag in
     frames (> 0: the residual lags the signature), p = min(1, (2L+1)·2Φ(−|z|max)), and the
     correlations (S, 2L+1) at lags −L..L)."""
     from scipy.special import ndtr
@@ -132,7 +162,7 @@ def xcorr_test(
     v = noise.whiten(signature, axis)
     v = v[:, None] if v.ndim == 1 else v
     c = np.array([xcorr(u, v[:, j], max_lag) for j in range(v.shape[1])])
-    z = c * np.sqrt(len(u))
+    z = c * np.sqrt(len(u)) / np.sqrt(_bartlett_factor(u, v, bartlett_lags))[:, None]
     best = np.argmax(np.abs(z), axis=1)
     zb = z[np.arange(len(z)), best]
     p = np.minimum(1.0, (2 * max_lag + 1) * 2.0 * ndtr(-np.abs(zb)))
