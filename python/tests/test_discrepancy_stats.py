@@ -40,9 +40,9 @@ def ar1(rng: np.random.Generator, rho: float, n: int = N) -> F64:
     ("rho", "floor", "period", "bound"),
     [
         # Bounds 3 × the nominal α = 1 %. Measured: white, σ given: 1/200 here, 0.75 % over 2000
-        # runs; AR(1), σ and colour from first differences: 1/200 here, 0.55 % over 2000; AR(1),
-        # σ and an AR(p) colour from the 10 s period repeats: 0/200 here, 0.85 % over 2000
-        # (docs/discrepancy.md).
+        # runs; AR(1), σ and colour from first differences: 0/200 here, 0.20 % over 2000; AR(1),
+        # σ and an AR(p) colour from the 10 s period repeats: 0/200 here, 0.45 % over 2000
+        # (docs/discrepancy.md, benches/python/discrepancy_false_alarms.py).
         (0.0, SIGMA, None, 0.03),
         (0.6, None, None, 0.03),
         (0.6, None, 10.0, 0.03),

@@ -24,11 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.signal import lfilter
 
 from rss6.discrepancy import stats
 from rss6.discrepancy.noise import (
     NoiseModel,
     as_residual,
+    fit_ar,
     noise_from_differences,
     noise_from_periods,
 )
@@ -200,18 +202,21 @@ def detect(
         pw, per, starts = stats.window_test(r[:, k], noise, k, width)
         window_p[k] = (per, starts)
         raw.append((names[k], "windows", float(per.min()), pw, f"{len(per)} windows"))
-        if noise.source == "differences":
-            # The AR(1) of the differences is only approximately this residual's; test the AR(1)
-            # fitted to it (Yule–Walker) instead, with one lag fewer (Ljung–Box on ARMA residuals).
+        if noise.source != "given":
+            # An estimated colour is not exact: from first differences it assumes AR(1), which a
+            # real closed loop does not meet (its noise needs AR orders of 12–27,
+            # docs/discrepancy.md); from period differences its coefficients carry their own
+            # sampling noise, which inflates Q. Test what an AR(p ≤ 30, AIC) fitted to the
+            # residual cannot absorb, over p + lb_lags lags against χ²_lb_lags (Ljung–Box on ARMA
+            # residuals).
             x = r[:, k] - r[:, k].mean()
-            phi = float(x[1:] @ x[:-1] / (x @ x))
-            u, fitted = x[1:] - phi * x[:-1], 1
+            phi, _ = fit_ar(x, 30)
+            u, fitted = lfilter(np.r_[1.0, -phi], [1.0], x)[len(phi) :], len(phi)
         else:
             u, fitted = noise.whiten(r[:, k], k), 0
-        q, plb = stats.ljung_box(u, min(lb_lags, len(u) // 5), fitted)
-        raw.append(
-            (names[k], "whiteness", float(q[0]), float(plb[0]), f"Ljung–Box Q, {lb_lags} lags")
-        )
+        h = min(lb_lags + fitted, len(u) // 4)
+        q, plb = stats.ljung_box(u, h, fitted)
+        raw.append((names[k], "whiteness", float(q[0]), float(plb[0]), f"Ljung–Box Q, {h} lags"))
         cols = np.column_stack([s[:, k if s.shape[1] > 1 else 0] for s in sigs.values()])
         if sigs:
             z, best, px, c = stats.xcorr_test(r[:, k], cols, noise, k, lag)

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rss6.errors import InvalidInputError, ShapeError
 
-__all__ = ["NoiseModel", "as_residual", "noise_from_differences", "noise_from_periods"]
+__all__ = ["NoiseModel", "as_residual", "fit_ar", "noise_from_differences", "noise_from_periods"]
 
 F64 = NDArray[np.float64]
 
@@ -132,7 +132,7 @@ def _ar_variance(phi: F64) -> float:
     return float(1.0 / max(1.0 - float(phi @ rho[1:]), 1e-12))
 
 
-def _fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
+def fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
     """Yule–Walker AR fit of order chosen by AIC (Levinson–Durbin, statsmodels): (φ, ESS-free
     marginal variance)."""
     from statsmodels.tsa.stattools import acovf, levinson_durbin
@@ -149,7 +149,7 @@ def _fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
     return coef, float(acov[0])
 
 
-def noise_from_periods(residual: ArrayLike, period: int, *, max_order: int = 8) -> NoiseModel:
+def noise_from_periods(residual: ArrayLike, period: int, *, max_order: int = 30) -> NoiseModel:
     """The noise model from differences of repeated periods: ``period`` frames P (the run must hold
     at least two periods). σ² = mean(d²)/2 over d_t = r_{t+P} − r_t; the colour is an AR(p ≤
     ``max_order``, AIC) fit to d; dof of σ̂² = 2·ESS of d."""
@@ -164,7 +164,7 @@ def noise_from_periods(residual: ArrayLike, period: int, *, max_order: int = 8) 
     ars: list[F64] = []
     dof = np.empty(r.shape[1])
     for k in range(r.shape[1]):
-        phi, var = _fit_ar(d[:, k], max_order)
+        phi, var = fit_ar(d[:, k], max_order)
         sig[k] = np.sqrt(var / 2.0)
         ars.append(phi)
     model = NoiseModel(sig, tuple(ars), np.full(r.shape[1], np.inf), "periods")
