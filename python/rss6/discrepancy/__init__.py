@@ -3,7 +3,7 @@
 Built so far — the statistical core, the data model and the report (docs/discrepancy.md):
 
 * :mod:`~rss6.discrepancy.noise` — the noise model (σ and AR colour per axis; given, from repeated
-  periods, or from first differences);
+  periods or runs, or from first differences);
 * :mod:`~rss6.discrepancy.stats` — energy, window, whiteness and cross-correlation tests, Holm,
   parametric bootstrap, score test, Fisher correlation and ambiguity, confidence intervals;
 * :func:`detect` — the Detect step on a residual, however it was simulated;
@@ -30,7 +30,12 @@ from rss6.discrepancy.detect import (
     detect,
     reference_signatures,
 )
-from rss6.discrepancy.noise import NoiseModel, noise_from_differences, noise_from_periods
+from rss6.discrepancy.noise import (
+    NoiseModel,
+    noise_from_differences,
+    noise_from_periods,
+    noise_from_repeats,
+)
 from rss6.discrepancy.report import (
     Ambiguity,
     CandidateRow,
@@ -62,6 +67,7 @@ __all__ = [
     "from_detection",
     "noise_from_differences",
     "noise_from_periods",
+    "noise_from_repeats",
     "reference_signatures",
     "stats",
     "unexplained",

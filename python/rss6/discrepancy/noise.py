@@ -20,6 +20,7 @@ Estimators and their bias (docs/discrepancy.md):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -28,7 +29,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from rss6.errors import InvalidInputError, ShapeError
 
-__all__ = ["NoiseModel", "as_residual", "fit_ar", "noise_from_differences", "noise_from_periods"]
+__all__ = [
+    "NoiseModel",
+    "as_residual",
+    "fit_ar",
+    "noise_from_differences",
+    "noise_from_periods",
+    "noise_from_repeats",
+]
 
 F64 = NDArray[np.float64]
 
@@ -51,7 +59,7 @@ class NoiseModel:
 
     ``sigma`` (axes,): marginal standard deviation (the noise floor, m or rad); ``ar``: per axis the
     AR coefficients φ (p,) (empty: white); ``dof`` (axes,): degrees of freedom of σ̂² (∞ when given);
-    ``source``: "given", "periods" or "differences"."""
+    ``source``: "given", "periods", "repeats" or "differences"."""
 
     sigma: F64
     ar: tuple[F64, ...]
@@ -133,12 +141,17 @@ def _ar_variance(phi: F64) -> float:
 
 
 def fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
-    """Yule–Walker AR fit of order chosen by AIC (Levinson–Durbin, statsmodels): (φ, ESS-free
-    marginal variance)."""
-    from statsmodels.tsa.stattools import acovf, levinson_durbin
+    """Yule–Walker AR fit of order chosen by AIC (Levinson–Durbin, statsmodels): (φ, marginal
+    variance about zero)."""
+    from statsmodels.tsa.stattools import acovf
 
-    n = len(x)
-    acov = acovf(x, nlag=max_order, fft=False, demean=False)
+    return _ar_from_acov(acovf(x, nlag=max_order, fft=False, demean=False), len(x))
+
+
+def _ar_from_acov(acov: F64, n: int) -> tuple[F64, float]:
+    from statsmodels.tsa.stattools import levinson_durbin
+
+    max_order = len(acov) - 1
     if acov[0] <= 0:
         raise InvalidInputError("a residual axis is identically zero: no noise to model")
     _, _, _, sig, phi = levinson_durbin(acov, nlags=max_order, isacov=True)
@@ -149,10 +162,40 @@ def fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
     return coef, float(acov[0])
 
 
+def noise_from_repeats(residuals: Sequence[ArrayLike], *, max_order: int = 30) -> NoiseModel:
+    """The noise model from K ≥ 2 repeats of the same run (same reference and camera timing):
+    real repeats of an experiment, or noisy replays of the model in its closed loop (the fitted null
+    model). Whatever repeats cancels in the deviations from the mean run, r_k − r̄, scaled by
+    √(K/(K−1)) to the noise's variance; σ² is their mean square, the colour an AR(p ≤
+    ``max_order``, AIC) fit to their pooled autocovariance; dof of σ̂² = (K−1)·ESS. Unbiased for
+    noise that is stationary and independent between repeats; the residual under test should not
+    be one of the repeats."""
+    from statsmodels.tsa.stattools import acovf
+
+    rs = [as_residual(r) for r in residuals]
+    if len(rs) < 2 or any(r.shape != rs[0].shape for r in rs):
+        raise InvalidInputError(
+            f"noise from repeats needs >= 2 residuals of one shape; got {[r.shape for r in rs]}"
+        )
+    k_runs, (n, m) = len(rs), rs[0].shape
+    mean = np.mean(rs, axis=0)
+    dev = [(r - mean) * np.sqrt(k_runs / (k_runs - 1)) for r in rs]
+    sig = np.empty(m)
+    ars: list[F64] = []
+    for k in range(m):
+        acov = np.mean([acovf(d[:, k], nlag=max_order, fft=False, demean=False) for d in dev], 0)
+        phi, var = _ar_from_acov(acov, n * (k_runs - 1))
+        sig[k] = np.sqrt(var)
+        ars.append(phi)
+    model = NoiseModel(sig, tuple(ars), np.full(m, np.inf), "repeats")
+    dof = np.array([(k_runs - 1) * model.ess(k, n) for k in range(m)])
+    return NoiseModel(sig, tuple(ars), dof, "repeats")
+
+
 def noise_from_periods(residual: ArrayLike, period: int, *, max_order: int = 30) -> NoiseModel:
     """The noise model from differences of repeated periods: ``period`` frames P (the run must hold
     at least two periods). σ² = mean(d²)/2 over d_t = r_{t+P} − r_t; the colour is an AR(p ≤
-    ``max_order``, AIC) fit to d; dof of σ̂² = 2·ESS of d."""
+    ``max_order``, AIC) fit to d; dof of σ̂² = ESS of d."""
     r = as_residual(residual)
     n = r.shape[0]
     if period < 1 or n < 2 * period:
