@@ -75,6 +75,17 @@ def test_coloured_noise_declared_white_is_flagged(run: tuple[F64, F64, dict[str,
     assert all(any(r.rejected and r.test == "whiteness" for r in d.tests) for d in dets)
 
 
+def test_a_signature_constant_to_rounding_is_ignored(run: tuple[F64, F64, dict[str, F64]]) -> None:
+    """The model's G̃ along a trajectory is constant up to 1e-12 of its value: its rounding noise
+    must not look like a signature."""
+    t, _, _ = run
+    rng = np.random.default_rng(16)
+    flat = 274.0 + 1e-12 * rng.standard_normal((N, 6))
+    det = discrepancy.detect(t, ar1(rng, 0.0), {"gravity load": flat}, noise_floor=SIGMA)
+    rows = [r for r in det.tests if r.test == "xcorr gravity load"]
+    assert len(rows) == 6 and all(r.p_value == 1.0 and r.statistic == 0.0 for r in rows)
+
+
 # (b), (c) ----------------------------------------------------------------------------------------
 
 

@@ -158,9 +158,13 @@ def xcorr_test(
     correlations (S, 2L+1) at lags −L..L)."""
     from scipy.special import ndtr
 
+    sig = np.asarray(signature, dtype=np.float64)
+    sig = sig[:, None] if sig.ndim == 1 else sig
+    # A signature constant to rounding (e.g. the model's gravity term along a trajectory) carries
+    # nothing; its rounding noise must not be correlated with the residual.
+    flat = np.ptp(sig, axis=0) <= 1e-9 * np.max(np.abs(sig), axis=0)
     u = noise.whiten(r, axis)
-    v = noise.whiten(signature, axis)
-    v = v[:, None] if v.ndim == 1 else v
+    v = noise.whiten(np.where(flat, 0.0, sig), axis)
     c = np.array([xcorr(u, v[:, j], max_lag) for j in range(v.shape[1])])
     z = c * np.sqrt(len(u)) / np.sqrt(_bartlett_factor(u, v, bartlett_lags))[:, None]
     best = np.argmax(np.abs(z), axis=1)
