@@ -286,9 +286,22 @@ def test_report_saves_markdown_and_figures(
         noise_floor=np.full(6, SIGMA),
         held_out=discrepancy.HeldOut(t, r, after, after),
         signatures=sig,
+        candidates=[
+            discrepancy.CandidateRow(
+                "coulomb friction",
+                "joint 1",
+                812.0,
+                1e-4,
+                {"f_c": 0.02},
+                {"f_c": (0.018, 0.022)},
+                after.std(0) - r.std(0),
+                False,
+            )
+        ],
     )
     assert rep.verdict == "named: coulomb friction (joint 1); ambiguous: {latency, pid gain}"
     assert rep.verdict in rep.table()
+    assert "f_c=0.02 [0.018, 0.022]" in rep.table()
     files = rep.save(tmp_path / "report")
     names = {f.name for f in files}
     assert {"report.md", "residuals.png", "binned.png", "acf.png", "xcorr.png"} <= names

@@ -157,7 +157,12 @@ def overlay(
     _save(fig, path)
 
 
-def gaps(rows: Mapping[str, F64], noise_floor: F64, path: str | PathLike[str]) -> None:
+def gaps(
+    rows: Mapping[str, F64],
+    noise_floor: F64,
+    path: str | PathLike[str],
+    run: str = "the held-out run",
+) -> None:
     """Residual RMS per axis of each model (mm, mrad) beside the noise floor, log scale."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -172,7 +177,7 @@ def gaps(rows: Mapping[str, F64], noise_floor: F64, path: str | PathLike[str]) -
     ax.set_xticks(np.arange(6), [f"{a} ({'mm' if i < 3 else 'mrad'})" for i, a in enumerate(AXES)])
     ax.set_yscale("log")
     ax.set_ylabel("RMS")
-    ax.set_title("residual RMS per axis on the held-out run", fontsize=9)
+    ax.set_title(f"residual RMS per axis on {run}", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, axis="y")
     _save(fig, path)

@@ -252,6 +252,7 @@ class DiscrepancyReport:
             {"before": self.gap_before, "named": self.gap_named, "after": self.gap_after},
             self.noise_floor,
             files["gaps"],
+            "the held-out run" if self.held_out is not None else "the fitting run",
         )
         captions = {
             "residuals": "Residual per axis over time on the fitting run, with the noise floor.",
