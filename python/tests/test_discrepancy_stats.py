@@ -322,7 +322,7 @@ def test_diagnose_says_what_is_missing() -> None:
 
 def test_detect_on_the_dsmc_closed_loop_is_silent_without_an_effect_and_finds_friction() -> None:
     """ModelSim, DSMC, Experiment 1, 30 s with Table 4.1 noise minus the same loop replayed without
-    noise; noise from first differences (the loop colours it: AR orders 12–27). Measured: 0/40
+    noise; noise from first differences (the loop colours it: AR orders up to 27). Measured: 0/40
     false alarms over seeds 1–40 (benches/python/discrepancy_false_alarms.py); an extra Coulomb
     friction of 0.05 N·m on every joint flags x, y, α, β, γ (RMS/σ̂ up to 8)."""
     import rss6

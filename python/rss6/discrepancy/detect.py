@@ -204,7 +204,7 @@ def detect(
         raw.append((names[k], "windows", float(per.min()), pw, f"{len(per)} windows"))
         if noise.source != "given":
             # An estimated colour is not exact: from first differences it assumes AR(1), which a
-            # real closed loop does not meet (its noise needs AR orders of 12–27,
+            # real closed loop does not meet (its noise needs AR orders up to 27,
             # docs/discrepancy.md); from period differences its coefficients carry their own
             # sampling noise, which inflates Q. Test what an AR(p ≤ 30, AIC) fitted to the
             # residual cannot absorb, over p + lb_lags lags against χ²_lb_lags (Ljung–Box on ARMA
