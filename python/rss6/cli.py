@@ -321,6 +321,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
     if not quiet:
         print(text, flush=True)
+    if report.run_failed:
+        print(f"rss6: the identification run failed: {report.run_failed}", file=sys.stderr)
+        return 4
     if not report.converged:
         print(
             f"rss6: CLOE did not converge ({report.error}); cost history "
@@ -457,7 +460,8 @@ def build_parser() -> argparse.ArgumentParser:
         "(rss6.identify.table_5_2_truth), identify Ξ and the drive PID gains by CLOE (§5.3) from "
         "Table 5.1, validate on fresh random trajectories, print Tables 5.2–5.4 beside the thesis's, "
         "write Figs. 5.7–5.9 (PNG), an MCAP log per run and tables.txt to --out. Exit status 3 if "
-        "CLOE did not converge (the report then shows the last iterate and the cost history).",
+        "CLOE did not converge (the report then shows the last iterate and the cost history), 4 if "
+        "the identification run on the robot failed (the visual PID faulted).",
     )
     i.add_argument("--simulate", action="store_true", help="identify a simulated robot")
     i.add_argument("--out", default="out-identify", help="output directory (default out-identify/)")

@@ -264,6 +264,34 @@ class IdentificationData:
         """Number of camera frames."""
         return int(self.t.shape[0])
 
+    def before_fault(self) -> IdentificationData:
+        """The data up to the visual PID's first fault (frames before it; per-tick arrays cut at
+        the same time), or ``self`` without a fault. After a fault the robot's command is held, so
+        later frames no longer follow the loop :func:`cloe` simulates."""
+        if self.fault is None:
+            return self
+        tf = float(self.fault[0])
+        keep = self.t < tf
+        if not np.any(keep):
+            raise IdentificationError(f"no camera frames before the fault at t = {tf:.3f} s")
+
+        def cut(a: F64 | None) -> F64 | None:
+            return None if a is None or self.tick_t is None else a[self.tick_t < tf]
+
+        return IdentificationData(
+            t=self.t[keep],
+            reference=self.reference,
+            measured=self.measured[keep],
+            duration=tf,
+            dt=self.dt,
+            tick_t=cut(self.tick_t),
+            kappa=cut(self.kappa),
+            theta_cmd=cut(self.theta_cmd),
+            reference_pose=cut(self.reference_pose),
+            true_pose=cut(self.true_pose),
+            fault=None,
+        )
+
     @classmethod
     def from_arrays(
         cls,
@@ -482,7 +510,12 @@ def cloe(
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
-    not produce."""
+    not produce, data whose run faulted (see :meth:`IdentificationData.before_fault`)."""
+    if data.fault is not None:
+        raise IdentificationError(
+            f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
+            "frames after it do not follow the loop: use data.before_fault()"
+        )
     if not consistent:
         raise InvalidInputError(
             "consistent=False is not implemented: CLOE estimates logs of physical quantities"
@@ -557,6 +590,12 @@ class Validation:
     def ratio(self) -> F64:
         """rms / rms_initial (n, 6): the thesis's criterion is ≤ 1/3."""
         return np.asarray(self.rms / self.rms_initial)
+
+    @property
+    def faulted(self) -> tuple[int, ...]:
+        """Indices of the trajectories whose run on the robot faulted (their RMS compares the
+        model with a robot that left the loop)."""
+        return tuple(i for i, d in enumerate(self.data) if d.fault is not None)
 
 
 def validate(

@@ -53,6 +53,8 @@ def test_an_infeasible_trajectory_is_refused_with_its_constraint_and_time(
 
 # --- The identification loop, CLOE, simulate (thesis §5.3, issue 13) ---------------------------
 
+import dataclasses  # noqa: E402
+
 from rss6 import _rss6  # noqa: E402
 
 SUBSET = ["platform.Sxx", "platform.Syy", "platform.Szz", "li", "ld"]
@@ -190,6 +192,14 @@ def test_cloe_names_what_it_cannot_identify_and_reports_non_convergence(
         identify.cloe(data, kp, dp, pid, parameters=["platform.Ixx"])
     with pytest.raises(rss6.InvalidInputError, match="consistent"):
         identify.cloe(data, kp, dp, pid, consistent=False)
+    # Frames after a visual-PID fault (command held) do not follow the loop: refused, and
+    # before_fault() keeps the frames before it.
+    faulted = dataclasses.replace(data, fault=(1.0, "pose unreachable"))
+    with pytest.raises(rss6.IdentificationError, match=r"faulted at t = 1\.000 s"):
+        identify.cloe(faulted, kp, dp, pid, parameters=SUBSET, torque_limit=1e4)
+    early = faulted.before_fault()
+    assert early.fault is None and early.frames == 31 and early.t[-1] < 1.0
+    assert early.kappa is not None and early.kappa.shape == (1000, 6)
     # One iteration from a spread guess cannot meet eq. 5.9's tolerances.
     guess = _spread(dp, pid, SUBSET, seed=2)
     with pytest.raises(rss6.IdentificationError, match="did not converge") as nc:

@@ -179,6 +179,16 @@ pub(crate) fn identification_run<'py>(
     Ok(d)
 }
 
+/// (frame times (F,), χ_s (F, 6), clamped joint-ticks).
+type SimulatedFrames<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+    usize,
+);
+
+/// (ψ (43,), dynamics, (l_p, l_i, l_d)).
+type PsiAndParams<'py> = (Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64, f64));
+
 fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
     PidGains { lp, li, ld }
 }
@@ -217,11 +227,7 @@ pub(crate) fn simulate_identification<'py>(
     torque_limit: f64,
     camera_latency: f64,
     dt: f64,
-) -> PyResult<(
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, numpy::PyArray2<f64>>,
-    usize,
-)> {
+) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
     let cfg = loop_config(kp, start, duration, torque_limit, camera_latency, dt)?;
     let a = LoopParams {
@@ -387,7 +393,7 @@ pub(crate) fn cloe_psi<'py>(
     dp: &PyDynamicParams,
     pid: (f64, f64, f64),
     psi: Option<Vec<f64>>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64, f64))> {
+) -> PyResult<PsiAndParams<'py>> {
     let guess = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
