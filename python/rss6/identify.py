@@ -41,6 +41,7 @@ __all__ = [
     "Excitation",
     "IdentificationData",
     "IdentificationResult",
+    "LoopModel",
     "Validation",
     "cloe",
     "collect",
@@ -50,6 +51,7 @@ __all__ = [
     "simulate",
     "table_5_2_truth",
     "validate",
+    "variation",
 ]
 
 F64 = NDArray[np.float64]
@@ -666,3 +668,16 @@ def validate(
         if progress is not None:
             progress(i + 1, n)
     return Validation(rms=rms, rms_initial=rms0, excitations=tuple(excs), data=tuple(datas))
+
+
+def variation(
+    estimates: Sequence[tuple[_rss6.DynamicParams, tuple[float, float, float]]],
+) -> dict[str, float]:
+    """Variation measure (thesis Table 5.5) of each quantity CLOE estimates
+    (:func:`parameter_names`) over several identifications (dynamics, pid): standard deviation over
+    |mean| (fraction). Needs at least two estimates."""
+    if len(estimates) < 2:
+        raise InvalidInputError("variation needs at least two estimates")
+    phi = np.array([np.exp(np.asarray(_rss6.cloe_psi(dp, pid)[0])) for dp, pid in estimates])
+    v = phi.std(axis=0, ddof=1) / np.abs(phi.mean(axis=0))
+    return dict(zip(parameter_names(), (float(x) for x in v)))

@@ -6,8 +6,9 @@
 3. CLOE (§5.3) from the initial model: Table 5.1, the tuned drive gains (400, 2000, 4) and small
    positive friction (0.1 N·m, 0.1 N·m·s/rad: the log-parametrisation cannot start at the thesis's 0).
 4. Tables 5.2 (initial, identified, truth, relative σ, flag > 10 %, beside the thesis's values),
-   5.3 (RMS before/after) and 5.4 (validation on fresh random feasible trajectories, RMS of the
-   identified and of the initial model); Figs. 5.7–5.9 as PNG; an MCAP log per run.
+   5.3 (RMS before/after), 5.4 (validation on fresh random feasible trajectories, RMS of the
+   identified and of the initial model) and 5.5 (variation over re-identifications on the
+   validation runs); Figs. 5.7–5.9 as PNG; an MCAP log per run.
 
 If CLOE does not converge the report says so, shows its cost history and uses the last accepted
 iterate (marked as such) for the tables and figures.
@@ -100,6 +101,8 @@ class IdentifyReport:
     validation: identify.Validation | None
     error: str = ""
     run_failed: str = ""
+    variation: dict[str, float] | None = None
+    reidentified: tuple[int, int] = (0, 0)
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
 
@@ -182,6 +185,26 @@ class IdentifyReport:
         )
         return "\n".join(lines)
 
+    def table_5_5(self) -> str:
+        """Table 5.5 analog: variation (std/|mean|) of each estimated quantity over the
+        identification run and the re-identifications on the validation runs, beside the thesis's
+        where it names the same quantity."""
+        if self.variation is None:
+            return "(fewer than two identifications: no variation measure)"
+        done, conv = self.reidentified
+        names = list(self.identified) if self.identified else self.names
+        lines = [f"{'quantity':14s} {'variation':>10s} {'thesis':>8s}"]
+        for n in names:
+            th = thesis.TABLE_5_5.get(n)
+            ths = f"{100 * th:7.2f}%" if th is not None else "       —"
+            lines.append(f"{n:14s} {100 * self.variation[n]:9.2f}% {ths}")
+        lines.append(
+            f"(over {done + 1} identifications: this run and {done} validation runs, {conv} of "
+            "those converged — the others enter with their last iterate; the thesis's is over 10; "
+            "'—': the thesis names moments (I_x, I_y), not Σ or It)"
+        )
+        return "\n".join(lines)
+
     def text(self) -> str:
         """What ``rss6 identify --simulate`` prints."""
         if self.run_failed:
@@ -229,7 +252,8 @@ class IdentifyReport:
                 "Table 5.4 — validation trajectories",
                 self.table_5_4(),
                 "",
-                "(Table 5.5, the variation over re-identifications, is not computed yet.)",
+                "Table 5.5 — variation measure over re-identifications",
+                self.table_5_5(),
                 f"files: {len(self.files)} in {self.files[0].parent if self.files else '-'}; {timing}",
             ]
         )
@@ -444,6 +468,30 @@ def run(
     )
     files.append(outdir / "fig5_9_validation.png")
 
+    # Table 5.5: identify again on every validation run that did not fault.
+    good = [j for j in range(n_val) if j not in val.faulted]
+    estimates = [(est_dp, est_pid)]
+    conv = 0
+    t0 = time.perf_counter()
+    b = bar(len(good), "re-identification")
+    for j in good:
+        try:
+            r = identify.cloe(
+                val.data[j], kp, dp0, pid0, max_iterations=iters, per_tick_jacobians=True
+            )
+            estimates.append((r.dynamics, r.pid))
+            conv += 1
+        except IdentificationError as e:
+            if not hasattr(e, "last_dynamics"):
+                raise
+            estimates.append((e.last_dynamics, e.last_pid))  # type: ignore[attr-defined]
+        if b is not None:
+            b.update(1)
+    if b is not None:
+        b.close()
+    elapsed["re-identification"] = time.perf_counter() - t0
+    var = identify.variation(estimates) if len(estimates) >= 2 else None
+
     return IdentifyReport(
         plant="rapier plant" if use_rapier else "model twin",
         excitation=exc,
@@ -465,4 +513,6 @@ def run(
         error=error,
         files=files,
         elapsed=elapsed,
+        variation=var,
+        reidentified=(len(good), conv),
     )

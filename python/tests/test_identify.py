@@ -283,3 +283,15 @@ def test_collect_through_the_can_bridge_equals_the_plant(kp: rss6.KinematicParam
     # Measured: 0.0090 bit and 8.1e-7 (m/rad); bounds ≈ 3×.
     assert dk < 0.03
     assert dm < 2.5e-6
+
+
+def test_variation_is_the_relative_spread_of_the_estimates() -> None:
+    dp, pid = identify.table_5_2_truth()
+    same = identify.variation([(dp, pid), (dp, pid)])
+    assert len(same) == 43 and max(same.values()) < 1e-12
+    moved = identify.variation([(dp, pid), (dp, (pid[0] * 1.2, pid[1], pid[2]))])
+    # Two values a and 1.2a: std/mean = (0.2a/√2)/(1.1a).
+    assert moved["lp"] == pytest.approx(0.2 / np.sqrt(2) / 1.1, rel=1e-9)
+    assert moved["li"] < 1e-12
+    with pytest.raises(rss6.InvalidInputError):
+        identify.variation([(dp, pid)])
