@@ -295,3 +295,21 @@ def test_variation_is_the_relative_spread_of_the_estimates() -> None:
     assert moved["li"] < 1e-12
     with pytest.raises(rss6.InvalidInputError):
         identify.variation([(dp, pid)])
+
+
+def test_an_exception_in_progress_stops_collect_and_cloe(kp: rss6.KinematicParams) -> None:
+    """Like Ctrl-C (checked at the same points): the run stops and the exception propagates."""
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+
+    class Stop(Exception):
+        pass
+
+    def stop(*_: object) -> None:
+        raise Stop
+
+    with pytest.raises(Stop):
+        _collect(_twin(dp, pid), exc, progress=stop, segment=0.5)
+    data = _collect(_twin(dp, pid), exc)
+    with pytest.raises(Stop):
+        identify.cloe(data, kp, dp, pid, parameters=SUBSET, torque_limit=1e4, progress=stop)
