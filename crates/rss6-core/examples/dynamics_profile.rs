@@ -15,6 +15,16 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(10_000);
+    // "*_load": the same calls with a 2 kg offset load (`*_with_env`).
+    let env = Environment::default().with_load(PlatformLoad::new(
+        2.0,
+        Vec3::new(0.05, 0.02, 0.03),
+        Mat3::identity() * 2e-3,
+    ));
+    let s = ModelState {
+        pose: p,
+        pose_dot: pd,
+    };
     let mut sink = 0.0;
     for _ in 0..n {
         sink += match which.as_str() {
@@ -33,11 +43,28 @@ fn main() {
             }
             "legs" => leg_jacobians(black_box(&kp), black_box(&p), &pd).unwrap()[0].j_a[(0, 0)],
             "rk4" => {
-                let s = ModelState {
-                    pose: p,
-                    pose_dot: pd,
-                };
                 rk4_step(black_box(&kp), &dp, black_box(&s), &pdd, 1e-3)
+                    .unwrap()
+                    .pose[0]
+            }
+            "id_load" => {
+                inverse_dynamics_with_env(black_box(&kp), &dp, black_box(&p), &pd, &pdd, &env)
+                    .unwrap()[0]
+            }
+            "fd_load" => {
+                forward_dynamics_with_env(black_box(&kp), &dp, black_box(&p), &pd, &pdd, &env)
+                    .unwrap()[0]
+            }
+            "mm_load" => {
+                mass_matrix_with_env(black_box(&kp), &dp, black_box(&p), &env).unwrap()[(0, 0)]
+            }
+            "terms_load" => {
+                dynamics_terms_with_env(black_box(&kp), &dp, black_box(&p), &pd, &env)
+                    .unwrap()
+                    .m[(0, 0)]
+            }
+            "rk4_load" => {
+                rk4_step_with_env(black_box(&kp), &dp, black_box(&s), &pdd, 1e-3, &env)
                     .unwrap()
                     .pose[0]
             }

@@ -64,6 +64,30 @@ fn dynamics_hot_paths_do_not_allocate() {
             sink += gravity_twist(&kp, &dp, p, &GRAVITY).unwrap()[2];
             sink += friction_twist(&kp, &dp, p, &pose_dot).unwrap()[0];
             sink += ModelState::at_rest(p).pose[2];
+            // with a load fixed to the platform
+            let env = Environment::with_gravity(g_tilt).with_load(PlatformLoad::new(
+                2.0,
+                Vec3::new(0.05, 0.02, 0.03),
+                Mat3::identity() * 2e-3,
+            ));
+            sink += env.load.map_or(0.0, |l| l.inertia_about_e()[(0, 0)]);
+            sink += env
+                .load
+                .map_or(Ok(()), |l| l.validate())
+                .map_or(1.0, |_| 0.0);
+            let tau_l =
+                inverse_dynamics_with_env(&kp, &dp, p, &pose_dot, &pose_ddot, &env).unwrap();
+            sink += tau_l[2];
+            sink += forward_dynamics_with_env(&kp, &dp, p, &pose_dot, &tau_l, &env).unwrap()[1];
+            sink += mass_matrix_with_env(&kp, &dp, p, &env).unwrap()[(3, 3)];
+            let t = dynamics_terms_with_env(&kp, &dp, p, &pose_dot, &env).unwrap();
+            sink += t.m[(2, 2)] + t.c[(0, 4)] + t.g[3];
+            sink += gravity_with_env(&kp, &dp, p, &env).unwrap()[4];
+            sink += rk4_step_with_env(&kp, &dp, &s, &tau_l, 1e-3, &env)
+                .unwrap()
+                .pose[1];
+            sink += kinetic_energy_with_env(&kp, &dp, p, &pose_dot, &env).unwrap();
+            sink += potential_energy_with_env(&kp, &dp, p, &env).unwrap();
             // error paths too
             let far = Vec6::new(0.0, 0.0, 0.5, 0.0, 0.0, 0.0);
             sink += inverse_dynamics(&kp, &dp, &far, &pose_dot, &pose_ddot).map_or(1.0, |_| 0.0);

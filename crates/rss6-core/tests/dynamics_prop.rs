@@ -38,8 +38,45 @@ fn params() -> impl Strategy<Value = DynamicParams> {
         })
 }
 
+/// A physical load: 0.1–5 kg, centre of mass within ±0.1 m of E, inertia A Aᵀ (SPD, full).
+fn load() -> impl Strategy<Value = PlatformLoad> {
+    (
+        0.1f64..5.0,
+        vec6(0.1, 0.1),
+        proptest::array::uniform9(-0.05f64..0.05),
+    )
+        .prop_map(|(m, c, a)| {
+            let a = Mat3::from_column_slice(&a);
+            PlatformLoad::new(m, Vec3::new(c[0], c[1], c[2]), a * a.transpose())
+        })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn inverse_of_forward_is_identity_with_load(
+        p in pose(), pd in vec6(0.2, 1.0), dtau in vec6(5.0, 5.0), dp in params(), l in load()
+    ) {
+        let kp = KinematicParams::nominal();
+        let env = Environment::default().with_load(l);
+        let z = Vec6::zeros();
+        let tau = inverse_dynamics_with_env(&kp, &dp, &p, &z, &z, &env).unwrap() + dtau;
+        let acc = forward_dynamics_with_env(&kp, &dp, &p, &pd, &tau, &env).unwrap();
+        let back = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &acc, &env).unwrap();
+        prop_assert!((back - tau).amax() <= 1e-10 * tau.amax(), "{} vs {}", back, tau);
+    }
+
+    #[test]
+    fn mass_matrix_with_load_is_spd(p in pose(), pd in vec6(0.2, 1.0), dp in params(), l in load()) {
+        let kp = KinematicParams::nominal();
+        let env = Environment::default().with_load(l);
+        let m = mass_matrix_with_env(&kp, &dp, &p, &env).unwrap();
+        prop_assert!((m - m.transpose()).amax() <= 1e-14 * m.amax());
+        prop_assert!(m.cholesky().is_some());
+        prop_assert!(kinetic_energy_with_env(&kp, &dp, &p, &pd, &env).unwrap()
+            >= kinetic_energy(&kp, &dp, &p, &pd).unwrap() - 1e-15);
+    }
 
     #[test]
     fn inverse_of_forward_is_identity(

@@ -82,6 +82,26 @@ fn dynamics() -> impl Strategy<Value = DynamicParams> {
     ]
 }
 
+/// A load: the sim test's offset load, or wild mass, centre of mass and inertia entries.
+fn load() -> impl Strategy<Value = PlatformLoad> {
+    prop_oneof![
+        Just(PlatformLoad::new(
+            2.0,
+            Vec3::new(0.05, 0.02, 0.03),
+            Mat3::identity() * 2e-3
+        )),
+        (wild(), wild3(), proptest::array::uniform9(wild()))
+            .prop_map(|(m, c, i)| { PlatformLoad::new(m, c, Mat3::from_column_slice(&i)) }),
+    ]
+}
+
+fn environment() -> impl Strategy<Value = Environment> {
+    (gravity_vec(), proptest::option::of(load())).prop_map(|(g, l)| Environment {
+        gravity: g,
+        load: l,
+    })
+}
+
 fn fk_options() -> impl Strategy<Value = FkOptions> {
     prop_oneof![
         Just(FkOptions::default()),
@@ -169,11 +189,32 @@ proptest! {
     }
 
     #[test]
+    fn dynamics_with_env(kp in kinematics(), dp in dynamics(), p in pose(), pd in rate(),
+                         pdd in rate(), env in environment(), l in load()) {
+        let _ = l.validate();
+        let _ = (l.inertia_about_e(), PlatformLoad::point(l.mass, l.com));
+        let _ = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
+        let _ = forward_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
+        let _ = mass_matrix_with_env(&kp, &dp, &p, &env);
+        let _ = dynamics_terms_with_env(&kp, &dp, &p, &pd, &env);
+        let _ = gravity_with_env(&kp, &dp, &p, &env);
+        let _ = kinetic_energy_with_env(&kp, &dp, &p, &pd, &env);
+        let _ = potential_energy_with_env(&kp, &dp, &p, &env);
+    }
+
+    #[test]
     fn integration(kp in kinematics(), dp in dynamics(), p in pose(), pd in rate(), tau in rate(),
                    dt in prop_oneof![1e-4..1e-2f64, wild()], g in gravity_vec()) {
         let s = ModelState { pose: p, pose_dot: pd };
         let _ = rk4_step(&kp, &dp, &s, &tau, dt);
         let _ = rk4_step_with_gravity(&kp, &dp, &ModelState::at_rest(&p), &tau, dt, &g);
+    }
+
+    #[test]
+    fn integration_with_env(kp in kinematics(), dp in dynamics(), p in pose(), pd in rate(),
+                            tau in rate(), dt in prop_oneof![1e-4..1e-2f64, wild()],
+                            env in environment()) {
+        let _ = rk4_step_with_env(&kp, &dp, &ModelState { pose: p, pose_dot: pd }, &tau, dt, &env);
     }
 
     #[test]

@@ -8,6 +8,10 @@
 //! τ_k = l_p e_k + l_i I_k + l_d (e_k − e_{k−1})/Δt
 //! ⇒ e_k = (τ_k − l_i I_{k−1} + l_d e_{k−1}/Δt) / (l_p + l_i Δt + l_d/Δt),  θ_d,k = θ_k + e_k,
 //!
+//! and with a filtered derivative (T_f > 0, D_k = (T_f D_{k−1} + l_d (e_k − e_{k−1}))/(T_f + Δt))
+//!
+//! e_k = (τ_k − l_i I_{k−1} − (T_f D_{k−1} − l_d e_{k−1})/(T_f + Δt)) / (l_p + l_i Δt + l_d/(T_f + Δt)),
+//!
 //! using the latest potentiometer θ_k (the same reading the drive uses). The converter keeps a shadow copy
 //! of the drive's PID state and advances it with the command actually sent (after the stroke clamp and the
 //! rate limit), so the shadow never drifts from the drive even when a command is limited. The request is
@@ -79,13 +83,21 @@ impl TorqueToPosition {
         let lim = self.shadow.torque_limit();
         let integral = self.shadow.integral();
         let prev = self.shadow.prev_error();
+        let prev_d = self.shadow.prev_derivative();
+        let t_f = self.shadow.derivative_filter();
         let primed = self.shadow.is_primed();
         let mut e = Vec6::zeros();
         for i in 0..LEGS {
             // Stay a hair inside the limit so the drive never saturates on an exact request. `lim` > 0
             // (checked by `JointPid::new`), so the clamp cannot panic; the denominators are > 0.
             let t = tau[i].clamp(-lim, lim) * (1.0 - 1e-12);
-            let (num, den) = if primed {
+            let (num, den) = if primed && t_f > 0.0 {
+                let h = t_f + dt;
+                (
+                    t - g.li * integral[i] - (t_f * prev_d[i] - g.ld * prev[i]) / h,
+                    g.lp + g.li * dt + g.ld / h,
+                )
+            } else if primed {
                 (
                     t - g.li * integral[i] + g.ld * prev[i] / dt,
                     g.lp + g.li * dt + g.ld / dt,

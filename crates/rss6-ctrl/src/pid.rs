@@ -51,9 +51,12 @@ impl PidGains {
     }
 }
 
-/// Discrete PID of eq. 6.14 for all six joints: τ = l_p e + l_i Σe·dt + l_d (e − e_prev)/dt,
-/// with e = θ_d − θ. Backward-Euler derivative and rectangle-rule integral, exactly what
-/// [`crate::pid::JointPid::step`] computes; the torque-to-position converter inverts this same law.
+/// Discrete PID of eq. 6.14 for all six joints: τ = l_p e + l_i Σe·dt + D, with e = θ_d − θ,
+/// rectangle-rule integral and derivative term D = l_d (e − e_prev)/dt (backward Euler, the thesis's
+/// law and the default). A real drive low-passes its derivative: with a filter time constant T_f > 0
+/// ([`JointPid::with_derivative_filter`]) D is the backward-Euler discretisation of l_d s/(T_f s + 1),
+/// D_k = (T_f D_{k−1} + l_d (e_k − e_{k−1})) / (T_f + dt). The torque-to-position converter inverts
+/// this same law.
 ///
 /// The output is clamped to ±`torque_limit` (no anti-windup beyond holding the integral while saturated).
 /// Gains, period and limit are fixed at construction ([`JointPid::new`] validates them).
@@ -62,8 +65,12 @@ pub struct JointPid {
     gains: PidGains,
     dt: f64,
     torque_limit: f64,
+    /// Derivative filter time constant T_f (s), 0 = unfiltered.
+    filter: f64,
     integral: [f64; LEGS],
     prev_error: [f64; LEGS],
+    /// The previous derivative term D_{k−1} (N·m).
+    prev_derivative: [f64; LEGS],
     primed: bool,
 }
 
@@ -91,10 +98,52 @@ impl JointPid {
             gains,
             dt,
             torque_limit,
+            filter: 0.0,
             integral: [0.0; LEGS],
             prev_error: [0.0; LEGS],
+            prev_derivative: [0.0; LEGS],
             primed: false,
         })
+    }
+
+    /// The same PID with its derivative term low-passed with time constant `t_f` (s, ≥ 0; 0 = the
+    /// unfiltered law). See the type's docs.
+    ///
+    /// Errors: [`CtrlError::InvalidParameter`] unless `t_f` is finite and ≥ 0.
+    ///
+    /// ```
+    /// use rss6_ctrl::{JointPid, PidGains};
+    /// let pid = JointPid::new(PidGains::tuned(), 1e-3, 30.0).unwrap();
+    /// assert!(pid.clone().with_derivative_filter(5e-3).is_ok());
+    /// assert!(pid.with_derivative_filter(f64::NAN).is_err());
+    /// ```
+    pub fn with_derivative_filter(mut self, t_f: f64) -> Result<Self> {
+        if !(t_f.is_finite() && t_f >= 0.0) {
+            return Err(CtrlError::InvalidParameter(
+                "derivative filter time constant must be finite and >= 0",
+            ));
+        }
+        self.filter = t_f;
+        Ok(self)
+    }
+
+    /// The derivative filter's time constant T_f (s); 0 = unfiltered.
+    pub fn derivative_filter(&self) -> f64 {
+        self.filter
+    }
+
+    /// The previous derivative term D_{k−1} (N·m) per joint.
+    pub fn prev_derivative(&self) -> [f64; LEGS] {
+        self.prev_derivative
+    }
+
+    /// The derivative term D_k for the error change `de` = e_k − e_{k−1} of joint `i` (a primed PID).
+    pub(crate) fn derivative(&self, i: usize, de: f64) -> f64 {
+        if self.filter > 0.0 {
+            (self.filter * self.prev_derivative[i] + self.gains.ld * de) / (self.filter + self.dt)
+        } else {
+            self.gains.ld * (de / self.dt)
+        }
     }
 
     /// The gains.
@@ -116,6 +165,7 @@ impl JointPid {
     pub fn reset(&mut self) {
         self.integral = [0.0; LEGS];
         self.prev_error = [0.0; LEGS];
+        self.prev_derivative = [0.0; LEGS];
         self.primed = false;
     }
 
@@ -141,13 +191,13 @@ impl JointPid {
         let lim = self.torque_limit;
         for i in 0..LEGS {
             let e = theta_cmd[i] - theta_meas[i];
-            let de = if self.primed {
-                (e - self.prev_error[i]) / self.dt
+            let d = if self.primed {
+                self.derivative(i, e - self.prev_error[i])
             } else {
                 0.0
             };
             let integral = self.integral[i] + e * self.dt;
-            let raw = self.gains.lp * e + self.gains.li * integral + self.gains.ld * de;
+            let raw = self.gains.lp * e + self.gains.li * integral + d;
             // `lim` > 0 and not NaN (checked in `new`), so the clamp cannot panic.
             let out = raw.clamp(-lim, lim);
             // Conditional integration: do not wind up while saturated.
@@ -155,6 +205,7 @@ impl JointPid {
                 self.integral[i] = integral;
             }
             self.prev_error[i] = e;
+            self.prev_derivative[i] = d;
             tau[i] = out;
         }
         self.primed = true;

@@ -215,23 +215,26 @@ proptest! {
     #![proptest_config(config())]
 
     #[test]
-    fn joint_pid(g in pid_gains(), step in dt(), lim in wild(),
+    fn joint_pid(g in pid_gains(), step in dt(), lim in wild(), t_f in wild(),
                  io in proptest::collection::vec((small6(), small6()), 1..4)) {
-        if let Ok(mut pid) = JointPid::new(g, step, lim) {
+        if let Ok(mut pid) = JointPid::new(g, step, lim).and_then(|p| p.with_derivative_filter(t_f)) {
             for (cmd, meas) in &io {
                 let _ = pid.step(cmd, meas);
             }
             let _ = (pid.integral(), pid.prev_error(), pid.dt(), pid.torque_limit(), pid.gains());
+            let _ = (pid.prev_derivative(), pid.derivative_filter());
             pid.reset();
         }
     }
 
     #[test]
     fn converter_and_guard(g in pid_gains(), step in dt(), lim in wild(), l in limits(),
-                           initial in small6(), mirror in any::<bool>(),
+                           initial in small6(), mirror in any::<bool>(), t_f in wild(),
                            io in proptest::collection::vec((wild6(), small6(), small6()), 1..4)) {
         let conv = if mirror {
-            JointPid::new(g, step, lim).and_then(|p| TorqueToPosition::mirroring(&p))
+            JointPid::new(g, step, lim)
+                .and_then(|p| p.with_derivative_filter(t_f))
+                .and_then(|p| TorqueToPosition::mirroring(&p))
         } else {
             TorqueToPosition::new(g, step, lim)
         };

@@ -234,10 +234,10 @@ macro_rules! sim_class {
         impl $name {
             /// `kp`, `dp`: the true robot. `pid` = (l_p, l_i, l_d) of the drive (N·m/rad,
             /// N·m/(rad·s), N·m·s/rad). `effects`: hidden effects {name: {param: value}} (names:
-            /// joint_friction, backlash, camera_latency, payload, base_tilt). `sensor_in_base` (ᴼχ_C)
-            /// and `target_in_effector` (ᴱχ_t) default to rss6-sim's placement; `camera_latency` (s),
-            /// `potentiometer_noise` (bit, default Table 4.1's 0.2233) and `pixel_noise` (px) tune the
-            /// sensors. Starts at home.
+            /// joint_friction, backlash, camera_latency, payload, base_tilt, joint_offset_drift).
+            /// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t) default to rss6-sim's
+            /// placement; `camera_latency` (s), `potentiometer_noise` (bit, default Table 4.1's
+            /// 0.2233) and `pixel_noise` (px) tune the sensors. Starts at home.
             #[new]
             #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None))]
             #[allow(clippy::too_many_arguments)]

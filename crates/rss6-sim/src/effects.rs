@@ -2,7 +2,8 @@
 //! switched on by name with parameters (the raw material of the discrepancy workflow).
 //!
 //! An effect is a value implementing [`Effect`]; it edits an [`EffectSetup`], the small set of hooks the
-//! simulator reads (gravity, payload, extra friction, camera latency, gear backlash). To add one:
+//! simulator reads (gravity, payload, extra friction, camera latency, gear backlash, potentiometer
+//! offset drift). To add one:
 //! write a struct implementing [`Effect`], add a field to [`EffectSetup`] if no existing hook fits,
 //! and register its constructor in [`REGISTRY`]. The simulator's outputs (readings, logs, `Debug`)
 //! never mention effects; only [`crate::Truth`] lists them.
@@ -14,9 +15,10 @@
 //! | `camera_latency` | `latency` (s) | extra delay of every CMM frame |
 //! | `payload` | `mass` (kg), `x`, `y`, `z` (m, COM in ΣE), optional `inertia` (kg·m², about its COM) | load rigidly fixed to the platform |
 //! | `base_tilt` | `roll`, `pitch` (rad) | the base is tilted: gravity = R_x(roll)·R_y(pitch)ᵀ·[0, 0, −9.81] in the base frame |
+//! | `joint_offset_drift` | `rate` (rad/s), optional `joint` (0–5, all if absent) | the potentiometer offset drifts: Δθ_i(t) = Δθ_i + rate·t (eq. 4.2), t the simulated time since the robot was built (a reset does not rewind it); plant and twin alike |
 
 use crate::error::{Result, SimError};
-use rss6_core::{Vec3, LEGS};
+use rss6_core::{Environment, Mat3, PlatformLoad, Vec3, LEGS};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -33,6 +35,14 @@ pub struct Payload {
     pub com: Vec3,
     /// Isotropic moment of inertia about its own centre of mass (kg·m²).
     pub inertia: f64,
+}
+
+impl Payload {
+    /// The payload as the analytic model's load: mass, centre of mass in ΣE and the isotropic
+    /// inertia as a 3 × 3 tensor about its centre of mass.
+    pub fn as_load(&self) -> PlatformLoad {
+        PlatformLoad::new(self.mass, self.com, Mat3::identity() * self.inertia)
+    }
 }
 
 /// Gear backlash between the drive (motor rotor, where the potentiometer sits) and the wrench.
@@ -63,6 +73,8 @@ pub struct EffectSetup {
     pub extra_camera_latency: f64,
     /// Gear backlash, the same on every joint.
     pub backlash: Option<Backlash>,
+    /// Drift rate of each potentiometer offset Δθ_i (rad/s).
+    pub dtheta_drift: [f64; LEGS],
 }
 
 impl Default for EffectSetup {
@@ -74,6 +86,19 @@ impl Default for EffectSetup {
             extra_viscous: [0.0; LEGS],
             extra_camera_latency: 0.0,
             backlash: None,
+            dtheta_drift: [0.0; LEGS],
+        }
+    }
+}
+
+impl EffectSetup {
+    /// The environment the analytic model sees: this gravity and the payload (if any) as a
+    /// [`PlatformLoad`] with its full mass, centre-of-mass offset and inertia.
+    pub fn environment(&self) -> Environment {
+        let env = Environment::with_gravity(self.gravity);
+        match self.payload {
+            Some(p) => env.with_load(p.as_load()),
+            None => env,
         }
     }
 }
@@ -119,6 +144,7 @@ pub const REGISTRY: &[(&str, EffectConstructor)] = &[
     ("camera_latency", CameraLatency::from_params),
     ("payload", PayloadEffect::from_params),
     ("base_tilt", BaseTilt::from_params),
+    ("joint_offset_drift", JointOffsetDrift::from_params),
 ];
 
 /// Builds an effect from its spec. Errors: unknown name, missing/unknown/out-of-range parameter.
@@ -405,6 +431,54 @@ impl Effect for BaseTilt {
     }
     fn apply(&self, s: &mut EffectSetup) {
         s.gravity = self.gravity();
+    }
+}
+
+/// The potentiometer offset Δθ_i drifts linearly in time (temperature, wear): the reading of a joint
+/// held still changes by −rate·t/η_i, and a drive that tracks the reading moves the joint by rate·t.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointOffsetDrift {
+    /// dΔθ/dt (rad/s), either sign.
+    pub rate: f64,
+    /// The joint (0–5), or all when `None`.
+    pub joint: Option<usize>,
+}
+
+impl JointOffsetDrift {
+    fn from_params(m: &BTreeMap<String, f64>) -> Result<Box<dyn Effect>> {
+        let p = Params::new("joint_offset_drift", m, &["rate", "joint"])?;
+        let rate = p.required("rate")?;
+        let joint = match m.get("joint") {
+            None => None,
+            Some(&j) if j >= 0.0 && j < LEGS as f64 && j.fract() == 0.0 => Some(j as usize),
+            Some(j) => {
+                return Err(param_err(
+                    "joint_offset_drift",
+                    &format!("bad joint index {j}"),
+                ))
+            }
+        };
+        Ok(Box::new(JointOffsetDrift { rate, joint }))
+    }
+}
+
+impl Effect for JointOffsetDrift {
+    fn name(&self) -> &'static str {
+        "joint_offset_drift"
+    }
+    fn params(&self) -> BTreeMap<String, f64> {
+        let mut m = BTreeMap::from([("rate".to_string(), self.rate)]);
+        if let Some(j) = self.joint {
+            m.insert("joint".to_string(), j as f64);
+        }
+        m
+    }
+    fn apply(&self, s: &mut EffectSetup) {
+        for i in 0..LEGS {
+            if self.joint.is_none_or(|j| j == i) {
+                s.dtheta_drift[i] += self.rate;
+            }
+        }
     }
 }
 

@@ -15,8 +15,8 @@ mod validation;
 
 pub use crate::effects::{
     build_effects, make_effect, Backlash, BacklashEffect, BaseTilt, CameraLatency, Effect,
-    EffectConstructor, EffectSetup, EffectSpec, JointFriction, Payload, PayloadEffect, G0,
-    REGISTRY,
+    EffectConstructor, EffectSetup, EffectSpec, JointFriction, JointOffsetDrift, Payload,
+    PayloadEffect, G0, REGISTRY,
 };
 pub use crate::error::{Result, SimError};
 pub use crate::params_file::{

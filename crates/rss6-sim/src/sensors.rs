@@ -312,11 +312,18 @@ pub fn measure_with<R: Rng>(cfg: &CmmConfig, c_chi_t: &Vec6, rng: &mut R) -> Res
     Ok(isometry_to_pose(&kabsch(&model, &meas)?))
 }
 
-/// Potentiometers: κ = (θ − Δθ)/η + noise (eq. 4.2), sampled every `period_ticks` joint-loop ticks.
+/// Potentiometers: κ = (θ − Δθ(t))/η + noise (eq. 4.2), sampled every `period_ticks` joint-loop ticks.
+/// Δθ(t) = Δθ + ṙ·t drifts linearly (the `joint_offset_drift` effect; ṙ = 0 without it), t the time
+/// the sensors have run since the robot was built (a reset does not rewind it: the sensor keeps ageing).
 #[derive(Debug, Clone)]
 pub(crate) struct Potentiometers {
     eta: [f64; 6],
     dtheta: [f64; 6],
+    /// Drift rate of Δθ per joint (rad/s).
+    drift: [f64; 6],
+    dt: f64,
+    /// Joint-loop ticks run since construction (not reset).
+    age_ticks: u64,
     noise: Normal<f64>,
     period_ticks: u64,
     last: Vec6,
@@ -336,6 +343,9 @@ impl Potentiometers {
         Ok(Potentiometers {
             eta,
             dtheta,
+            drift: [0.0; 6],
+            dt: 0.0,
+            age_ticks: 0,
             noise,
             period_ticks: period_ticks.max(1),
             last: Vec6::zeros(),
@@ -343,11 +353,24 @@ impl Potentiometers {
         })
     }
 
-    /// Samples if `tick` is a sampling tick; returns the held reading (bit).
+    /// Lets Δθ drift at `rate` (rad/s per joint) with joint-loop period `dt` (s).
+    pub(crate) fn with_drift(mut self, rate: [f64; 6], dt: f64) -> Self {
+        self.drift = rate;
+        self.dt = dt;
+        self
+    }
+
+    /// Samples if `tick` is a sampling tick; returns the held reading (bit). `tick` > 0 is a
+    /// joint-loop step (the sensors age by one tick); `tick` = 0 is a reset, which does not age them.
     pub(crate) fn tick(&mut self, tick: u64, theta: &Vec6) -> Vec6 {
+        if tick > 0 {
+            self.age_ticks += 1;
+        }
         if tick % self.period_ticks == 0 {
+            let age = self.age_ticks as f64 * self.dt;
             self.last = Vec6::from_fn(|i, _| {
-                (theta[i] - self.dtheta[i]) / self.eta[i] + self.noise.sample(&mut self.rng)
+                (theta[i] - (self.dtheta[i] + self.drift[i] * age)) / self.eta[i]
+                    + self.noise.sample(&mut self.rng)
             });
         }
         self.last

@@ -83,6 +83,12 @@ pub struct SimConfig {
     pub dt: f64,
     /// PID torque limit per joint (N·m).
     pub torque_limit: f64,
+    /// Time constant T_f (s) of the drive's derivative filter
+    /// ([`rss6_ctrl::JointPid::with_derivative_filter`]); 0 = the thesis's unfiltered law (default).
+    pub drive_derivative_filter: f64,
+    /// Velocity scale ε (rad/s) of the model twin's Coulomb friction f_c tanh(θ̇/ε); 0 = the
+    /// thesis's f_c sign(θ̇) (default). The rapier plant ignores it (its Coulomb friction sticks).
+    pub friction_smoothing: f64,
     /// Seed of every random stream (sensor noise).
     pub seed: u64,
     /// The nominal parameters that define the joint-command convention (η_nom, Δθ_nom).
@@ -112,6 +118,8 @@ impl SimConfig {
             pid,
             dt: 1e-3,
             torque_limit: DEFAULT_TORQUE_LIMIT,
+            drive_derivative_filter: 0.0,
+            friction_smoothing: 0.0,
             seed: 0,
             nominal: KinematicParams::nominal(),
             pot_noise: POT_NOISE_BITS,
@@ -163,6 +171,16 @@ impl SimConfig {
             return Err(SimError::InvalidConfig(
                 "solver iterations must be >= 1".into(),
             ));
+        }
+        for (name, v) in [
+            ("drive derivative filter", self.drive_derivative_filter),
+            ("friction smoothing", self.friction_smoothing),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SimError::InvalidConfig(format!(
+                    "{name} must be finite and >= 0, got {v}"
+                )));
+            }
         }
         Ok(())
     }
@@ -300,6 +318,7 @@ impl<P: Physics> Robot<P> {
         physics: P,
     ) -> Result<Self> {
         let pid = JointPid::new(cfg.pid, cfg.dt, cfg.torque_limit)
+            .and_then(|p| p.with_derivative_filter(cfg.drive_derivative_filter))
             .map_err(|e| SimError::InvalidConfig(format!("drive PID: {e}")))?;
         let period_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
         let pots = Potentiometers::new(
@@ -308,7 +327,8 @@ impl<P: Physics> Robot<P> {
             cfg.pot_noise,
             period_ticks,
             ChaCha8Rng::seed_from_u64(cfg.seed),
-        )?;
+        )?
+        .with_drift(setup.dtheta_drift, cfg.dt);
         let mut cam_rng = ChaCha8Rng::seed_from_u64(cfg.seed);
         cam_rng.set_stream(1);
         let cmm = OpticalCmm::new(cfg.cmm.clone(), setup.extra_camera_latency, cam_rng);

@@ -3,16 +3,17 @@
 //! and sensors: the "simulated model" of the thesis's Fig. 5.1.
 //!
 //! Joint angles are θ = IK(χ) and rates θ̇ = J_θ χ̇ (eq. 5.3). Effects the model can express act on it
-//! too (gravity direction, friction, backlash, camera latency; a payload adds its mass and its
-//! parallel-axis inertia to the platform, but Ξ has no place for a COM offset, so the offset's
-//! gravity moment is not modelled — that is a model discrepancy by design).
+//! too (gravity direction, friction, backlash, camera latency, and a payload: Ξ has no place for it,
+//! so it enters the dynamics as a [`rss6_core::PlatformLoad`] — its mass, its centre-of-mass offset
+//! in ΣE (the offset's gravity moment and inertial forces) and its inertia, through
+//! [`rss6_core::rk4_step_with_env`] with [`EffectSetup::environment`]).
 
 use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    ik, jacobian_theta, rk4_step_with_gravity, DynamicParams, KinematicParams, ModelState, Vec3,
-    Vec6,
+    forward_dynamics_with_env, ik, jacobian_theta, rk4_step_by, rk4_step_with_env, DynamicParams,
+    Environment, KinematicParams, ModelState, Vec6, LEGS,
 };
 
 /// Analytic-model physics.
@@ -20,7 +21,10 @@ use rss6_core::{
 pub struct ModelPhysics {
     kp: KinematicParams,
     dp: DynamicParams,
-    gravity: Vec3,
+    /// ε of the smoothed Coulomb friction (rad/s); 0 = sign.
+    smoothing: f64,
+    /// Gravity and the payload (a load fixed to the platform).
+    env: Environment,
     dt: f64,
     state: ModelState,
     theta: Vec6,
@@ -33,17 +37,11 @@ impl ModelPhysics {
         let (fc, fv) = total_friction(&cfg.dynamics, setup);
         dp.coulomb = fc;
         dp.viscous = fv;
-        if let Some(p) = setup.payload {
-            let c = p.com;
-            dp.platform.mass += p.mass;
-            for k in 0..3 {
-                dp.platform.inertia[k] += p.inertia + p.mass * (c.norm_squared() - c[k] * c[k]);
-            }
-        }
         ModelPhysics {
             kp: cfg.kinematics,
             dp,
-            gravity: setup.gravity,
+            smoothing: cfg.friction_smoothing,
+            env: setup.environment(),
             dt: cfg.dt,
             state: ModelState {
                 pose: rss6_core::home_pose(),
@@ -70,8 +68,21 @@ impl Physics for ModelPhysics {
     }
 
     fn advance(&mut self, tau: &Vec6) -> Result<()> {
-        self.state =
-            rk4_step_with_gravity(&self.kp, &self.dp, &self.state, tau, self.dt, &self.gravity)?;
+        self.state = if self.smoothing > 0.0 {
+            // f_c tanh(θ̇/ε) at every stage: the Coulomb part as a known joint torque on the
+            // friction-free model (the same arithmetic as rss6-ident's CLOE loop).
+            let mut dp_nc = self.dp;
+            dp_nc.coulomb = [0.0; LEGS];
+            let (kp, dp, env, eps) = (&self.kp, &self.dp, &self.env, self.smoothing);
+            rk4_step_by(&self.state, self.dt, |p, v| {
+                let theta_dot = jacobian_theta(kp, p)? * v;
+                let tau_eff =
+                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (theta_dot[i] / eps).tanh());
+                forward_dynamics_with_env(kp, &dp_nc, p, v, &tau_eff, env)
+            })?
+        } else {
+            rk4_step_with_env(&self.kp, &self.dp, &self.state, tau, self.dt, &self.env)?
+        };
         self.theta = ik(&self.kp, &self.state.pose)?;
         Ok(())
     }

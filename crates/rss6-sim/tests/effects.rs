@@ -5,7 +5,7 @@ use rss6_core::{
     home_pose, ik, inverse_dynamics_with_gravity, DynamicParams, KinematicParams, LegGeometry,
     Vec3, Vec6,
 };
-use rss6_sim::{EffectSpec, ExcitingTrajectory, Plant, RobotSim, SimConfig};
+use rss6_sim::{EffectSpec, ExcitingTrajectory, ModelSim, Plant, RobotSim, SimConfig};
 
 fn quiet(effects: Vec<EffectSpec>) -> Plant {
     let mut cfg = SimConfig::nominal();
@@ -208,4 +208,102 @@ fn base_tilt_changes_the_gravity_torque_pattern_as_the_model_says() {
         (tau1 - tau0).norm() > 0.05 * tau0.norm(),
         "tilt should change the torque pattern"
     );
+}
+
+/// Runs `robot` (built without noise from `effects`) holding home for `steps` ticks; returns the
+/// true joint angles after every tick.
+fn hold_and_record<R: RobotSim>(robot: &mut R, steps: usize) -> Vec<Vec6> {
+    let cmd = ik(&KinematicParams::nominal(), &home_pose()).unwrap();
+    (0..steps)
+        .map(|_| {
+            robot.step_joint_command(&cmd).unwrap();
+            robot.true_theta()
+        })
+        .collect()
+}
+
+/// `joint_offset_drift`: Δθ_i(t) = Δθ_i + rate·t. At the same physical state the reading differs by
+/// exactly −rate·t/η_i on the drifting joint and not at all elsewhere; in closed loop the drive
+/// tracks the drifting reading, so that joint's true angle moves by rate·t and the others hold.
+/// Plant and model twin alike (they share the sensor model).
+#[test]
+fn joint_offset_drift_moves_the_reading_by_rate_t_and_nothing_else() {
+    let (rate, joint, steps) = (2e-3, 2usize, 1500usize);
+    let t = steps as f64 * 1e-3;
+    let drift = || {
+        vec![EffectSpec::new(
+            "joint_offset_drift",
+            &[("rate", rate), ("joint", joint as f64)],
+        )]
+    };
+    let quiet_cfg = |effects: Vec<EffectSpec>| {
+        let mut cfg = SimConfig::nominal();
+        cfg.pot_noise = 0.0;
+        cfg.cmm.pixel_noise = 0.0;
+        cfg.effects = effects;
+        cfg
+    };
+    let eta = KinematicParams::nominal().eta;
+    fn check<R: RobotSim>(
+        name: &str,
+        plain: &mut R,
+        drifting: &mut R,
+        steps: usize,
+        rate: f64,
+        joint: usize,
+        eta: &[f64; 6],
+    ) {
+        let t = steps as f64 * 1e-3;
+        let a = hold_and_record(plain, steps);
+        let b = hold_and_record(drifting, steps);
+        // Closed loop: the drifting joint follows rate·t (after the PID catches up), the others hold.
+        let (mut follow, mut others): (f64, f64) = (0.0, 0.0);
+        for (k, (ta, tb)) in a.iter().zip(&b).enumerate().skip(steps / 2) {
+            let d = tb - ta;
+            let expected = rate * (k + 1) as f64 * 1e-3;
+            follow = follow.max((d[joint] - expected).abs() / expected);
+            others = others.max(
+                (0..6)
+                    .filter(|&i| i != joint)
+                    .map(|i| d[i].abs())
+                    .fold(0.0, f64::max),
+            );
+        }
+        // Same physical state (reset places both at home; it does not rewind the sensors' age):
+        // the readings differ by exactly −rate·t/η on the drifting joint.
+        plain.reset(&home_pose()).unwrap();
+        drifting.reset(&home_pose()).unwrap();
+        assert_eq!(plain.true_theta(), drifting.true_theta());
+        let dk = drifting.potentiometers() - plain.potentiometers();
+        let expected = -rate * t / eta[joint];
+        println!(
+            "{name}: Δκ = {dk:.4?} bit (expected {expected:.4} on joint {joint}); closed loop: drifting joint vs rate·t rel. err {follow:.2e}, other joints {others:.2e} rad"
+        );
+        for i in 0..6 {
+            let want = if i == joint { expected } else { 0.0 };
+            assert!(
+                (dk[i] - want).abs() <= 1e-9 * expected.abs(),
+                "{name} joint {i}: {} vs {want}",
+                dk[i]
+            );
+        }
+        // ≈ 3× measured (plant and twin alike: 1.1e-3 rel., 2.2e-6 rad of rate·t = 3e-3 rad).
+        assert!(follow < 3.5e-3, "{name}: drifting joint {follow}");
+        assert!(others < 7e-6, "{name}: other joints moved {others} rad");
+    }
+    let mut p0 = Plant::new(quiet_cfg(vec![])).unwrap();
+    let mut p1 = Plant::new(quiet_cfg(drift())).unwrap();
+    check("plant", &mut p0, &mut p1, steps, rate, joint, &eta);
+    let mut m0 = ModelSim::new(quiet_cfg(vec![])).unwrap();
+    let mut m1 = ModelSim::new(quiet_cfg(drift())).unwrap();
+    check("twin", &mut m0, &mut m1, steps, rate, joint, &eta);
+    assert!(t > 1.0);
+    // Bad parameters are refused.
+    for bad in [
+        vec![("joint", 1.0)],
+        vec![("rate", 1e-3), ("joint", 6.0)],
+        vec![("rate", 1e-3), ("speed", 1.0)],
+    ] {
+        assert!(rss6_sim::make_effect(&EffectSpec::new("joint_offset_drift", &bad)).is_err());
+    }
 }

@@ -1,6 +1,7 @@
 //! Time integration of the analytic model: [`ModelState`] and one RK4 step of the forward dynamics.
 
-use super::newton_euler::forward_dynamics_with_gravity;
+use super::load::Environment;
+use super::newton_euler::forward_dynamics_with_env;
 use super::GRAVITY;
 use crate::error::{CoreError, Result};
 use crate::params::{DynamicParams, KinematicParams};
@@ -47,10 +48,35 @@ pub fn rk4_step_with_gravity(
     dt: f64,
     g: &Vec3,
 ) -> Result<ModelState> {
+    rk4_step_with_env(kp, dp, state, tau_a, dt, &Environment::with_gravity(*g))
+}
+
+/// [`rk4_step`] in the environment `env` (gravity and an optional load fixed to the platform): each
+/// stage is [`crate::forward_dynamics_with_env`]. `dt` in s, τ_a in N·m, held over the step.
+pub fn rk4_step_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    state: &ModelState,
+    tau_a: &Vec6,
+    dt: f64,
+    env: &Environment,
+) -> Result<ModelState> {
+    rk4_step_by(state, dt, |p: &Vec6, pd: &Vec6| {
+        forward_dynamics_with_env(kp, dp, p, pd, tau_a, env)
+    })
+}
+
+/// One classical RK4 step of χ̈ = f(χ, χ̇) over `dt` (s): the integrator of [`rk4_step`] for any
+/// acceleration function (e.g. forward dynamics with a modified friction law).
+///
+/// Errors: [`CoreError::NonFinite`] for a non-finite `dt`; whatever `f` returns.
+pub fn rk4_step_by<F>(state: &ModelState, dt: f64, f: F) -> Result<ModelState>
+where
+    F: Fn(&Vec6, &Vec6) -> Result<Vec6>,
+{
     if !dt.is_finite() {
         return Err(CoreError::NonFinite);
     }
-    let f = |p: &Vec6, pd: &Vec6| forward_dynamics_with_gravity(kp, dp, p, pd, tau_a, g);
     let (p0, v0) = (state.pose, state.pose_dot);
     let a1 = f(&p0, &v0)?;
     let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));

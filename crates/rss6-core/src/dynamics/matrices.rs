@@ -1,6 +1,7 @@
 //! The matrix path: M, C, G, τ_f in twist coordinates (eq. 3.41, 3.47) and in χ coordinates (eq. 6.2,
 //! 6.4), all terms in one pass ([`dynamics_terms`]), and the energies used by the tests.
 
+use super::load::{Environment, LoadAt};
 use super::newton_euler::twist_force;
 use super::{check_finite, joint_friction, link_transverse_inertia, platform_inertia};
 use super::{wrench_axial_inertia, GRAVITY};
@@ -47,8 +48,9 @@ pub(super) fn twist_terms(
     geom: &LegGeometry,
     dp: &DynamicParams,
     v: &Vec6,
-    g: &Vec3,
+    env: &Environment,
 ) -> Result<TwistTerms> {
+    let g = &env.gravity;
     let ip = platform_inertia(&geom.rot, &dp.platform);
     let mut m = Mat6::zeros();
     let mut c = Mat6::zeros();
@@ -78,6 +80,12 @@ pub(super) fn twist_terms(
             + k.jbd.transpose() * k.jbd_dot * il;
         gv -= k.jau.transpose() * g * mw + k.jbu.transpose() * g * ml;
     }
+    if let Some(load) = &env.load {
+        let l = LoadAt::new(load, &geom.rot);
+        l.add_mass(&mut m);
+        l.add_coriolis(&mut c, v);
+        gv += l.gravity(g);
+    }
     Ok(TwistTerms {
         m,
         c,
@@ -103,8 +111,26 @@ pub(super) fn twist_terms(
 /// assert!(m.cholesky().is_some());
 /// ```
 pub fn mass_matrix(kp: &KinematicParams, dp: &DynamicParams, pose: &Vec6) -> Result<Mat6> {
+    mass_matrix_with_env(kp, dp, pose, &Environment::default())
+}
+
+/// [`mass_matrix`] with the load of `env`, if any (its gravity plays no part): M̃ = J_sᵀ (M + M_L) J_s
+/// with M_L the load's twist-coordinate mass matrix ([`crate::PlatformLoad`]). Units as [`mass_matrix`].
+///
+/// Errors: as [`mass_matrix`]; [`CoreError::NonFinite`](crate::CoreError::NonFinite) for a non-finite
+/// gravity or load.
+pub fn mass_matrix_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    env: &Environment,
+) -> Result<Mat6> {
+    env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let m = twist_mass_matrix(&geom, dp)?;
+    let mut m = twist_mass_matrix(&geom, dp)?;
+    if let Some(load) = &env.load {
+        LoadAt::new(load, &geom.rot).add_mass(&mut m);
+    }
     let js = twist_jacobian(pose);
     Ok(js.transpose() * m * js)
 }
@@ -125,7 +151,7 @@ pub fn coriolis(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let t = twist_terms(&geom, dp, &v, &GRAVITY)?;
+    let t = twist_terms(&geom, dp, &v, &Environment::default())?;
     Ok(js.transpose() * (t.m * twist_jacobian_dot(pose, pose_dot) + t.c * js))
 }
 
@@ -141,9 +167,23 @@ pub fn gravity_with(
     pose: &Vec6,
     g: &Vec3,
 ) -> Result<Vec6> {
-    check_finite(g.as_slice())?;
+    gravity_with_env(kp, dp, pose, &Environment::with_gravity(*g))
+}
+
+/// G̃(χ) in the environment `env` (N, N·m): its gravity and, if present, the load's weight
+/// [−m g; −m c × g] at its offset centre of mass, mapped by J_sᵀ.
+pub fn gravity_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    env: &Environment,
+) -> Result<Vec6> {
+    env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let (f, _, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), g)?;
+    let (mut f, _, _) = twist_force(&geom, dp, &Vec6::zeros(), &Vec6::zeros(), &env.gravity)?;
+    if let Some(load) = &env.load {
+        f += LoadAt::new(load, &geom.rot).gravity(&env.gravity);
+    }
     Ok(twist_jacobian(pose).transpose() * f)
 }
 
@@ -177,7 +217,13 @@ pub fn coriolis_twist(
     v_e: &Vec6,
 ) -> Result<Mat6> {
     check_finite(v_e.as_slice())?;
-    Ok(twist_terms(&LegGeometry::at_pose(kp, pose)?, dp, v_e, &GRAVITY)?.c)
+    Ok(twist_terms(
+        &LegGeometry::at_pose(kp, pose)?,
+        dp,
+        v_e,
+        &Environment::default(),
+    )?
+    .c)
 }
 
 /// Gravity G(χ) of eq. 3.41/3.47 in twist coordinates (N, N·m) for gravity `g` (m/s²): G̃ = J_sᵀ G.
@@ -241,12 +287,24 @@ pub fn dynamics_terms_with_gravity(
     pose_dot: &Vec6,
     g: &Vec3,
 ) -> Result<DynamicsTerms> {
+    dynamics_terms_with_env(kp, dp, pose, pose_dot, &Environment::with_gravity(*g))
+}
+
+/// [`dynamics_terms`] in the environment `env`: M̃, C̃ and G̃ include the load, if any
+/// ([`crate::PlatformLoad`]: M_L, C_L, G_L mapped by J_s like the platform's terms; Property 2 holds).
+pub fn dynamics_terms_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    env: &Environment,
+) -> Result<DynamicsTerms> {
     check_finite(pose_dot.as_slice())?;
-    check_finite(g.as_slice())?;
+    env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
     let j_s = twist_jacobian(pose);
     let v = j_s * pose_dot;
-    let t = twist_terms(&geom, dp, &v, g)?;
+    let t = twist_terms(&geom, dp, &v, env)?;
     let j_ad = geom.j_ad()?;
     let j_theta = j_ad * j_s;
     let js_t = j_s.transpose();
@@ -268,8 +326,19 @@ pub fn kinetic_energy(
     pose: &Vec6,
     pose_dot: &Vec6,
 ) -> Result<f64> {
+    kinetic_energy_with_env(kp, dp, pose, pose_dot, &Environment::default())
+}
+
+/// [`kinetic_energy`] including the load of `env`, if any: ½ χ̇ᵀ M̃ χ̇ with [`mass_matrix_with_env`] (J).
+pub fn kinetic_energy_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    env: &Environment,
+) -> Result<f64> {
     check_finite(pose_dot.as_slice())?;
-    Ok(0.5 * pose_dot.dot(&(mass_matrix(kp, dp, pose)? * pose_dot)))
+    Ok(0.5 * pose_dot.dot(&(mass_matrix_with_env(kp, dp, pose, env)? * pose_dot)))
 }
 
 /// Potential energy V = −Σ m_k gᵀ c_k of the 13 bodies (J), zero at the base plane for g = [`GRAVITY`].
@@ -280,6 +349,19 @@ pub fn potential_energy_with_gravity(
     pose: &Vec6,
     g: &Vec3,
 ) -> Result<f64> {
+    potential_energy_with_env(kp, dp, pose, &Environment::with_gravity(*g))
+}
+
+/// [`potential_energy_with_gravity`] in the environment `env`, with the load's −m gᵀ(E + R c') if any
+/// (J). G̃ of [`gravity_with_env`] is its gradient.
+pub fn potential_energy_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    env: &Environment,
+) -> Result<f64> {
+    env.check()?;
+    let g = &env.gravity;
     let geom = LegGeometry::at_pose(kp, pose)?;
     let e = Vec3::new(pose[0], pose[1], pose[2]);
     let mut v = -dp.platform.mass * g.dot(&e);
@@ -287,6 +369,9 @@ pub fn potential_energy_with_gravity(
         let cw = (geom.b[i] + geom.t[i]) * 0.5;
         let cl = (geom.t[i] + geom.a[i]) * 0.5;
         v -= dp.wrenches[i].mass * g.dot(&cw) + dp.links[i].mass * g.dot(&cl);
+    }
+    if let Some(load) = &env.load {
+        v += LoadAt::new(load, &geom.rot).potential(&e, g);
     }
     Ok(v)
 }

@@ -41,6 +41,17 @@
 //! which is the same virtual-work sum (eq. 3.45–3.47), only cheaper. The tests check that both paths
 //! agree.
 //!
+//! # A load on the platform
+//!
+//! A rigid body fixed to the platform with its centre of mass away from E and a full inertia tensor
+//! ([`PlatformLoad`]) is not part of Ξ; it enters through an [`Environment`] (gravity + optional load)
+//! passed to the `*_with_env` functions ([`inverse_dynamics_with_env`], [`forward_dynamics_with_env`],
+//! [`mass_matrix_with_env`], [`dynamics_terms_with_env`], [`gravity_with_env`], [`rk4_step_with_env`],
+//! and the energies). The plain and `*_with_gravity` functions are these with no load. The load's
+//! terms (offset gravity moment m c × g, inertial wrench with m(Ë + ω̇ × c + ω × (ω × c)), the
+//! parallel-axis inertia rotated to the base frame, the gyroscopic ω × I_c ω) are derived in the
+//! `load` module's docs and in `docs/dynamics.md`.
+//!
 //! # Friction
 //!
 //! Joint friction τ_f,i = f_c,i sign(θ̇_i) + f_v,i θ̇_i (eq. 3.48, 6.4) with sign(0) = 0, and
@@ -48,19 +59,24 @@
 //! functions use the thesis's sign.
 
 mod integration;
+mod load;
 mod matrices;
 mod newton_euler;
 
-pub use self::integration::{rk4_step, rk4_step_with_gravity, ModelState};
+pub use self::integration::{
+    rk4_step, rk4_step_by, rk4_step_with_env, rk4_step_with_gravity, ModelState,
+};
+pub use self::load::{Environment, PlatformLoad};
 pub use self::matrices::{
-    coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_gravity, friction,
-    friction_twist, gravity, gravity_twist, gravity_with, kinetic_energy, mass_matrix,
-    mass_matrix_twist, potential_energy_with_gravity, DynamicsTerms,
+    coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_env, dynamics_terms_with_gravity,
+    friction, friction_twist, gravity, gravity_twist, gravity_with, gravity_with_env,
+    kinetic_energy, kinetic_energy_with_env, mass_matrix, mass_matrix_twist, mass_matrix_with_env,
+    potential_energy_with_env, potential_energy_with_gravity, DynamicsTerms,
 };
 pub(crate) use self::newton_euler::leg_acc;
 pub use self::newton_euler::{
-    forward_dynamics, forward_dynamics_with_gravity, inverse_dynamics,
-    inverse_dynamics_with_gravity,
+    forward_dynamics, forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
+    inverse_dynamics_with_env, inverse_dynamics_with_gravity,
 };
 
 use crate::error::{check_finite, Result};

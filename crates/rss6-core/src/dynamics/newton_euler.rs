@@ -1,6 +1,7 @@
 //! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
 //! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
 
+use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
 use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
 use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
@@ -212,11 +213,37 @@ pub fn inverse_dynamics_with_gravity(
     pose_ddot: &Vec6,
     g: &Vec3,
 ) -> Result<Vec6> {
+    inverse_dynamics_with_env(
+        kp,
+        dp,
+        pose,
+        pose_dot,
+        pose_ddot,
+        &Environment::with_gravity(*g),
+    )
+}
+
+/// [`inverse_dynamics`] in the environment `env`: its gravity and, if present, a load fixed to the
+/// platform (the Newton–Euler force F_L of [`crate::PlatformLoad`], mapped to the actuators through
+/// J_adᵀ like the platform's own). τ_a in N·m.
+///
+/// Errors: as [`inverse_dynamics`]; [`CoreError::NonFinite`] for a non-finite gravity or load.
+pub fn inverse_dynamics_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    env: &Environment,
+) -> Result<Vec6> {
     check_state(pose_dot, pose_ddot)?;
-    check_finite(g.as_slice())?;
+    env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
     let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
-    let (f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, g)?;
+    let (mut f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, &env.gravity)?;
+    if let Some(load) = &env.load {
+        f += LoadAt::new(load, &geom.rot).force(&v, &v_dot, &env.gravity);
+    }
     Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
 }
 
@@ -244,14 +271,43 @@ pub fn forward_dynamics_with_gravity(
     tau_a: &Vec6,
     g: &Vec3,
 ) -> Result<Vec6> {
+    forward_dynamics_with_env(
+        kp,
+        dp,
+        pose,
+        pose_dot,
+        tau_a,
+        &Environment::with_gravity(*g),
+    )
+}
+
+/// [`forward_dynamics`] in the environment `env`: its gravity and, if present, a load fixed to the
+/// platform (its mass matrix M_L enters M, its velocity and gravity forces the bias). χ̈ in m/s²,
+/// rad/s².
+///
+/// Errors: as [`forward_dynamics`]; [`CoreError::NonFinite`] for a non-finite gravity or load;
+/// `Singular(Matrix)` if a load that is not positive semi-definite makes M indefinite.
+pub fn forward_dynamics_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+) -> Result<Vec6> {
     check_state(pose_dot, tau_a)?;
-    check_finite(g.as_slice())?;
+    env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
-    let m = twist_mass_matrix(&geom, dp)?;
+    let mut m = twist_mass_matrix(&geom, dp)?;
     // Velocity and gravity forces at zero twist acceleration.
-    let (bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), g)?;
+    let (mut bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
+    if let Some(load) = &env.load {
+        let l = LoadAt::new(load, &geom.rot);
+        l.add_mass(&mut m);
+        bias += l.force(&v, &Vec6::zeros(), &env.gravity);
+    }
     let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
     let v_dot = m
         .cholesky()

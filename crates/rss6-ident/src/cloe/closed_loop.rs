@@ -30,7 +30,9 @@
 //! forward dynamics with the Coulomb signs frozen at the stage (Coulomb friction enters as a known
 //! torque, so no step can cross sign(θ̇) = 0 and the difference is the derivative almost
 //! everywhere): 24 forward-dynamics calls per stage. In χ̇ the forward dynamics are quadratic, so
-//! that difference is exact whatever the step; in χ the step is 10⁻⁶ (truncation ~10⁻¹²). This is
+//! that difference is exact whatever the step; in χ the step is 10⁻⁶ (truncation ~10⁻¹²). With
+//! smoothed friction (`friction_smoothing` = ε > 0) the Coulomb torque f_c tanh(θ̇/ε) is part of
+//! the differenced function and the χ̇ step is 10⁻⁶ too. This is
 //! the dominant cost (see `benches/examples/cloe_cost.rs`); analytic state Jacobians in rss6-core
 //! would remove it. Sign changes of θ̇ inside a step and torque saturation are treated as the
 //! discrete loop treats them: the derivative of sign is 0, of a saturated torque 0.
@@ -88,6 +90,7 @@ struct Lean<'a> {
     // Drive PID.
     integral: [f64; LEGS],
     prev_error: [f64; LEGS],
+    prev_derivative: [f64; LEGS],
     primed: bool,
     // Visual PID.
     bias: Vec6,
@@ -109,6 +112,7 @@ struct SensState {
     theta_meas: Sens,
     integral: Sens,
     prev_error: Sens,
+    prev_derivative: Sens,
     command: Sens,
     v_integral: Sens,
     last_frame: Option<Sens>,
@@ -123,6 +127,7 @@ impl SensState {
             theta_meas: z(),
             integral: z(),
             prev_error: z(),
+            prev_derivative: z(),
             command: z(),
             v_integral: z(),
             last_frame: None,
@@ -141,9 +146,13 @@ struct Stage {
 
 const EPS_CLOCK: f64 = 1e-9;
 
+/// Index of f_c,1 in Ξ (after the 13 bodies' [m, I_x, I_y, I_z]).
+const COULOMB: usize = 4 * (1 + 2 * LEGS);
+
 impl<'a> Lean<'a> {
     fn new(cfg: &'a LoopConfig, a: &LoopParams, columns: Option<Vec<usize>>) -> Result<Self> {
         let theta = ik(&cfg.kp, &cfg.start)?;
+        check_friction_stiffness(cfg, &a.dynamics)?;
         let mut dp_nc = a.dynamics;
         dp_nc.coulomb = [0.0; LEGS];
         let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
@@ -162,6 +171,7 @@ impl<'a> Lean<'a> {
             theta_meas,
             integral: [0.0; LEGS],
             prev_error: [0.0; LEGS],
+            prev_derivative: [0.0; LEGS],
             primed: false,
             bias,
             v_integral: Vec6::zeros(),
@@ -329,39 +339,51 @@ impl<'a> Lean<'a> {
         Ok(())
     }
 
-    /// Eq. 5.5 on the held potentiometer angle, exactly as `rss6_ctrl::JointPid::step`. Returns the
-    /// torque and its sensitivity.
+    /// Eq. 5.5 on the held potentiometer angle, exactly as `rss6_ctrl::JointPid::step` (with its
+    /// derivative filter when `derivative_filter` > 0). Returns the torque and its sensitivity.
     fn drive_pid(&mut self) -> (Vec6, Option<Sens>) {
         let dt = self.cfg.dt;
         let lim = self.cfg.torque_limit;
+        let t_f = self.cfg.derivative_filter;
         let gains = self.pid;
         let mut tau = Vec6::zeros();
         let mut s_tau = self.sens.as_ref().map(|s| Sens::zeros(s.columns.len()));
         for i in 0..LEGS {
             let e = self.command[i] - self.theta_meas[i];
-            let de = if self.primed {
-                (e - self.prev_error[i]) / dt
-            } else {
-                0.0
+            let de = e - self.prev_error[i];
+            // D_k = l_d Δe/dt, or (T_f D_{k−1} + l_d Δe)/(T_f + dt) filtered; 0 on the first tick.
+            let d = match (self.primed, t_f > 0.0) {
+                (false, _) => 0.0,
+                (true, false) => gains.ld * (de / dt),
+                (true, true) => (t_f * self.prev_derivative[i] + gains.ld * de) / (t_f + dt),
             };
             let integral = self.integral[i] + e * dt;
-            let raw = gains.lp * e + gains.li * integral + gains.ld * de;
+            let raw = gains.lp * e + gains.li * integral + d;
             let out = raw.clamp(-lim, lim);
             if let (Some(s), Some(st)) = (self.sens.as_mut(), s_tau.as_mut()) {
                 let s_e = s.command.row(i) - s.theta_meas.row(i);
-                let s_de = if self.primed {
-                    (&s_e - s.prev_error.row(i)) / dt
-                } else {
-                    s_e.clone() * 0.0
+                let s_de = &s_e - s.prev_error.row(i);
+                // ∂D: the same recursion, plus D's explicit dependence on l_d.
+                let mut s_d = match (self.primed, t_f > 0.0) {
+                    (false, _) => s_e.clone() * 0.0,
+                    (true, false) => &s_de * (gains.ld / dt),
+                    (true, true) => {
+                        (s.prev_derivative.row(i) * t_f + &s_de * gains.ld) / (t_f + dt)
+                    }
                 };
+                if self.primed {
+                    let dd_dld = if t_f > 0.0 { de / (t_f + dt) } else { de / dt };
+                    if let Some(c) = s.columns.iter().position(|&col| col == N_DYN + 2) {
+                        s_d[c] += dd_dld;
+                    }
+                }
                 let s_int = s.integral.row(i) + &s_e * dt;
                 if raw == out {
-                    let mut row = &s_e * gains.lp + &s_int * gains.li + &s_de * gains.ld;
+                    let mut row = &s_e * gains.lp + &s_int * gains.li + &s_d;
                     for (c, &col) in s.columns.iter().enumerate() {
                         match col {
                             N_DYN => row[c] += e,
                             x if x == N_DYN + 1 => row[c] += integral,
-                            x if x == N_DYN + 2 => row[c] += de,
                             _ => {}
                         }
                     }
@@ -369,11 +391,13 @@ impl<'a> Lean<'a> {
                     s.integral.set_row(i, &s_int);
                 }
                 s.prev_error.set_row(i, &s_e);
+                s.prev_derivative.set_row(i, &s_d);
             }
             if raw == out {
                 self.integral[i] = integral;
             }
             self.prev_error[i] = e;
+            self.prev_derivative[i] = d;
             tau[i] = out;
         }
         self.primed = true;
@@ -391,8 +415,21 @@ impl<'a> Lean<'a> {
     ) -> Result<Stage> {
         let cfg = self.cfg;
         let g = &cfg.gravity;
-        let a = forward_dynamics_with_gravity(&cfg.kp, &self.dp, p, v, tau, g)
-            .map_err(|e| sim_err(t, e))?;
+        let eps = cfg.friction_smoothing;
+        // The Coulomb torque f_c tanh(θ̇/ε) (smoothed) as a known joint torque on the friction-free
+        // model, exactly as `rss6_sim::ModelSim` integrates it.
+        let smooth_tau = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
+            let theta_dot = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))? * vv;
+            Ok(Vec6::from_fn(|i, _| {
+                tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh()
+            }))
+        };
+        let a = if eps > 0.0 {
+            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, p, v, &smooth_tau(p, v)?, g)
+        } else {
+            forward_dynamics_with_gravity(&cfg.kp, &self.dp, p, v, tau, g)
+        }
+        .map_err(|e| sim_err(t, e))?;
         let Some(s) = self.sens.as_ref() else {
             return Ok(Stage { a, jac: None });
         };
@@ -400,7 +437,12 @@ impl<'a> Lean<'a> {
         let theta_dot = j_theta * v;
         let tau_eff = Vec6::from_fn(|i, _| tau[i] - self.dp.coulomb[i] * sign0(theta_dot[i]));
         let f = |pp: &Vec6, vv: &Vec6| {
-            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, pp, vv, &tau_eff, g)
+            let tau_pv = if eps > 0.0 {
+                smooth_tau(pp, vv)?
+            } else {
+                tau_eff
+            };
+            forward_dynamics_with_gravity(&cfg.kp, &self.dp_nc, pp, vv, &tau_pv, g)
                 .map_err(|e| sim_err(t, e))
         };
         let (fp, fv) = match frozen {
@@ -409,15 +451,15 @@ impl<'a> Lean<'a> {
                 let mut fp = Mat6::zeros();
                 let mut fv = Mat6::zeros();
                 const HP: f64 = 1e-6;
-                const HV: f64 = 1e-2;
+                let hv = if eps > 0.0 { 1e-6 } else { 1e-2 };
                 for k in 0..6 {
                     let (mut pp, mut pm) = (*p, *p);
                     pp[k] += HP;
                     pm[k] -= HP;
                     fp.set_column(k, &((f(&pp, v)? - f(&pm, v)?) / (pp[k] - pm[k])));
                     let (mut vp, mut vm) = (*v, *v);
-                    vp[k] += HV;
-                    vm[k] -= HV;
+                    vp[k] += hv;
+                    vm[k] -= hv;
                     fv.set_column(k, &((f(p, &vp)? - f(p, &vm)?) / (vp[k] - vm[k])));
                 }
                 (fp, fv)
@@ -432,7 +474,11 @@ impl<'a> Lean<'a> {
         let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
         let mut fxi = Sens::zeros(s.columns.len());
         for (c, &col) in s.columns.iter().enumerate() {
-            if col < N_DYN {
+            if eps > 0.0 && (COULOMB..COULOMB + LEGS).contains(&col) {
+                // ∂χ̈/∂f_c,i = −M̃⁻¹J_θᵀ e_i tanh(θ̇_i/ε).
+                let i = col - COULOMB;
+                fxi.set_column(c, &(-(ft.column(i) * (theta_dot[i] / eps).tanh())));
+            } else if col < N_DYN {
                 fxi.set_column(c, &(-(ft * gamma.column(col))));
             }
         }
@@ -496,6 +542,50 @@ impl<'a> Lean<'a> {
         }
         Ok(())
     }
+}
+
+/// Largest λ·dt of the friction's linearisation M_θ⁻¹ diag(f_c/ε + f_v) that RK4 (stable on the
+/// real axis up to 2.785) is allowed at the start pose: 2.0 leaves room for the drive's damping.
+const MAX_FRICTION_STIFFNESS: f64 = 2.0;
+
+/// With smoothed friction, f_c tanh(θ̇/ε) acts like a viscous f_c/ε near θ̇ = 0; integrated
+/// explicitly at `dt` it must stay inside RK4's stability region, or the loop chatters and χ_s
+/// stops being a smooth function of A (measured: ε = 0.1 rad/s with Table 5.2's friction, λ·dt ≈ 3,
+/// leaves LM stuck). The check is at the start pose, where the run rests.
+fn check_friction_stiffness(cfg: &LoopConfig, dp: &DynamicParams) -> Result<()> {
+    let eps = cfg.friction_smoothing;
+    let m = mass_matrix(&cfg.kp, dp, &cfg.start)?;
+    let j = jacobian_theta(&cfg.kp, &cfg.start)?;
+    let Some(m_inv) = m.try_inverse() else {
+        return Err(IdentError::InvalidInput(
+            "the mass matrix at the start pose is singular".into(),
+        ));
+    };
+    // M_θ⁻¹ = J_θ M̃⁻¹ J_θᵀ; the eigenvalues of M_θ⁻¹ D are those of D^½ M_θ⁻¹ D^½ (symmetric).
+    let d = Vec6::from_fn(|i, _| {
+        let c = if eps > 0.0 { dp.coulomb[i] / eps } else { 0.0 };
+        (c + dp.viscous[i]).max(0.0).sqrt()
+    });
+    let s = Mat6::from_diagonal(&d) * (j * m_inv * j.transpose()) * Mat6::from_diagonal(&d);
+    let s = (s + s.transpose()) * 0.5;
+    let lambda = s.symmetric_eigenvalues().max();
+    let stiff = lambda * cfg.dt;
+    if stiff.is_nan() || stiff > MAX_FRICTION_STIFFNESS {
+        let need = if eps > 0.0 {
+            format!(
+                "; with this friction ε must be at least ≈ {:.3} rad/s",
+                eps * stiff / MAX_FRICTION_STIFFNESS
+            )
+        } else {
+            String::new()
+        };
+        return Err(IdentError::InvalidInput(format!(
+            "joint friction too stiff for dt = {} s: λ·dt = {stiff:.2} > {MAX_FRICTION_STIFFNESS} \
+             (friction smoothing ε = {eps} rad/s){need}",
+            cfg.dt
+        )));
+    }
+    Ok(())
 }
 
 /// The drive-convention angle of the noise-free potentiometer reading of θ (eq. 4.2 twice).

@@ -24,6 +24,12 @@ pub struct LoopConfig {
     pub dt: f64,
     /// Drive torque limit (N·m).
     pub torque_limit: f64,
+    /// Time constant T_f (s) of the drive's derivative filter (`JointPid::with_derivative_filter`);
+    /// 0 = unfiltered (eq. 5.5 as printed).
+    pub derivative_filter: f64,
+    /// Velocity scale ε (rad/s) of the model's Coulomb friction f_c tanh(θ̇/ε); 0 = f_c sign(θ̇)
+    /// (eq. 3.48 as printed).
+    pub friction_smoothing: f64,
     /// Potentiometer sampling period (s), 2e-3.
     pub pot_period: f64,
     /// Camera frame period (s), 0.033.
@@ -54,7 +60,8 @@ pub enum StateJacobians {
 
 impl LoopConfig {
     /// The thesis's loop on `kp` from rest at `start` for `duration` s: nominal drive convention,
-    /// thesis outer gains, 1 kHz, 500 Hz potentiometers, 0.033 s frames without latency, 30 N·m.
+    /// thesis outer gains, 1 kHz, 500 Hz potentiometers, 0.033 s frames without latency, 30 N·m,
+    /// unfiltered derivative, sign Coulomb friction.
     pub fn new(kp: KinematicParams, start: Vec6, duration: f64) -> Self {
         LoopConfig {
             kp,
@@ -62,6 +69,8 @@ impl LoopConfig {
             gains: CartesianPidGains::thesis(),
             dt: 1e-3,
             torque_limit: 30.0,
+            derivative_filter: 0.0,
+            friction_smoothing: 0.0,
             pot_period: 2e-3,
             camera_period: 0.033,
             camera_latency: 0.0,
@@ -87,11 +96,17 @@ impl LoopConfig {
                 )));
             }
         }
-        if !(self.camera_latency.is_finite() && self.camera_latency >= 0.0) {
-            return Err(IdentError::InvalidInput(format!(
-                "camera latency must be finite and >= 0, got {}",
-                self.camera_latency
-            )));
+        let non_negative = [
+            ("camera_latency", self.camera_latency),
+            ("derivative_filter", self.derivative_filter),
+            ("friction_smoothing", self.friction_smoothing),
+        ];
+        for (name, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(IdentError::InvalidInput(format!(
+                    "{name} must be finite and >= 0, got {v}"
+                )));
+            }
         }
         self.kp.validate()?;
         self.drive.validate()?;

@@ -8,9 +8,12 @@
 //! uses R_ii < 10⁻³ on its regressor; on unit-norm columns the default 10⁻³ is the same rule made
 //! unit-free. Unidentifiable entries stay at the guess (the prior) and are reported by name.
 //!
-//! Stopping rules (eq. 5.9): after an accepted step, converged when the relative change of Φ is at
+//! Stopping rules (eq. 5.9): after an accepted step, converged when Φ dropped by less than 10⁻²
+//! residual variances (Φ/(N − p)) at two accepted steps in a row — a change no test on the data
+//! could see, whatever the size of Φ (with a model mismatch Φ/(N − p) ≫ 1, and LM then creeps
+//! along flat directions for many iterations) — or when the relative change of Φ is at
 //! most `tol_cost` **and** every estimated quantity moved by at most `tol_step` relative (or by
-//! less than 1 % of its predicted standard deviation: with noise, poorly identified quantities
+//! less than 10 % of its predicted standard deviation: with noise, poorly identified quantities
 //! drift along flat directions without changing Φ); also
 //! converged when no damping (up to λ = 10¹²) lowers Φ and the residual is orthogonal to every
 //! Jacobian column within `tol_gradient` (or Φ is below 10⁻²⁰ per residual: noise-free data fitted
@@ -66,6 +69,13 @@ pub struct CloeOptions {
     /// When no step lowers Φ: converged if every |cos| between the residual and a Jacobian column
     /// is at most this (first-order optimality), else [`IdentError::NotConverged`].
     pub tol_gradient: f64,
+    /// Standard deviation of a Gaussian prior on every estimated log-parameter, centred at the
+    /// guess (`Some(1.0)`: a factor e). It adds Σ((ψ − ψ_guess)/σ_prior)² to Φ, so a quantity the
+    /// run hardly sees stays near its prior instead of drifting towards 0 or ∞ along a flat
+    /// direction of the noisy cost; a well-identified one (σ ≪ σ_prior) moves by a fraction
+    /// (σ/σ_prior)² of its distance to the guess. `None`: the pure output error of eq. 5.7
+    /// (noise-free checks).
+    pub prior_log_std: Option<f64>,
 }
 
 impl Default for CloeOptions {
@@ -82,6 +92,7 @@ impl Default for CloeOptions {
             max_log_step: 0.5,
             tol_gradient: 1e-4,
             per_tick_jacobians: false,
+            prior_log_std: Some(1.0),
         }
     }
 }
@@ -105,11 +116,11 @@ pub struct CloeResult {
     pub rms_before: Vec6,
     /// RMS of χ_m − χ_s per axis at the estimate (m, rad).
     pub rms_after: Vec6,
-    /// Φ at the start and after every accepted step.
+    /// Φ (with the prior's term, if any) at the start and after every accepted step.
     pub cost_history: Vec<f64>,
     /// Jacobian evaluations (LM iterations).
     pub iterations: usize,
-    /// Φ/(N − p) at the estimate: ≈ 1 when the residual is the camera noise of `noise`; well
+    /// Φ/(N − p) at the estimate (the output error alone, without the prior's term): ≈ 1 when the residual is the camera noise of `noise`; well
     /// above 1 means a model discrepancy (or a minimum the non-smooth loop kept LM from leaving).
     pub reduced_chi2: f64,
     /// Simulations without sensitivities (rejected trial steps included).
@@ -223,6 +234,16 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
     };
 
     let mut psi: Vec<f64> = cons.psi(guess)?.to_vec();
+    let psi_prior = psi.clone();
+    let prior_w = match options.prior_log_std {
+        None => 0.0,
+        Some(s) if s.is_finite() && s > 0.0 => 1.0 / s,
+        Some(s) => {
+            return Err(IdentError::InvalidInput(format!(
+                "the prior's log-std must be finite and > 0, got {s}"
+            )))
+        }
+    };
     let mut cur = evaluate_with(&psi, true, false, &mut sims)?;
     let rms_before = cur.rms;
     // Identifiability at the guess.
@@ -263,19 +284,41 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         .map(|k| names[k].clone())
         .collect();
 
+    // The prior as extra residual rows √w(ψ_guess − ψ) with unit-weight Jacobian rows.
+    let prior_cost = |psi: &[f64]| -> f64 {
+        active
+            .iter()
+            .map(|&j| (prior_w * (psi[j] - psi_prior[j])).powi(2))
+            .sum()
+    };
+    let augment = |g: &DMatrix<f64>, r: &DVector<f64>, psi: &[f64]| {
+        let (n, p) = (g.nrows(), active.len());
+        let extra = if prior_w > 0.0 { p } else { 0 };
+        let mut ga = DMatrix::zeros(n + extra, p);
+        ga.rows_mut(0, n).copy_from(&g.select_columns(&active));
+        let mut ra = DVector::zeros(n + extra);
+        ra.rows_mut(0, n).copy_from(r);
+        for (k, &j) in active.iter().enumerate().take(extra) {
+            ga[(n + k, k)] = prior_w;
+            ra[n + k] = prior_w * (psi_prior[j] - psi[j]);
+        }
+        (ga, ra)
+    };
     let mut lambda = options.lambda0;
-    let mut history = vec![cur.cost];
+    let mut history = vec![cur.cost + prior_cost(&psi)];
     let mut iterations = 1usize;
     let mut converged = false;
-    let mut stopped = !progress(0, cur.cost, &psi);
+    let mut previous_invisible = false;
+    let mut stopped = !progress(0, history[0], &psi);
     'outer: while iterations <= options.max_iterations && !stopped {
         let g = cur
             .g
             .as_ref()
             .ok_or_else(|| IdentError::InvalidInput("missing sensitivities".into()))?;
-        let ga = g.select_columns(&active);
+        let (ga, ra) = augment(g, &cur.residual, &psi);
+        let cur_total = cur.cost + prior_cost(&psi);
         let gtg = ga.tr_mul(&ga);
-        let gtr = ga.tr_mul(&cur.residual);
+        let gtr = ga.tr_mul(&ra);
         loop {
             // Marquardt's scaling diag(GᵀG), floored so that nearly flat directions are damped too.
             let top = (0..active.len()).map(|k| gtg[(k, k)]).fold(0.0, f64::max);
@@ -303,27 +346,35 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
             let rel_step = step.iter().map(|d| d.exp_m1().abs()).fold(0.0, f64::max);
             let next = evaluate_with(&trial, false, false, &mut sims);
             match next {
-                Ok(e) if e.cost < cur.cost => {
-                    let rel_cost = (cur.cost - e.cost) / cur.cost.max(f64::MIN_POSITIVE);
+                Ok(e) if e.cost + prior_cost(&trial) < cur_total => {
+                    let total = e.cost + prior_cost(&trial);
+                    let rel_cost = (cur_total - total) / cur_total.max(f64::MIN_POSITIVE);
                     psi = trial;
-                    history.push(e.cost);
-                    if !progress(iterations, e.cost, &psi) {
+                    history.push(total);
+                    if !progress(iterations, total, &psi) {
                         stopped = true;
                         break 'outer;
                     }
                     lambda = (lambda / 10.0).max(1e-12);
-                    // tol_2 of eq. 5.9, or a step below 1 % of every predicted σ (poorly
+                    // tol_2 of eq. 5.9, or a step below 10 % of every predicted σ (poorly
                     // identified quantities drift along flat directions without any effect).
+                    let dof = (cur.residual.len() as f64 - active.len() as f64).max(1.0);
+                    // Φ's drop in units of the residual variance: below 10⁻² it is statistically
+                    // invisible (a likelihood ratio of e^0.005), whatever Φ's size.
+                    let chi2_drop = (cur_total - total) / (e.cost / dof).max(f64::MIN_POSITIVE);
                     let sigma_small = {
-                        let dof = (ga.nrows() as f64 - active.len() as f64).max(1.0);
                         gtg.clone().cholesky().is_some_and(|c| {
                             let inv = c.inverse();
-                            (0..active.len()).all(|k| {
-                                step[k].abs() <= 1e-2 * (e.cost / dof * inv[(k, k)]).sqrt()
-                            })
+                            (0..active.len())
+                                .all(|k| step[k].abs() <= 0.1 * (e.cost / dof * inv[(k, k)]).sqrt())
                         })
                     };
-                    if rel_cost <= options.tol_cost && (rel_step <= options.tol_step || sigma_small)
+                    let invisible = chi2_drop <= 1e-2;
+                    let settled = invisible && previous_invisible;
+                    previous_invisible = invisible;
+                    if settled
+                        || (rel_cost <= options.tol_cost
+                            && (rel_step <= options.tol_step || sigma_small))
                     {
                         cur = evaluate_with(&psi, true, false, &mut sims)?;
                         converged = true;
@@ -334,7 +385,10 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                         cur = evaluate_with(&psi, true, false, &mut sims)?;
                         break 'outer;
                     }
-                    cur = evaluate_with(&psi, true, options.per_tick_jacobians, &mut sims)?;
+                    // Near the minimum the per-tick approximation's error (≈ 10⁻³) would make
+                    // convergence linear: exact sensitivities once Φ changes by < 1 %.
+                    let fast = options.per_tick_jacobians && rel_cost > 1e-2;
+                    cur = evaluate_with(&psi, true, fast, &mut sims)?;
                     continue 'outer;
                 }
                 _ => {
@@ -342,7 +396,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                     if lambda > 1e12 {
                         // No step lowers Φ: a minimum to the precision of Φ if the residual is
                         // orthogonal to every column (first-order optimality), else a failure.
-                        converged = optimal(&ga, &cur.residual, options.tol_gradient)
+                        converged = optimal(&ga, &ra, options.tol_gradient)
                             || cur.cost <= 1e-20 * cur.residual.len() as f64;
                         break 'outer;
                     }
@@ -364,8 +418,9 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         .g
         .as_ref()
         .ok_or_else(|| IdentError::InvalidInput("missing sensitivities".into()))?;
-    let ga = g.select_columns(&active);
-    let dof = (ga.nrows() as f64 - active.len() as f64).max(1.0);
+    let n_data = g.nrows();
+    let (ga, _) = augment(g, &cur.residual, &psi);
+    let dof = (n_data as f64 - active.len() as f64).max(1.0);
     let sigma2 = cur.cost / dof;
     let relative_std: Vec<f64> = match ga.tr_mul(&ga).cholesky() {
         Some(c) => {
