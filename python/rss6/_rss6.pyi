@@ -331,6 +331,8 @@ class _SimBase:
         solver_iterations: int | None = None,
         potentiometer_noise: float | None = None,
         pixel_noise: float | None = None,
+        drive_derivative_filter: float = 0.0,
+        friction_smoothing: float = 0.0,
     ) -> Self: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
@@ -583,6 +585,8 @@ def simulate_identification(
     torque_limit: float = 30.0,
     camera_latency: float = 0.0,
     dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
 ) -> tuple[_F64, _F64, int]: ...
 def cloe_identify(
     t: ArrayLike,
@@ -600,12 +604,15 @@ def cloe_identify(
     torque_limit: float = 30.0,
     camera_latency: float = 0.0,
     dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
     noise: tuple[float, float] | None = None,
     per_tick_jacobians: bool = False,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-5,
     identifiability_threshold: float = 1e-3,
     poor_std: float = 0.1,
+    prior_log_std: float = 1.0,
     progress: Callable[[int, float], Any] | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...

@@ -316,6 +316,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         seed=args.seed,
         plant=args.plant,
         progress=lambda total, desc: _progress(total, desc, quiet),
+        as_printed=args.as_printed,
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
@@ -476,6 +477,12 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("auto", "rapier", "model"),
         default="auto",
         help="the simulated robot: rapier plant (default when built) or the analytic-model twin",
+    )
+    i.add_argument(
+        "--as-printed",
+        action="store_true",
+        help="the loop as the thesis prints it: unfiltered drive derivative (eq. 5.5) and sign "
+        "Coulomb friction in the model (default: 5 ms derivative filter, tanh friction)",
     )
     i.add_argument("--quiet", action="store_true", help="no progress bars or report on stdout")
     i.set_defaults(func=cmd_identify)

@@ -397,11 +397,14 @@ def collect(
 @dataclass(frozen=True)
 class LoopModel:
     """What the simulated loop assumes besides A: the kinematics ``kp``, the drive's ``torque_limit``
-    (N·m), the camera latency (s)."""
+    (N·m), the camera latency (s), the drive's ``derivative_filter`` T_f (s) and the model's
+    Coulomb ``friction_smoothing`` ε (rad/s; 0 = sign)."""
 
     kp: _rss6.KinematicParams
     torque_limit: float = 30.0
     camera_latency: float = 0.0
+    derivative_filter: float = 0.0
+    friction_smoothing: float = 0.0
 
 
 def simulate(
@@ -414,9 +417,12 @@ def simulate(
     torque_limit: float = 30.0,
     camera_latency: float = 0.0,
     dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
 ) -> F64:
     """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
-    Fig. 5.1 following ``excitation`` from rest at its start: the model's camera frames at ``times``
+    Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
+    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed): the model's camera frames at ``times``
     (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
     otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
@@ -433,6 +439,8 @@ def simulate(
         torque_limit=torque_limit,
         camera_latency=camera_latency,
         dt=dt,
+        derivative_filter=derivative_filter,
+        friction_smoothing=friction_smoothing,
     )
     ts = np.asarray(ts)
     k = np.clip(np.searchsorted(ts, tt), 0, max(ts.size - 1, 0))
@@ -494,21 +502,28 @@ def cloe(
     progress: Callable[[int, float], Any] | None = None,
     torque_limit: float = 30.0,
     camera_latency: float = 0.0,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
     noise: tuple[float, float] | None = None,
     per_tick_jacobians: bool = False,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-5,
+    prior_log_std: float | None = 1.0,
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
-    simulated loop (model kinematics ``kp``, ``torque_limit`` N·m, ``camera_latency`` s) and its exact
-    sensitivities.
+    simulated loop (model kinematics ``kp``, ``torque_limit`` N·m, ``camera_latency`` s, the drive's
+    ``derivative_filter`` T_f s and the model's Coulomb ``friction_smoothing`` ε rad/s — 0: as printed,
+    non-smooth) and its exact sensitivities.
 
     ``parameters``: ``"base"`` estimates every quantity the data identify (QR with column pivoting
     at the guess, relative threshold 10⁻³), a list of names (:func:`parameter_names`) only those
     (the others stay at the guess); ``consistent``: the estimator works on logs of physical quantities,
     so every iterate is a physical robot (the only parametrisation implemented: ``False`` is refused).
     ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1).
+    ``prior_log_std``: σ of a Gaussian prior on every estimated log-quantity centred at the guess
+    (keeps quantities the run hardly sees near it); ``None``: the pure output error of eq. 5.7.
+    ``cost_history`` includes the prior's term.
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
@@ -552,10 +567,13 @@ def cloe(
         torque_limit=torque_limit,
         camera_latency=camera_latency,
         dt=data.dt,
+        derivative_filter=derivative_filter,
+        friction_smoothing=friction_smoothing,
         noise=noise,
         per_tick_jacobians=per_tick_jacobians,
         tol_cost=tol_cost,
         tol_step=tol_step,
+        prior_log_std=0.0 if prior_log_std is None else float(prior_log_std),
         progress=progress,
     )
     lp, li, ld = r["pid"]
@@ -573,7 +591,13 @@ def cloe(
         reduced_chi2=float(r["reduced_chi2"]),
         simulations=int(r["simulations"]),
         guess=(dp_guess, pid),
-        model=LoopModel(kp=kp, torque_limit=torque_limit, camera_latency=camera_latency),
+        model=LoopModel(
+            kp=kp,
+            torque_limit=torque_limit,
+            camera_latency=camera_latency,
+            derivative_filter=derivative_filter,
+            friction_smoothing=friction_smoothing,
+        ),
     )
 
 
@@ -661,6 +685,8 @@ def validate(
                 torque_limit=m.torque_limit,
                 camera_latency=m.camera_latency,
                 dt=d.dt,
+                derivative_filter=m.derivative_filter,
+                friction_smoothing=m.friction_smoothing,
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

@@ -34,6 +34,11 @@ __all__ = ["IdentifyReport", "run"]
 INITIAL_FRICTION = (0.1, 0.1)
 #: Drive gains of the initial model (rss6's tuned gains, PidGains::tuned).
 INITIAL_PID = (400.0, 2000.0, 4.0)
+#: Time constant (s) of the drive's derivative filter, on the plant and in the model (as in
+#: rss6-ident's identification_study example).
+DRIVE_DERIVATIVE_FILTER = 5e-3
+#: ε (rad/s) of the model's smoothed Coulomb friction f_c tanh(θ̇/ε) (ibid.).
+FRICTION_SMOOTHING = 0.5
 
 _AXES = ("x", "y", "z", "α", "β", "γ")
 
@@ -78,6 +83,13 @@ def _thesis_columns() -> tuple[list[float], list[float]]:
     return initial, ident
 
 
+def _loop_text(smooth: dict[str, float]) -> str:
+    t_f, eps = smooth["derivative_filter"], smooth["friction_smoothing"]
+    if t_f == 0 and eps == 0:
+        return "loop as printed: unfiltered drive derivative, sign friction"
+    return f"drive derivative filter {1e3 * t_f:g} ms, model friction tanh(θ̇/{eps:g} rad/s)"
+
+
 @dataclass
 class IdentifyReport:
     """Everything ``rss6 identify --simulate`` found and wrote."""
@@ -101,6 +113,7 @@ class IdentifyReport:
     validation: identify.Validation | None
     error: str = ""
     run_failed: str = ""
+    loop: str = ""
     variation: dict[str, float] | None = None
     reidentified: tuple[int, int] = (0, 0)
     files: list[Path] = field(default_factory=list)
@@ -229,7 +242,7 @@ class IdentifyReport:
         hist = " → ".join(f"{c:.4g}" for c in self.cost_history)
         return "\n".join(
             [
-                f"rss6 identify --simulate on the {self.plant} (truth: table_5_2_truth)",
+                f"rss6 identify --simulate on the {self.plant} (truth: table_5_2_truth; {self.loop})",
                 (
                     f"1. exciting trajectory: {e.coefficients.shape[1] // 2} harmonics of "
                     f"{e.f0} Hz, {e.duration:.1f} s, O_in {e.observability:.4g}, "
@@ -266,12 +279,15 @@ def run(
     seed: int = 0,
     plant: str = "auto",
     progress: Callable[[int, str], Any] | None = None,
+    as_printed: bool = False,
 ) -> IdentifyReport:
     """Runs the study (see the module docs) and writes its files into ``out``. ``quick``: a 2 s
     trajectory (3 harmonics of 0.5 Hz, 5 generations), 10 CLOE iterations, 2 validation trajectories;
     otherwise 10 s (5 of 0.1 Hz, 30 generations), 20 iterations, 10 trajectories. ``plant``:
     "rapier", "model" or "auto". ``progress(total, desc)`` returns a context manager with
-    ``update(n)`` (e.g. a tqdm bar) or None."""
+    ``update(n)`` (e.g. a tqdm bar) or None. The drive filters its derivative
+    (:data:`DRIVE_DERIVATIVE_FILTER`) and the model smooths Coulomb friction
+    (:data:`FRICTION_SMOOTHING`), unless ``as_printed``: eq. 5.5 unfiltered, sign friction."""
     outdir = Path(out)
     outdir.mkdir(parents=True, exist_ok=True)
     kp = rss6.KinematicParams.nominal()
@@ -282,6 +298,9 @@ def run(
     # rapier plant leave its workspace more often (docs/identification.md).
     amplitude = (0.002, 0.01) if quick else (0.001, 0.005)
     use_rapier = plant == "rapier" or (plant == "auto" and rss6.Plant is not None)
+    t_f = 0.0 if as_printed else DRIVE_DERIVATIVE_FILTER
+    eps = 0.0 if as_printed else FRICTION_SMOOTHING
+    smooth = {"derivative_filter": t_f, "friction_smoothing": eps}
 
     def bar(total: int, desc: str) -> Any:
         return None if progress is None else progress(total, desc)
@@ -314,8 +333,8 @@ def run(
 
     def make_robot() -> Any:
         if use_rapier:
-            return rss6.Plant(kp, dp_true, pid=pid_true, seed=seed)
-        return rss6.ModelSim(kp, dp_true, pid=pid_true, seed=seed)
+            return rss6.Plant(kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f)
+        return rss6.ModelSim(kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f)
 
     robot = make_robot()
     truth = robot.truth()
@@ -367,6 +386,7 @@ def run(
             rms_after=np.full(6, np.nan),
             validation=None,
             error="identification run failed",
+            loop=_loop_text(smooth),
             run_failed=f"visual-PID fault at t = {data.fault[0]:.3f} s: {data.fault[1]}",
             files=files,
             elapsed=elapsed,
@@ -383,7 +403,15 @@ def run(
     error = ""
     try:
         res = identify.cloe(
-            data, kp, dp0, pid0, max_iterations=iters, per_tick_jacobians=True, progress=step
+            data,
+            kp,
+            dp0,
+            pid0,
+            max_iterations=iters,
+            per_tick_jacobians=True,
+            progress=step,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
         )
         converged = True
         est_dp, est_pid = res.dynamics, res.pid
@@ -400,8 +428,26 @@ def run(
         hist = np.asarray(e.cost_history)  # type: ignore[attr-defined]
         its, chi2 = int(e.iterations), float("nan")  # type: ignore[attr-defined]
         identified, rel, unid = (), np.zeros(0), ()
-        chi0 = identify.simulate(kp, dp0, pid0, exc, times=data.t, dt=data.dt)
-        chi1 = identify.simulate(kp, est_dp, est_pid, exc, times=data.t, dt=data.dt)
+        chi0 = identify.simulate(
+            kp,
+            dp0,
+            pid0,
+            exc,
+            times=data.t,
+            dt=data.dt,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+        )
+        chi1 = identify.simulate(
+            kp,
+            est_dp,
+            est_pid,
+            exc,
+            times=data.t,
+            dt=data.dt,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+        )
         rms_b = np.sqrt(np.mean((data.measured - chi0) ** 2, axis=0))
         rms_a = np.sqrt(np.mean((data.measured - chi1) ** 2, axis=0))
         result = identify.IdentificationResult(
@@ -418,15 +464,33 @@ def run(
             reduced_chi2=chi2,
             simulations=0,
             guess=(dp0, pid0),
-            model=identify.LoopModel(kp=kp),
+            model=identify.LoopModel(kp=kp, derivative_filter=t_f, friction_smoothing=eps),
         )
     if b is not None:
         b.close()
     elapsed["cloe"] = time.perf_counter() - t0
 
     sims = {
-        "initial": identify.simulate(kp, dp0, pid0, exc, times=data.t, dt=data.dt),
-        "identified": identify.simulate(kp, est_dp, est_pid, exc, times=data.t, dt=data.dt),
+        "initial": identify.simulate(
+            kp,
+            dp0,
+            pid0,
+            exc,
+            times=data.t,
+            dt=data.dt,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+        ),
+        "identified": identify.simulate(
+            kp,
+            est_dp,
+            est_pid,
+            exc,
+            times=data.t,
+            dt=data.dt,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+        ),
     }
     plots.identification_fit(
         data.t,
@@ -460,7 +524,14 @@ def run(
         d1.measured,
         {
             "identified": identify.simulate(
-                kp, est_dp, est_pid, val.excitations[0], times=d1.t, dt=d1.dt
+                kp,
+                est_dp,
+                est_pid,
+                val.excitations[0],
+                times=d1.t,
+                dt=d1.dt,
+                derivative_filter=t_f,
+                friction_smoothing=eps,
             )
         },
         outdir / "fig5_9_validation.png",
@@ -477,7 +548,14 @@ def run(
     for j in good:
         try:
             r = identify.cloe(
-                val.data[j], kp, dp0, pid0, max_iterations=iters, per_tick_jacobians=True
+                val.data[j],
+                kp,
+                dp0,
+                pid0,
+                max_iterations=iters,
+                per_tick_jacobians=True,
+                derivative_filter=t_f,
+                friction_smoothing=eps,
             )
             estimates.append((r.dynamics, r.pid))
             conv += 1
@@ -515,4 +593,5 @@ def run(
         elapsed=elapsed,
         variation=var,
         reidentified=(len(good), conv),
+        loop=_loop_text(smooth),
     )

@@ -194,6 +194,7 @@ fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
 }
 
 /// The loop's configuration: `LoopConfig::new` with the given fields set.
+#[allow(clippy::too_many_arguments)]
 fn loop_config(
     kp: &PyKinematicParams,
     start: &Bound<'_, PyAny>,
@@ -201,9 +202,13 @@ fn loop_config(
     torque_limit: f64,
     camera_latency: f64,
     dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
 ) -> PyResult<LoopConfig> {
     let mut cfg = LoopConfig::new(kp.inner, vec6(start, "start")?, duration);
     cfg.torque_limit = torque_limit;
+    cfg.derivative_filter = derivative_filter;
+    cfg.friction_smoothing = friction_smoothing;
     cfg.camera_latency = camera_latency;
     cfg.dt = dt;
     Ok(cfg)
@@ -211,9 +216,11 @@ fn loop_config(
 
 /// Simulates the identification loop on the model (`kp`, `dp`, drive gains `pid` = (l_p, l_i,
 /// l_d)) from rest at `start` for `duration` s following the Fourier trajectory (`f0`,
-/// `coefficients`). Returns (frame times (F,), χ_s (F, 6), joint-ticks with the torque clamped).
+/// `coefficients`). `derivative_filter` T_f (s) of the drive's derivative and `friction_smoothing` ε
+/// (rad/s) of the model's Coulomb friction (0: as printed). Returns (frame times (F,), χ_s (F, 6),
+/// joint-ticks with the torque clamped).
 #[pyfunction]
-#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3))]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_identification<'py>(
     py: Python<'py>,
@@ -227,9 +234,20 @@ pub(crate) fn simulate_identification<'py>(
     torque_limit: f64,
     camera_latency: f64,
     dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
-    let cfg = loop_config(kp, start, duration, torque_limit, camera_latency, dt)?;
+    let cfg = loop_config(
+        kp,
+        start,
+        duration,
+        torque_limit,
+        camera_latency,
+        dt,
+        derivative_filter,
+        friction_smoothing,
+    )?;
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
@@ -243,14 +261,16 @@ pub(crate) fn simulate_identification<'py>(
 /// CLOE (eq. 5.6–5.9) of the measured frames `measured` (F, 6) at times `t` (F,) collected with the
 /// identification loop following the Fourier trajectory (`f0`, `coefficients`) from rest at
 /// `start`, from the guess (`dp_guess`, `pid_guess`). `parameters`: names to estimate (see
-/// `cloe_parameter_names`), None for every identifiable one. No convergence raises
+/// `cloe_parameter_names`), None for every identifiable one. `derivative_filter`,
+/// `friction_smoothing`: as for `simulate_identification`. `prior_log_std`: σ of the Gaussian prior
+/// on every estimated log-quantity, centred at the guess (0: none, the pure output error of eq. 5.7). No convergence raises
 /// `rss6.IdentificationError` with `iterations`, `cost_history` and the last accepted iterate
 /// `last_dynamics`, `last_pid`. The loop's model: `kp`,
 /// `torque_limit`, `camera_latency`, `dt`, run for `duration` s. `progress(iteration, cost)` after
 /// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
 /// propagates. Returns a dict (see `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, progress=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -268,12 +288,15 @@ pub(crate) fn cloe_identify<'py>(
     torque_limit: f64,
     camera_latency: f64,
     dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
     noise: Option<(f64, f64)>,
     per_tick_jacobians: bool,
     tol_cost: f64,
     tol_step: f64,
     identifiability_threshold: f64,
     poor_std: f64,
+    prior_log_std: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
@@ -285,7 +308,16 @@ pub(crate) fn cloe_identify<'py>(
         )));
     }
     let exc: Excitation = excitation(f0, coefficients)?;
-    let cfg = loop_config(kp, start, duration, torque_limit, camera_latency, dt)?;
+    let cfg = loop_config(
+        kp,
+        start,
+        duration,
+        torque_limit,
+        camera_latency,
+        dt,
+        derivative_filter,
+        friction_smoothing,
+    )?;
     let guess = LoopParams {
         dynamics: dp_guess.inner,
         pid: pid_gains(pid_guess),
@@ -298,6 +330,7 @@ pub(crate) fn cloe_identify<'py>(
         identifiability_threshold,
         poor_std,
         per_tick_jacobians,
+        prior_log_std: (prior_log_std != 0.0).then_some(prior_log_std),
         ..CloeOptions::default()
     };
     if let Some((p, a)) = noise {
