@@ -178,10 +178,9 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="CLOE does not converge on the realistic loop yet: Coulomb friction (Table 5.2 × 40) "
-    "and the 30 N·m clamp hit by the drive's derivative kick make Φ non-smooth "
-    "(docs/identification.md); the lead's derivative filter and friction smoothing target this. "
-    "Strict: remove the marker once it converges.",
+    reason="CLOE does not converge on the rapier plant in the quick run: Φ 2.67e4 → 6.02e3 in 10 "
+    "iterations on 2 s, with the drive derivative filter (5 ms) and tanh friction in the model "
+    "(docs/identification.md). Strict: remove the marker once it converges.",
 )
 def test_identify_simulate_quick_converges_on_the_plant(identify_quick):
     r, _ = identify_quick
