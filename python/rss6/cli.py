@@ -317,6 +317,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         plant=args.plant,
         progress=lambda total, desc: _progress(total, desc, quiet),
         as_printed=args.as_printed,
+        variation=not args.no_variation,
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
@@ -483,6 +484,11 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the loop as the thesis prints it: unfiltered drive derivative (eq. 5.5) and sign "
         "Coulomb friction in the model (default: 5 ms derivative filter, tanh friction)",
+    )
+    i.add_argument(
+        "--no-variation",
+        action="store_true",
+        help="skip Table 5.5 (re-identification on every validation run: most of a full run's time)",
     )
     i.add_argument("--quiet", action="store_true", help="no progress bars or report on stdout")
     i.set_defaults(func=cmd_identify)
