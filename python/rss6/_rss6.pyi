@@ -24,6 +24,9 @@ __all__ = [
     "TorqueToPosition",
     "Trajectory",
     "calibration_study",
+    "cloe_identify",
+    "cloe_parameter_names",
+    "cloe_psi",
     "collect",
     "compose_poses",
     "coriolis",
@@ -35,6 +38,7 @@ __all__ = [
     "friction",
     "gravity",
     "home_pose",
+    "identification_run",
     "ik",
     "ik_batch",
     "implicit",
@@ -51,7 +55,9 @@ __all__ = [
     "rpba",
     "run_servo",
     "select_configurations",
+    "simulate_identification",
     "stroke",
+    "table_5_2_truth_params",
     "thesis_tables",
 ]
 
@@ -325,6 +331,8 @@ class _SimBase:
         solver_iterations: int | None = None,
         potentiometer_noise: float | None = None,
         pixel_noise: float | None = None,
+        drive_derivative_filter: float = 0.0,
+        friction_smoothing: float = 0.0,
     ) -> Self: ...
     def reset(self, pose: ArrayLike) -> None: ...
     def step_joint_command(self, theta_cmd: ArrayLike) -> None: ...
@@ -552,4 +560,64 @@ class ExcitationProblem:
     def observability(self, coefficients: ArrayLike) -> tuple[float, float]: ...
 
 def excitation_at(f0: float, coefficients: ArrayLike, t: float) -> tuple[_F64, _F64, _F64]: ...
+def identification_run(
+    robot: Any,
+    f0: float,
+    coefficients: ArrayLike,
+    duration: float,
+    kp_model: KinematicParams,
+    sensor_in_base: ArrayLike,
+    target_in_effector: ArrayLike,
+    *,
+    segment: float = 1.0,
+    progress: Callable[[float, float], Any] | None = None,
+    mcap: _Path | None = None,
+) -> dict[str, Any]: ...
+def simulate_identification(
+    kp: KinematicParams,
+    dp: DynamicParams,
+    pid: tuple[float, float, float],
+    f0: float,
+    coefficients: ArrayLike,
+    *,
+    start: ArrayLike,
+    duration: float,
+    torque_limit: float = 30.0,
+    camera_latency: float = 0.0,
+    dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+) -> tuple[_F64, _F64, int]: ...
+def cloe_identify(
+    t: ArrayLike,
+    measured: ArrayLike,
+    f0: float,
+    coefficients: ArrayLike,
+    kp: KinematicParams,
+    dp_guess: DynamicParams,
+    pid_guess: tuple[float, float, float],
+    *,
+    start: ArrayLike,
+    duration: float,
+    parameters: list[str] | None = None,
+    max_iterations: int = 20,
+    torque_limit: float = 30.0,
+    camera_latency: float = 0.0,
+    dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+    noise: tuple[float, float] | None = None,
+    per_tick_jacobians: bool = False,
+    tol_cost: float = 1e-6,
+    tol_step: float = 1e-5,
+    identifiability_threshold: float = 1e-3,
+    poor_std: float = 0.1,
+    prior_log_std: float = 1.0,
+    progress: Callable[[int, float], Any] | None = None,
+) -> dict[str, Any]: ...
+def cloe_parameter_names() -> list[str]: ...
+def table_5_2_truth_params() -> tuple[DynamicParams, tuple[float, float, float]]: ...
+def cloe_psi(
+    dp: DynamicParams, pid: tuple[float, float, float], psi: list[float] | None = None
+) -> tuple[_F64, DynamicParams, tuple[float, float, float]]: ...
 def thesis_tables() -> dict[str, dict[str, Any]]: ...

@@ -8,6 +8,9 @@
                          FILE as it goes, then calibrate from the log.
 ``rss6 calibrate --from-mcap FILE``  calibrate from a logged collection (also a truncated one).
 ``rss6 track``           one tracking run (controller × trajectory) with an MCAP log.
+``rss6 identify --simulate``  dynamic identification of a simulated robot (thesis §5.6): exciting
+                         trajectory, the loop of Fig. 5.1 on the rapier plant, CLOE, Tables 5.2–5.4
+                         beside the thesis's, Figs. 5.7–5.9 and MCAP logs in ``--out``.
 """
 
 from __future__ import annotations
@@ -298,6 +301,41 @@ def cmd_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_identify(args: argparse.Namespace) -> int:
+    from rss6 import identify_sim
+
+    if not args.simulate:
+        print("rss6: error: identify needs --simulate (the only mode so far)", file=sys.stderr)
+        return 2
+    quiet = bool(args.quiet)
+    if args.plant == "rapier":
+        _check_plant("rapier")
+    report = identify_sim.run(
+        args.out,
+        quick=args.quick,
+        seed=args.seed,
+        plant=args.plant,
+        progress=lambda total, desc: _progress(total, desc, quiet),
+        as_printed=args.as_printed,
+        variation=not args.no_variation,
+    )
+    text = report.text()
+    (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
+    if not quiet:
+        print(text, flush=True)
+    if report.run_failed:
+        print(f"rss6: the identification run failed: {report.run_failed}", file=sys.stderr)
+        return 4
+    if not report.converged:
+        print(
+            f"rss6: CLOE did not converge ({report.error}); cost history "
+            f"{[round(float(c), 4) for c in report.cost_history]}",
+            file=sys.stderr,
+        )
+        return 3
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="rss6",
@@ -415,6 +453,45 @@ def build_parser() -> argparse.ArgumentParser:
         "--mcap", help="log the run to this MCAP file (as it goes: on disk every simulated second)"
     )
     t.set_defaults(func=cmd_track)
+
+    i = sub.add_parser(
+        "identify",
+        help="dynamic identification (thesis ch. 5) of a simulated robot by CLOE (--simulate)",
+        description="With --simulate: design an exciting trajectory (§5.4), run the identification "
+        "loop of Fig. 5.1 on the simulated robot whose truth is Table 5.2's identified values "
+        "(rss6.identify.table_5_2_truth), identify Ξ and the drive PID gains by CLOE (§5.3) from "
+        "Table 5.1, validate on fresh random trajectories, print Tables 5.2–5.4 beside the thesis's, "
+        "write Figs. 5.7–5.9 (PNG), an MCAP log per run and tables.txt to --out. Exit status 3 if "
+        "CLOE did not converge (the report then shows the last iterate and the cost history), 4 if "
+        "the identification run on the robot failed (the visual PID faulted).",
+    )
+    i.add_argument("--simulate", action="store_true", help="identify a simulated robot")
+    i.add_argument("--out", default="out-identify", help="output directory (default out-identify/)")
+    i.add_argument("--seed", type=int, default=0, help="seed of the design, noise, validation")
+    i.add_argument(
+        "--quick",
+        action="store_true",
+        help="2 s trajectory, 10 CLOE iterations, 2 validation runs: under a minute",
+    )
+    i.add_argument(
+        "--plant",
+        choices=("auto", "rapier", "model"),
+        default="auto",
+        help="the simulated robot: rapier plant (default when built) or the analytic-model twin",
+    )
+    i.add_argument(
+        "--as-printed",
+        action="store_true",
+        help="the loop as the thesis prints it: unfiltered drive derivative (eq. 5.5) and sign "
+        "Coulomb friction in the model (default: 5 ms derivative filter, tanh friction)",
+    )
+    i.add_argument(
+        "--no-variation",
+        action="store_true",
+        help="skip Table 5.5 (re-identification on every validation run: most of a full run's time)",
+    )
+    i.add_argument("--quiet", action="store_true", help="no progress bars or report on stdout")
+    i.set_defaults(func=cmd_identify)
 
     s = sub.add_parser(
         "can-sim",

@@ -108,7 +108,12 @@ class CalibrationError(Rss6Error):
 class IdentificationError(Rss6Error):
     """Dynamic identification could not produce a trustworthy answer: an infeasible exciting
     trajectory (the message names the constraint and the time), no camera frames, a parameter that is
-    not identifiable, no convergence."""
+    not identifiable, no convergence.
+
+    Attributes when CLOE raised it: ``names`` (the requested quantities the data cannot identify);
+    on no convergence ``iterations``, ``cost_history`` (Φ at the guess and after every accepted
+    step) and the last accepted iterate ``last_dynamics``, ``last_pid``.
+    """
 
 
 class LogError(Rss6Error):

@@ -1,4 +1,6 @@
-"""Dynamic identification (thesis ch. 5). This part: exciting trajectories (§5.4).
+"""Dynamic identification (thesis ch. 5): exciting trajectories (§5.4), the identification loop of
+Fig. 5.1 on a robot (:func:`collect`) and on the model (:func:`simulate`), CLOE (§5.3, :func:`cloe`)
+and validation on fresh trajectories (§5.5, :func:`validate`).
 
 An exciting trajectory is a finite Fourier series per pose axis (eq. 5.11) with n harmonics of f0 that
 starts and ends at rest at a chosen pose. :func:`excitation` maximises the observability index O_in
@@ -19,17 +21,38 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rss6 import _rss6
-from rss6.errors import IdentificationError, InvalidInputError
+from rss6.errors import (
+    IdentificationError,
+    InvalidInputError,
+    NonFiniteError,
+    ShapeError,
+)
 
-__all__ = ["Excitation", "excitation"]
+__all__ = [
+    "Excitation",
+    "IdentificationData",
+    "IdentificationResult",
+    "LoopModel",
+    "Validation",
+    "cloe",
+    "collect",
+    "excitation",
+    "parameter_names",
+    "random_excitation",
+    "simulate",
+    "table_5_2_truth",
+    "validate",
+    "variation",
+]
 
 F64 = NDArray[np.float64]
 
@@ -152,3 +175,535 @@ def excitation(
             " 1 + the excess over the first violated limit); lower `amplitude` or relax the limits"
         )
     return _finish(problem, np.asarray(problem.coefficients(res.x), dtype=np.float64), f0)
+
+
+def random_excitation(
+    kp: _rss6.KinematicParams,
+    *,
+    harmonics: int = 5,
+    f0: float = 0.1,
+    seed: int = 0,
+    amplitude: tuple[float, float] = (0.001, 0.005),
+    batch: int = 64,
+    attempts: int = 50,
+    **limits: Any,
+) -> Excitation:
+    """A random feasible trajectory (validation, §5.5): free coefficients drawn uniformly within
+    ``amplitude`` (as in :func:`excitation`) with ``seed``, the first of ``batch`` candidates that meets
+    every limit. Raises :class:`rss6.IdentificationError` after ``attempts`` batches without one."""
+    problem = _rss6.ExcitationProblem(kp, harmonics=harmonics, f0=f0, **limits)
+    d = problem.dimension
+    k = d // 6
+    half = np.array([amplitude[0] if j // k < 3 else amplitude[1] for j in range(d)])
+    rng = np.random.default_rng(seed)
+    for _ in range(attempts):
+        x = rng.uniform(-1.0, 1.0, size=(batch, d)) * half
+        scores = np.asarray(problem.objectives(x))
+        ok = np.flatnonzero(scores < 0)
+        if ok.size:
+            c = np.asarray(problem.coefficients(x[ok[0]]), dtype=np.float64)
+            return _finish(problem, c, f0)
+    raise IdentificationError(
+        f"no feasible random trajectory in {attempts * batch} draws; lower `amplitude`"
+    )
+
+
+def parameter_names() -> list[str]:
+    """Names of the quantities CLOE estimates: logs of ``platform.m``, the platform's second moments
+    ``platform.Sxx``/``Syy``/``Szz``, ``wrench<i>.m``, ``wrench<i>.Iz``, ``link<i>.m``, the transverse
+    ``link<i>.It``, ``fc<i>``, ``fv<i>``, and the drive gains ``lp``, ``li``, ``ld`` (43)."""
+    return list(_rss6.cloe_parameter_names())
+
+
+def table_5_2_truth() -> tuple[_rss6.DynamicParams, tuple[float, float, float]]:
+    """The documented simulated truth shaped like Table 5.2 (``rss6_ident::table_5_2_truth``): the
+    table's identified masses and inertias, its friction × 40 (drive units to N·m) and the tuned
+    drive gains moved by its identified/initial ratios. Returns (dynamics, (l_p, l_i, l_d))."""
+    dp, pid = _rss6.table_5_2_truth_params()
+    return dp, (float(pid[0]), float(pid[1]), float(pid[2]))
+
+
+def _rows6(a: ArrayLike, name: str) -> F64:
+    x = np.asarray(a, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != 6:
+        raise ShapeError(f"{name} must have shape (N, 6), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        bad = np.argwhere(~np.isfinite(x))[0]
+        raise NonFiniteError(f"{name} contains NaN or infinity at index [{bad[0]}, {bad[1]}]")
+    return x
+
+
+@dataclass(frozen=True)
+class IdentificationData:
+    """What the identification loop measured.
+
+    ``t`` (F,): times (s from the start) of the camera frames the visual PID consumed; ``measured``
+    (F, 6): χ_E of those frames (m, rad); ``reference``: the exciting trajectory the loop followed
+    (from rest at ``start`` = its pose at t = 0); ``duration`` (s) of the run; ``dt`` (s) the joint
+    tick. When collected on a robot also per tick: ``tick_t``, ``kappa`` (potentiometers, bit),
+    ``theta_cmd`` (commands, drive convention, rad), ``reference_pose`` (χ_d) and ``true_pose`` (NaN
+    rows on a real robot), and ``fault`` (None or (t, reason) of the visual PID's first fault)."""
+
+    t: F64
+    reference: Excitation
+    measured: F64
+    duration: float
+    dt: float = 1e-3
+    tick_t: F64 | None = None
+    kappa: F64 | None = None
+    theta_cmd: F64 | None = None
+    reference_pose: F64 | None = None
+    true_pose: F64 | None = None
+    fault: tuple[float, str] | None = None
+
+    @property
+    def start(self) -> F64:
+        """The pose the run starts at rest at (6,)."""
+        return self.reference.sample(0.0)[0]
+
+    @property
+    def frames(self) -> int:
+        """Number of camera frames."""
+        return int(self.t.shape[0])
+
+    def before_fault(self) -> IdentificationData:
+        """The data up to the visual PID's first fault (frames before it; per-tick arrays cut at
+        the same time), or ``self`` without a fault. After a fault the robot's command is held, so
+        later frames no longer follow the loop :func:`cloe` simulates."""
+        if self.fault is None:
+            return self
+        tf = float(self.fault[0])
+        keep = self.t < tf
+        if not np.any(keep):
+            raise IdentificationError(f"no camera frames before the fault at t = {tf:.3f} s")
+
+        def cut(a: F64 | None) -> F64 | None:
+            return None if a is None or self.tick_t is None else a[self.tick_t < tf]
+
+        return IdentificationData(
+            t=self.t[keep],
+            reference=self.reference,
+            measured=self.measured[keep],
+            duration=tf,
+            dt=self.dt,
+            tick_t=cut(self.tick_t),
+            kappa=cut(self.kappa),
+            theta_cmd=cut(self.theta_cmd),
+            reference_pose=cut(self.reference_pose),
+            true_pose=cut(self.true_pose),
+            fault=None,
+        )
+
+    @classmethod
+    def from_arrays(
+        cls,
+        t: ArrayLike,
+        reference: Excitation,
+        measured: ArrayLike,
+        *,
+        duration: float | None = None,
+        dt: float = 1e-3,
+    ) -> IdentificationData:
+        """Data from arrays: frame times ``t`` (F,) s, strictly increasing, ≥ 0; the trajectory
+        ``reference``; ``measured`` χ_E (F, 6) at those times. ``duration`` defaults to the last
+        frame time plus one tick. Raises :class:`rss6.ShapeError`, :class:`rss6.NonFiniteError`,
+        :class:`rss6.InvalidInputError` (t not increasing, not an Excitation) or
+        :class:`rss6.IdentificationError` (no frames)."""
+        if not isinstance(reference, Excitation):
+            raise InvalidInputError(
+                f"reference must be an rss6.identify.Excitation, got {type(reference).__name__}"
+            )
+        tt = np.asarray(t, dtype=np.float64)
+        if tt.ndim != 1:
+            raise ShapeError(f"t must have shape (F,), got {tt.shape}")
+        if tt.size == 0:
+            raise IdentificationError("no camera frames: t is empty")
+        if not np.all(np.isfinite(tt)):
+            raise NonFiniteError(
+                f"t contains NaN or infinity at index [{np.argmin(np.isfinite(tt))}]"
+            )
+        m = _rows6(measured, "measured")
+        if m.shape[0] != tt.size:
+            raise ShapeError(f"measured must have shape ({tt.size}, 6) like t, got {m.shape}")
+        if tt[0] < 0 or np.any(np.diff(tt) <= 0):
+            raise InvalidInputError("t must be >= 0 and strictly increasing")
+        if not (np.isfinite(dt) and dt > 0):
+            raise InvalidInputError(f"dt must be finite and > 0 s, got {dt}")
+        dur = float(tt[-1] + dt) if duration is None else float(duration)
+        if not (np.isfinite(dur) and dur > tt[-1]):
+            raise InvalidInputError(f"duration must exceed the last frame time, got {dur}")
+        return cls(t=tt, reference=reference, measured=m, duration=dur, dt=float(dt))
+
+
+def collect(
+    robot: Any,
+    excitation: Excitation,
+    *,
+    kp_model: _rss6.KinematicParams,
+    sensor_in_base: ArrayLike,
+    target_in_effector: ArrayLike,
+    periods: int = 1,
+    mcap: str | Path | None = None,
+    progress: Callable[[float, float], Any] | None = None,
+    segment: float = 1.0,
+) -> IdentificationData:
+    """Runs the identification loop of Fig. 5.1 on ``robot`` (:class:`rss6.Plant`,
+    :class:`rss6.ModelSim` or any :class:`rss6.types.Robot`, e.g. ``rss6.can.simulated_robot(...)``):
+    the robot is reset at rest at the trajectory's start (if it has ``reset``), then for ``periods``
+    periods of ``excitation`` the visual PID (eq. 5.4, thesis gains, ``kp_model``'s J_θ) turns each
+    camera frame (through ``sensor_in_base`` ᴼχ_C and ``target_in_effector`` ᴱχ_t) into joint
+    commands the drive's PID tracks. ``progress(done_s, total_s)`` every ``segment`` s of robot time
+    (raise in it, or Ctrl-C, to stop: the exception propagates); ``mcap``: log every tick there as the
+    run goes. Raises :class:`rss6.IdentificationError` if no camera frame arrived."""
+    if not isinstance(excitation, Excitation):
+        raise InvalidInputError("excitation must be an rss6.identify.Excitation")
+    if int(periods) < 1:
+        raise InvalidInputError(f"periods must be >= 1, got {periods}")
+    duration = int(periods) * excitation.duration
+    if hasattr(robot, "reset"):
+        robot.reset(excitation.sample(0.0)[0])
+    raw = _rss6.identification_run(
+        robot,
+        excitation.f0,
+        excitation.coefficients,
+        duration,
+        kp_model,
+        np.asarray(sensor_in_base, dtype=np.float64),
+        np.asarray(target_in_effector, dtype=np.float64),
+        segment=segment,
+        progress=progress,
+        mcap=None if mcap is None else str(mcap),
+    )
+    if int(raw["frames"]) == 0 or raw["frame_t"].size == 0:
+        raise IdentificationError(
+            f"no camera frames in {duration:.3f} s of identification run (target never seen)"
+        )
+    dt = float(raw["t"][1] - raw["t"][0]) if raw["t"].size > 1 else 1e-3
+    return IdentificationData(
+        t=np.asarray(raw["frame_t"]),
+        reference=excitation,
+        measured=np.asarray(raw["measured"]),
+        duration=duration,
+        dt=dt,
+        tick_t=np.asarray(raw["t"]),
+        kappa=np.asarray(raw["kappa"]),
+        theta_cmd=np.asarray(raw["theta_cmd"]),
+        reference_pose=np.asarray(raw["reference"]),
+        true_pose=np.asarray(raw["true_pose"]),
+        fault=None if raw["fault"] is None else (float(raw["fault"][0]), str(raw["fault"][1])),
+    )
+
+
+@dataclass(frozen=True)
+class LoopModel:
+    """What the simulated loop assumes besides A: the kinematics ``kp``, the drive's ``torque_limit``
+    (N·m), the camera latency (s), the drive's ``derivative_filter`` T_f (s) and the model's
+    Coulomb ``friction_smoothing`` ε (rad/s; 0 = sign)."""
+
+    kp: _rss6.KinematicParams
+    torque_limit: float = 30.0
+    camera_latency: float = 0.0
+    derivative_filter: float = 0.0
+    friction_smoothing: float = 0.0
+
+
+def simulate(
+    kp: _rss6.KinematicParams,
+    dynamics: _rss6.DynamicParams,
+    pid: tuple[float, float, float],
+    excitation: Excitation,
+    *,
+    times: ArrayLike,
+    torque_limit: float = 30.0,
+    camera_latency: float = 0.0,
+    dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+) -> F64:
+    """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
+    Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
+    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed): the model's camera frames at ``times``
+    (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
+    otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
+    tt = np.asarray(times, dtype=np.float64).reshape(-1)
+    if tt.size == 0 or not np.all(np.isfinite(tt)):
+        raise InvalidInputError("times must be a non-empty array of finite times")
+    ts, chi, _ = _rss6.simulate_identification(
+        kp,
+        dynamics,
+        (float(pid[0]), float(pid[1]), float(pid[2])),
+        excitation.f0,
+        excitation.coefficients,
+        start=excitation.sample(0.0)[0],
+        duration=float(tt.max() + dt),
+        torque_limit=torque_limit,
+        camera_latency=camera_latency,
+        dt=dt,
+        derivative_filter=derivative_filter,
+        friction_smoothing=friction_smoothing,
+    )
+    ts = np.asarray(ts)
+    k = np.clip(np.searchsorted(ts, tt), 0, max(ts.size - 1, 0))
+    km = np.clip(k - 1, 0, max(ts.size - 1, 0))
+    best = np.where(np.abs(ts[km] - tt) < np.abs(ts[k] - tt), km, k) if ts.size else k
+    if ts.size == 0 or np.any(np.abs(ts[best] - tt) > 0.5 * dt):
+        bad = tt[0] if ts.size == 0 else tt[np.argmax(np.abs(ts[best] - tt) > 0.5 * dt)]
+        raise IdentificationError(
+            f"no camera frames: the model's loop has no frame at t = {bad:.4f} s"
+        )
+    return np.asarray(chi)[best]
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """What :func:`cloe` returns.
+
+    ``dynamics`` (:class:`rss6.DynamicParams`) and ``pid`` (l_p, l_i, l_d): the estimate
+    (unidentifiable quantities at the guess); ``identified``: names of the estimated quantities (see
+    :func:`parameter_names`) and ``relative_std`` (same order) their relative standard deviations;
+    ``poorly_identified``: those above 10 %; ``unidentifiable``: quantities the data cannot see;
+    ``rms_before``/``rms_after`` (6,): RMS of χ_m − χ_s per axis (m, rad) at the guess and at the
+    estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
+    ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise). ``guess`` and ``model``
+    keep what :func:`validate` needs."""
+
+    dynamics: _rss6.DynamicParams
+    pid: tuple[float, float, float]
+    identified: tuple[str, ...]
+    unidentifiable: tuple[str, ...]
+    relative_std: F64
+    poorly_identified: tuple[str, ...]
+    rms_before: F64
+    rms_after: F64
+    cost_history: F64
+    iterations: int
+    reduced_chi2: float
+    simulations: int
+    guess: tuple[_rss6.DynamicParams, tuple[float, float, float]]
+    model: LoopModel
+
+    def std(self, name: str) -> float:
+        """Relative standard deviation of the identified quantity ``name``."""
+        try:
+            return float(self.relative_std[self.identified.index(name)])
+        except ValueError:
+            raise InvalidInputError(f"{name!r} was not identified") from None
+
+
+def cloe(
+    data: IdentificationData,
+    kp: _rss6.KinematicParams,
+    dp_guess: _rss6.DynamicParams,
+    pid_guess: tuple[float, float, float],
+    *,
+    parameters: str | Sequence[str] = "base",
+    consistent: bool = True,
+    max_iterations: int = 20,
+    progress: Callable[[int, float], Any] | None = None,
+    torque_limit: float = 30.0,
+    camera_latency: float = 0.0,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+    noise: tuple[float, float] | None = None,
+    per_tick_jacobians: bool = False,
+    tol_cost: float = 1e-6,
+    tol_step: float = 1e-5,
+    prior_log_std: float | None = 1.0,
+) -> IdentificationResult:
+    """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
+    from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
+    simulated loop (model kinematics ``kp``, ``torque_limit`` N·m, ``camera_latency`` s, the drive's
+    ``derivative_filter`` T_f s and the model's Coulomb ``friction_smoothing`` ε rad/s — 0: as printed,
+    non-smooth) and its exact sensitivities.
+
+    ``parameters``: ``"base"`` estimates every quantity the data identify (QR with column pivoting
+    at the guess, relative threshold 10⁻³), a list of names (:func:`parameter_names`) only those
+    (the others stay at the guess); ``consistent``: the estimator works on logs of physical quantities,
+    so every iterate is a physical robot (the only parametrisation implemented: ``False`` is refused).
+    ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1).
+    ``prior_log_std``: σ of a Gaussian prior on every estimated log-quantity centred at the guess
+    (keeps quantities the run hardly sees near it); ``None``: the pure output error of eq. 5.7.
+    ``cost_history`` includes the prior's term.
+    ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
+    Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
+    (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
+    not produce, data whose run faulted (see :meth:`IdentificationData.before_fault`)."""
+    if data.fault is not None:
+        raise IdentificationError(
+            f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
+            "frames after it do not follow the loop: use data.before_fault()"
+        )
+    if not consistent:
+        raise InvalidInputError(
+            "consistent=False is not implemented: CLOE estimates logs of physical quantities"
+        )
+    if isinstance(parameters, str):
+        if parameters != "base":
+            raise InvalidInputError(
+                f"parameters must be 'base' or a list of names, got {parameters!r}"
+            )
+        names: list[str] | None = None
+    else:
+        names = [str(n) for n in parameters]
+        known = set(parameter_names())
+        unknown = [n for n in names if n not in known]
+        if unknown:
+            raise InvalidInputError(
+                f"unknown parameter(s) {', '.join(unknown)}; see rss6.identify.parameter_names()"
+            )
+    pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
+    r = _rss6.cloe_identify(
+        data.t,
+        data.measured,
+        data.reference.f0,
+        data.reference.coefficients,
+        kp,
+        dp_guess,
+        pid,
+        start=data.start,
+        duration=data.duration,
+        parameters=names,
+        max_iterations=max_iterations,
+        torque_limit=torque_limit,
+        camera_latency=camera_latency,
+        dt=data.dt,
+        derivative_filter=derivative_filter,
+        friction_smoothing=friction_smoothing,
+        noise=noise,
+        per_tick_jacobians=per_tick_jacobians,
+        tol_cost=tol_cost,
+        tol_step=tol_step,
+        prior_log_std=0.0 if prior_log_std is None else float(prior_log_std),
+        progress=progress,
+    )
+    lp, li, ld = r["pid"]
+    return IdentificationResult(
+        dynamics=r["dynamics"],
+        pid=(float(lp), float(li), float(ld)),
+        identified=tuple(r["identified"]),
+        unidentifiable=tuple(r["unidentifiable"]),
+        relative_std=np.asarray(r["relative_std"]),
+        poorly_identified=tuple(r["poorly_identified"]),
+        rms_before=np.asarray(r["rms_before"]),
+        rms_after=np.asarray(r["rms_after"]),
+        cost_history=np.asarray(r["cost_history"]),
+        iterations=int(r["iterations"]),
+        reduced_chi2=float(r["reduced_chi2"]),
+        simulations=int(r["simulations"]),
+        guess=(dp_guess, pid),
+        model=LoopModel(
+            kp=kp,
+            torque_limit=torque_limit,
+            camera_latency=camera_latency,
+            derivative_filter=derivative_filter,
+            friction_smoothing=friction_smoothing,
+        ),
+    )
+
+
+@dataclass(frozen=True)
+class Validation:
+    """What :func:`validate` returns: ``rms`` (n, 6) RMS of χ_m − χ_s per axis (m, rad) with the
+    identified model on each fresh trajectory, ``rms_initial`` (n, 6) the same with the initial
+    model (the guess), ``excitations`` and ``data`` of each trajectory."""
+
+    rms: F64
+    rms_initial: F64
+    excitations: tuple[Excitation, ...]
+    data: tuple[IdentificationData, ...]
+
+    @property
+    def ratio(self) -> F64:
+        """rms / rms_initial (n, 6): the thesis's criterion is ≤ 1/3."""
+        return np.asarray(self.rms / self.rms_initial)
+
+    @property
+    def faulted(self) -> tuple[int, ...]:
+        """Indices of the trajectories whose run on the robot faulted (their RMS compares the
+        model with a robot that left the loop)."""
+        return tuple(i for i, d in enumerate(self.data) if d.fault is not None)
+
+
+def validate(
+    result: IdentificationResult,
+    robot: Any,
+    *,
+    n: int = 10,
+    seed: int = 0,
+    kp_model: _rss6.KinematicParams | None = None,
+    sensor_in_base: ArrayLike | None = None,
+    target_in_effector: ArrayLike | None = None,
+    harmonics: int = 5,
+    f0: float = 0.1,
+    amplitude: tuple[float, float] = (0.001, 0.005),
+    mcap_dir: str | Path | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+    **limits: Any,
+) -> Validation:
+    """Validation on fresh trajectories (thesis §5.5, Tables 5.3–5.5): ``n`` random feasible
+    trajectories (:func:`random_excitation`, seeds ``seed``, ``seed`` + 1, …, same limits), each
+    collected on ``robot`` (:func:`collect`), then the identified model and the initial one
+    (``result.guess``) simulated in the loop at the frame times. ``kp_model`` defaults to the model's
+    kinematics; ``sensor_in_base``/``target_in_effector`` to the robot's truth (simulated robots).
+    ``mcap_dir``: one log per trajectory (``validation_<i>.mcap``). ``progress(done, n)``."""
+    kp = result.model.kp if kp_model is None else kp_model
+    if sensor_in_base is None or target_in_effector is None:
+        if not hasattr(robot, "truth"):
+            raise InvalidInputError(
+                "sensor_in_base and target_in_effector are needed for this robot"
+            )
+        truth = robot.truth()
+        sensor_in_base = truth["sensor_in_base"] if sensor_in_base is None else sensor_in_base
+        target_in_effector = (
+            truth["target_in_effector"] if target_in_effector is None else target_in_effector
+        )
+    rms = np.zeros((n, 6))
+    rms0 = np.zeros((n, 6))
+    excs: list[Excitation] = []
+    datas: list[IdentificationData] = []
+    m = result.model
+    for i in range(n):
+        exc = random_excitation(
+            kp, harmonics=harmonics, f0=f0, seed=seed + i, amplitude=amplitude, **limits
+        )
+        mcap = None if mcap_dir is None else Path(mcap_dir) / f"validation_{i}.mcap"
+        d = collect(
+            robot,
+            exc,
+            kp_model=kp,
+            sensor_in_base=sensor_in_base,
+            target_in_effector=target_in_effector,
+            mcap=mcap,
+        )
+        for out, (dp, pid) in ((rms, (result.dynamics, result.pid)), (rms0, result.guess)):
+            chi = simulate(
+                m.kp,
+                dp,
+                pid,
+                exc,
+                times=d.t,
+                torque_limit=m.torque_limit,
+                camera_latency=m.camera_latency,
+                dt=d.dt,
+                derivative_filter=m.derivative_filter,
+                friction_smoothing=m.friction_smoothing,
+            )
+            out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
+        excs.append(exc)
+        datas.append(d)
+        if progress is not None:
+            progress(i + 1, n)
+    return Validation(rms=rms, rms_initial=rms0, excitations=tuple(excs), data=tuple(datas))
+
+
+def variation(
+    estimates: Sequence[tuple[_rss6.DynamicParams, tuple[float, float, float]]],
+) -> dict[str, float]:
+    """Variation measure (thesis Table 5.5) of each quantity CLOE estimates
+    (:func:`parameter_names`) over several identifications (dynamics, pid): standard deviation over
+    |mean| (fraction). Needs at least two estimates."""
+    if len(estimates) < 2:
+        raise InvalidInputError("variation needs at least two estimates")
+    phi = np.array([np.exp(np.asarray(_rss6.cloe_psi(dp, pid)[0])) for dp, pid in estimates])
+    v = phi.std(axis=0, ddof=1) / np.abs(phi.mean(axis=0))
+    return dict(zip(parameter_names(), (float(x) for x in v)))

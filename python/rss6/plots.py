@@ -7,6 +7,9 @@ caller's matplotlib backend (and pyplot's figure list) is never touched.
   vs calibrated.
 * :func:`tracking` — Figs. 6.4/6.7: desired pose and the measured pose of each controller.
 * :func:`tracking_errors` — Figs. 6.5/6.8: tracking errors of each controller.
+* :func:`exciting_trajectory` — Fig. 5.7: the exciting trajectory (position and angles).
+* :func:`identification_fit` — Figs. 5.8/5.9: measured poses (dots) and the poses the model
+  simulates in the loop with the initial and the identified parameters (lines).
 """
 
 from __future__ import annotations
@@ -24,7 +27,13 @@ if TYPE_CHECKING:
 
     from rss6.servo import TrackingResult
 
-__all__ = ["relative_pose_errors", "tracking", "tracking_errors"]
+__all__ = [
+    "exciting_trajectory",
+    "identification_fit",
+    "relative_pose_errors",
+    "tracking",
+    "tracking_errors",
+]
 
 _LABELS = ("x (mm)", "y (mm)", "z (mm)", "α (mrad)", "β (mrad)", "γ (mrad)")
 _TITLES = (
@@ -151,3 +160,61 @@ def table_text(
             row += "".join(f" {measured[n].table()[stat][k]:12.3f}" for n in extra)
             lines.append(row)
     return "\n".join(lines)
+
+
+def exciting_trajectory(
+    t: ArrayLike, pose: ArrayLike, path: str | PathLike[str], title: str = ""
+) -> None:
+    """Fig. 5.7: the exciting trajectory χ_d(t) (``pose`` (N, 6), m and rad) — (a) positions in mm,
+    (b) angles in mrad."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    tt = np.asarray(t, dtype=np.float64)
+    p = np.asarray(pose, dtype=np.float64)
+    fig = Figure(figsize=(9, 6))
+    FigureCanvasAgg(fig)
+    a, b = fig.subplots(2, 1, sharex=True)
+    for i, n in enumerate("xyz"):
+        a.plot(tt, p[:, i] * 1e3, label=n)
+    for i, n in enumerate("αβγ"):
+        b.plot(tt, p[:, 3 + i] * 1e3, label=n)
+    a.set_ylabel("position (mm)")
+    b.set_ylabel("angle (mrad)")
+    b.set_xlabel("t (s)")
+    a.set_title("(a) positional trajectory")
+    b.set_title("(b) angular trajectory")
+    for ax in (a, b):
+        ax.legend(loc="upper right")
+        ax.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    _save(fig, path)
+
+
+def identification_fit(
+    t: ArrayLike,
+    measured: ArrayLike,
+    simulated: Mapping[str, ArrayLike],
+    path: str | PathLike[str],
+    title: str = "",
+) -> None:
+    """Figs. 5.8/5.9: the measured poses (black dots) and each simulated pose trajectory of
+    ``simulated`` (label → (N, 6); "initial" green, "identified" blue as in the thesis)."""
+    fig, axes = _figure()
+    tt = np.asarray(t, dtype=np.float64)
+    m = np.asarray(measured, dtype=np.float64)
+    colours = {"initial": "tab:green", "identified": "tab:blue"}
+    for i, ax in enumerate(axes):
+        ax.plot(tt, m[:, i] * 1e3, "k.", ms=3, label="measured")
+        for label, sim in simulated.items():
+            ax.plot(tt, np.asarray(sim)[:, i] * 1e3, color=colours.get(label), label=label)
+        ax.set_ylabel(_LABELS[i])
+        ax.set_title(_TITLES[i])
+        ax.grid(True, alpha=0.3)
+    axes[2].set_xlabel("t (s)")
+    axes[5].set_xlabel("t (s)")
+    axes[0].legend(loc="upper right")
+    if title:
+        fig.suptitle(title)
+    _save(fig, path)

@@ -23,9 +23,9 @@ def run(*args, timeout=300):
 def test_help_documents_every_subcommand():
     r = run("--help")
     assert r.returncode == 0
-    for sub in ("demo", "calibrate", "track", "can-sim"):
+    for sub in ("demo", "calibrate", "track", "identify", "can-sim"):
         assert sub in r.stdout
-    for sub in ("demo", "calibrate", "track", "can-sim"):
+    for sub in ("demo", "calibrate", "track", "identify", "can-sim"):
         h = run(sub, "--help")
         assert h.returncode == 0, h.stderr
         assert "usage: rss6 " + sub in h.stdout
@@ -146,3 +146,42 @@ def test_calibrate_modes_are_exclusive(capsys):
     with pytest.raises(SystemExit) as e:
         cli.main(["calibrate", "--simulate", "--from-mcap", "x.mcap"])
     assert e.value.code == 2 and "not allowed with" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def identify_quick(tmp_path_factory):
+    """One `rss6 identify --simulate --quick` run (measured: 15–19 s on the loaded 2-core box)."""
+    out = tmp_path_factory.mktemp("identify")
+    r = run("identify", "--simulate", "--quick", "--quiet", "--out", str(out), timeout=120)
+    return r, out
+
+
+def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
+    r, out = identify_quick
+    # 0: CLOE converged; 3: it did not, and the report says so with the cost history.
+    assert r.returncode in (0, 3), r.stderr
+    text = (out / "tables.txt").read_text(encoding="utf-8")
+    for heading in ("Table 5.2", "Table 5.3", "Table 5.4", "Table 5.5"):
+        assert heading in text
+    for name in ("platform.Sxx", "wrench1.Iz", "link6.It", "fc1", "fv6", "lp", "li", "ld"):
+        assert name in text
+    assert "cost history" in text
+    if r.returncode == 3:
+        assert "DID NOT CONVERGE" in text and "did not converge" in r.stderr
+    for f in ("fig5_7_excitation.png", "fig5_8_identification.png", "fig5_9_validation.png"):
+        assert (out / f).stat().st_size > 10_000
+    for f in ("identification.mcap", "validation_0.mcap", "validation_1.mcap"):
+        log = rss6.logs.read_log(out / f)
+        assert log is not None
+    assert run("identify").returncode == 2  # --simulate is the only mode
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="CLOE does not converge on the rapier plant in the quick run: Φ 2.67e4 → 6.02e3 in 10 "
+    "iterations on 2 s, with the drive derivative filter (5 ms) and tanh friction in the model "
+    "(docs/identification.md). Strict: remove the marker once it converges.",
+)
+def test_identify_simulate_quick_converges_on_the_plant(identify_quick):
+    r, _ = identify_quick
+    assert r.returncode == 0, r.stderr[-2000:]

@@ -49,3 +49,268 @@ def test_an_infeasible_trajectory_is_refused_with_its_constraint_and_time(
     assert still.coefficients.shape == (6, 11)
     with pytest.raises(rss6.InvalidInputError):
         identify.Excitation.from_coefficients(kp, np.zeros((5, 11)), 0.1)
+
+
+# --- The identification loop, CLOE, simulate (thesis §5.3, issue 13) ---------------------------
+
+import dataclasses  # noqa: E402
+
+from rss6 import _rss6  # noqa: E402
+
+SUBSET = ["platform.Sxx", "platform.Syy", "platform.Szz", "li", "ld"]
+
+
+def _short_excitation(kp: rss6.KinematicParams, seed: int = 1) -> identify.Excitation:
+    """A feasible 2 s trajectory (3 harmonics of 0.5 Hz): keeps every CLOE run in seconds."""
+    return identify.random_excitation(kp, harmonics=3, f0=0.5, seed=seed, amplitude=(0.01, 0.05))
+
+
+def _smooth_truth() -> tuple[rss6.DynamicParams, tuple[float, float, float]]:
+    """table_5_2_truth with Coulomb friction × 1e-6: the loop is then differentiable (with the
+    torque clamp out of reach), as in rss6-ident's noise-free CLOE test (docs/identification.md)."""
+    dp, pid = identify.table_5_2_truth()
+    d = dp.to_dict()
+    d["coulomb"] = [c * 1e-6 for c in d["coulomb"]]
+    return rss6.DynamicParams.from_dict(d), pid
+
+
+def _twin(dp: rss6.DynamicParams, pid: tuple[float, float, float]) -> rss6.ModelSim:
+    return rss6.ModelSim(
+        rss6.KinematicParams.nominal(),
+        dp,
+        pid=pid,
+        torque_limit=1e4,
+        potentiometer_noise=0.0,
+        pixel_noise=0.0,
+    )
+
+
+def _collect(robot: object, exc: identify.Excitation, **kw: object) -> identify.IdentificationData:
+    truth = robot.truth()  # type: ignore[attr-defined]
+    return identify.collect(
+        robot,
+        exc,
+        kp_model=rss6.KinematicParams.nominal(),
+        sensor_in_base=truth["sensor_in_base"],
+        target_in_effector=truth["target_in_effector"],
+        **kw,  # type: ignore[arg-type]
+    )
+
+
+def _spread(
+    dp: rss6.DynamicParams, pid: tuple[float, float, float], names: list[str], seed: int
+) -> tuple[rss6.DynamicParams, tuple[float, float, float]]:
+    """The truth with `names` moved by seeded factors in [0.7, 1.3]."""
+    psi, _, _ = _rss6.cloe_psi(dp, pid)
+    all_names = identify.parameter_names()
+    rng = np.random.default_rng(seed)
+    moved = psi.copy()
+    for n in names:
+        moved[all_names.index(n)] += np.log(1.0 + 0.3 * rng.uniform(-1.0, 1.0))
+    _, gdp, gpid = _rss6.cloe_psi(dp, pid, list(moved))
+    return gdp, gpid
+
+
+def test_noise_free_round_trip_on_the_twin(kp: rss6.KinematicParams, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+    seen: list[tuple[float, float]] = []
+    data = _collect(
+        _twin(dp, pid), exc, mcap=tmp_path / "ident.mcap", progress=lambda d, t: seen.append((d, t))
+    )
+    assert data.frames == 61 and data.t[0] == 0.0 and data.duration == pytest.approx(2.0)
+    assert data.kappa is not None and data.kappa.shape == (2000, 6)
+    assert data.theta_cmd is not None and data.theta_cmd.shape == (2000, 6)
+    assert seen[-1] == pytest.approx((2.0, 2.0))
+    assert (tmp_path / "ident.mcap").stat().st_size > 0
+    log = rss6.logs.read_log(tmp_path / "ident.mcap")
+    assert log is not None
+    # The loop simulated on the model = the loop run on the twin (measured 5.8e-14 m/rad).
+    chi = identify.simulate(kp, dp, pid, exc, times=data.t, torque_limit=1e4)
+    assert np.abs(chi - data.measured).max() < 2e-13
+    guess = _spread(dp, pid, SUBSET, seed=1)
+    costs: list[float] = []
+    res = identify.cloe(
+        data,
+        kp,
+        *guess,
+        parameters=SUBSET,
+        torque_limit=1e4,
+        tol_cost=1e-12,
+        tol_step=1e-9,
+        prior_log_std=None,  # the pure output error: noise-free data are fitted exactly
+        progress=lambda k, c: costs.append(c),
+    )
+    assert set(res.identified) == set(SUBSET)
+    psi_true, _, _ = _rss6.cloe_psi(dp, pid)
+    psi_est, _, _ = _rss6.cloe_psi(res.dynamics, res.pid)
+    names = identify.parameter_names()
+    worst = max(abs(np.expm1(psi_est[names.index(n)] - psi_true[names.index(n)])) for n in SUBSET)
+    # Measured: worst relative error 1.5e-7 (platform.Szz), 10 iterations, Φ 692 → 2.9e-18;
+    # bound ≈ 3×.
+    assert worst < 5e-7
+    assert res.cost_history[-1] < 1e-12 * res.cost_history[0]
+    assert costs == pytest.approx(list(res.cost_history))
+    assert np.all(res.rms_after < 1e-3 * res.rms_before)
+    # Quantities not estimated stay at the guess.
+    # (Ξ entries 28..52: the links' masses and inertias.)
+    assert np.allclose(res.dynamics.to_vector()[28:52], guess[0].to_vector()[28:52], rtol=1e-12)
+
+
+def test_identification_data_from_arrays_refuses_bad_input(kp: rss6.KinematicParams) -> None:
+    exc = _short_excitation(kp)
+    t = np.arange(5) * 0.033
+    ok = identify.IdentificationData.from_arrays(t, exc, np.zeros((5, 6)))
+    assert ok.frames == 5 and ok.duration == pytest.approx(t[-1] + 1e-3)
+    assert np.allclose(ok.start, exc.sample(0.0)[0])
+    with pytest.raises(rss6.ShapeError, match=r"\(5, 6\)"):
+        identify.IdentificationData.from_arrays(t, exc, np.zeros((4, 6)))
+    with pytest.raises(rss6.ShapeError):
+        identify.IdentificationData.from_arrays(t, exc, np.zeros((5, 3)))
+    bad = np.zeros((5, 6))
+    bad[2, 4] = np.nan
+    with pytest.raises(rss6.NonFiniteError, match=r"\[2, 4\]"):
+        identify.IdentificationData.from_arrays(t, exc, bad)
+    with pytest.raises(rss6.InvalidInputError, match="increasing"):
+        identify.IdentificationData.from_arrays(t[::-1], exc, np.zeros((5, 6)))
+    with pytest.raises(rss6.IdentificationError, match="no camera frames"):
+        identify.IdentificationData.from_arrays([], exc, np.zeros((0, 6)))
+    with pytest.raises(rss6.InvalidInputError, match="Excitation"):
+        identify.IdentificationData.from_arrays(t, "exp1", np.zeros((5, 6)))  # type: ignore[arg-type]
+
+
+def test_cloe_names_what_it_cannot_identify_and_reports_non_convergence(
+    kp: rss6.KinematicParams,
+) -> None:
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+    data = _collect(_twin(dp, pid), exc)
+    # Wrench 1's mass and I_z only enter as m·(l/2)² + I_z: not identifiable together.
+    with pytest.raises(rss6.IdentificationError, match="not identifiable") as e:
+        identify.cloe(data, kp, dp, pid, parameters=["wrench1.m", "wrench1.Iz"], torque_limit=1e4)
+    assert set(e.value.names) <= {"wrench1.m", "wrench1.Iz"} and e.value.names  # type: ignore[attr-defined]
+    with pytest.raises(rss6.InvalidInputError, match="unknown parameter"):
+        identify.cloe(data, kp, dp, pid, parameters=["platform.Ixx"])
+    with pytest.raises(rss6.InvalidInputError, match="consistent"):
+        identify.cloe(data, kp, dp, pid, consistent=False)
+    # Frames after a visual-PID fault (command held) do not follow the loop: refused, and
+    # before_fault() keeps the frames before it.
+    faulted = dataclasses.replace(data, fault=(1.0, "pose unreachable"))
+    with pytest.raises(rss6.IdentificationError, match=r"faulted at t = 1\.000 s"):
+        identify.cloe(faulted, kp, dp, pid, parameters=SUBSET, torque_limit=1e4)
+    early = faulted.before_fault()
+    assert early.fault is None and early.frames == 31 and early.t[-1] < 1.0
+    assert early.kappa is not None and early.kappa.shape == (1000, 6)
+    # One iteration from a spread guess cannot meet eq. 5.9's tolerances.
+    guess = _spread(dp, pid, SUBSET, seed=2)
+    with pytest.raises(rss6.IdentificationError, match="did not converge") as nc:
+        identify.cloe(
+            data, kp, *guess, parameters=SUBSET, torque_limit=1e4, max_iterations=1, tol_cost=1e-12
+        )
+    hist = nc.value.cost_history  # type: ignore[attr-defined]
+    assert len(hist) == 2 and hist[1] < hist[0]
+    assert isinstance(nc.value.last_dynamics, rss6.DynamicParams)  # type: ignore[attr-defined]
+
+
+class _Blind:
+    """A robot whose camera never sees the target."""
+
+    def __init__(self, inner: rss6.ModelSim) -> None:
+        self.inner = inner
+        self.dt = inner.dt
+
+    @property
+    def time(self) -> float:
+        return self.inner.time
+
+    def reset(self, pose: object) -> None:
+        self.inner.reset(pose)
+
+    def step_joint_command(self, cmd: object) -> None:
+        self.inner.step_joint_command(cmd)
+
+    def camera(self) -> None:
+        return None
+
+    def potentiometers(self) -> object:
+        return self.inner.potentiometers()
+
+
+def test_collect_without_camera_frames_is_a_typed_error(kp: rss6.KinematicParams) -> None:
+    exc = _short_excitation(kp)
+    dp, pid = _smooth_truth()
+    twin = _twin(dp, pid)
+    truth = twin.truth()
+    with pytest.raises(rss6.IdentificationError, match="no camera frames"):
+        identify.collect(
+            _Blind(twin),
+            exc,
+            kp_model=kp,
+            sensor_in_base=truth["sensor_in_base"],
+            target_in_effector=truth["target_in_effector"],
+        )
+    # Times the model's loop never produces a frame at.
+    with pytest.raises(rss6.IdentificationError, match="no camera frames"):
+        identify.simulate(kp, dp, pid, exc, times=[0.0, 0.0165])
+
+
+def test_collect_through_the_can_bridge_equals_the_plant(kp: rss6.KinematicParams) -> None:
+    """Identification runs through the bridge (rss6.can, issue 15): the compiled loop drives the
+    bridge's robot through the Robot adapter; the frames equal those on the plant up to the count
+    quantisation of the commands and readings."""
+    pytest.importorskip("can")
+    pytest.importorskip("canopen")
+    import rss6.can as rcan
+
+    # Gentler than _short_excitation: the bridge refuses a command step above v_max·dt = 0.01 rad
+    # per cycle, and the visual PID's sample-and-hold command jumps at every frame (0.011 rad seen
+    # with amplitude (0.01, 0.05)).
+    exc = identify.random_excitation(kp, harmonics=3, f0=0.5, seed=1, amplitude=(0.002, 0.01))
+
+    def plant() -> rss6.ModelSim:
+        return rss6.ModelSim(kp, rss6.DynamicParams.nominal(), seed=3)
+
+    with rcan.simulated_robot(plant()) as robot:
+        bus = _collect(robot, exc)
+        assert robot.fault is None
+    direct = plant()
+    direct.reset(rss6.home_pose())  # as often as simulated_robot reset its plant
+    ref = _collect(direct, exc)
+    assert np.array_equal(bus.t, ref.t)
+    assert bus.kappa is not None and ref.kappa is not None
+    dk = np.abs(bus.kappa - ref.kappa).max()
+    dm = np.abs(bus.measured - ref.measured).max()
+    print(f"bridge vs plant: |Δκ| {dk:.3g} bit, |Δχ_E| {dm:.3g}")
+    # Measured: 0.0090 bit and 8.1e-7 (m/rad); bounds ≈ 3×.
+    assert dk < 0.03
+    assert dm < 2.5e-6
+
+
+def test_variation_is_the_relative_spread_of_the_estimates() -> None:
+    dp, pid = identify.table_5_2_truth()
+    same = identify.variation([(dp, pid), (dp, pid)])
+    assert len(same) == 43 and max(same.values()) < 1e-12
+    moved = identify.variation([(dp, pid), (dp, (pid[0] * 1.2, pid[1], pid[2]))])
+    # Two values a and 1.2a: std/mean = (0.2a/√2)/(1.1a).
+    assert moved["lp"] == pytest.approx(0.2 / np.sqrt(2) / 1.1, rel=1e-9)
+    assert moved["li"] < 1e-12
+    with pytest.raises(rss6.InvalidInputError):
+        identify.variation([(dp, pid)])
+
+
+def test_an_exception_in_progress_stops_collect_and_cloe(kp: rss6.KinematicParams) -> None:
+    """Like Ctrl-C (checked at the same points): the run stops and the exception propagates."""
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+
+    class Stop(Exception):
+        pass
+
+    def stop(*_: object) -> None:
+        raise Stop
+
+    with pytest.raises(Stop):
+        _collect(_twin(dp, pid), exc, progress=stop, segment=0.5)
+    data = _collect(_twin(dp, pid), exc)
+    with pytest.raises(Stop):
+        identify.cloe(data, kp, dp, pid, parameters=SUBSET, torque_limit=1e4, progress=stop)

@@ -34,9 +34,9 @@ pub use crate::calibrate::{
     RejectedConfiguration,
 };
 pub use crate::cloe::{
-    cloe, parameter_names as loop_parameter_names, simulate as simulate_loop, table_5_2_truth,
-    CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams, LoopRun, StateJacobians,
-    DRIVE_UNIT_TO_NM, N_A, N_PSI,
+    cloe, cloe_observed, parameter_names as loop_parameter_names, simulate as simulate_loop,
+    table_5_2_truth, CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams,
+    LoopRun, StateJacobians, DRIVE_UNIT_TO_NM, N_A, N_PSI,
 };
 pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,

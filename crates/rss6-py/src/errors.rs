@@ -18,6 +18,10 @@ pub(crate) enum Attr {
     S(String),
     /// A list-of-integers attribute.
     IL(Vec<i64>),
+    /// A list-of-floats attribute.
+    FL(Vec<f64>),
+    /// A list-of-strings attribute.
+    SL(Vec<String>),
 }
 
 /// Builds an instance of `rss6.errors.<class>` with `msg` and the given attributes.
@@ -33,6 +37,8 @@ pub(crate) fn make(class: &str, msg: impl Into<String>, attrs: Vec<(&'static str
                     Attr::I(x) => exc.setattr(k, x)?,
                     Attr::S(x) => exc.setattr(k, x)?,
                     Attr::IL(x) => exc.setattr(k, x)?,
+                    Attr::FL(x) => exc.setattr(k, x)?,
+                    Attr::SL(x) => exc.setattr(k, x)?,
                 }
             }
             Ok(PyErr::from_value(exc))

@@ -21,7 +21,7 @@ fn coefficients(obj: &Bound<'_, PyAny>) -> PyResult<[Vec<f64>; 6]> {
     Ok(std::array::from_fn(|i| data[i * w..(i + 1) * w].to_vec()))
 }
 
-fn excitation(f0: f64, coeffs: &Bound<'_, PyAny>) -> PyResult<Excitation> {
+pub(crate) fn excitation(f0: f64, coeffs: &Bound<'_, PyAny>) -> PyResult<Excitation> {
     Excitation::from_coefficients(f0, coefficients(coeffs)?).map_err(|e| invalid(e.to_string()))
 }
 

@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod macros;
 
 mod calib;
+mod cloe;
 mod convert;
 mod ctrl;
 mod dwell;
@@ -69,6 +70,12 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::calibration_study, m)?)?;
     m.add_class::<identify::PyExcitationProblem>()?;
     m.add_function(wrap_pyfunction!(identify::excitation_at, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::identification_run, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::simulate_identification, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::cloe_identify, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::cloe_parameter_names, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::table_5_2_truth_params, m)?)?;
+    m.add_function(wrap_pyfunction!(cloe::cloe_psi, m)?)?;
     m.add_function(wrap_pyfunction!(thesis::thesis_tables, m)?)?;
     Ok(())
 }

@@ -121,8 +121,12 @@ fn sim_config(
     solver_iterations: Option<usize>,
     potentiometer_noise: Option<f64>,
     pixel_noise: Option<f64>,
+    drive_derivative_filter: f64,
+    friction_smoothing: f64,
 ) -> PyResult<SimConfig> {
     let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
+    cfg.drive_derivative_filter = drive_derivative_filter;
+    cfg.friction_smoothing = friction_smoothing;
     cfg.seed = seed;
     cfg.dt = dt;
     cfg.torque_limit = torque_limit;
@@ -237,9 +241,12 @@ macro_rules! sim_class {
             /// joint_friction, backlash, camera_latency, payload, base_tilt, joint_offset_drift).
             /// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t) default to rss6-sim's
             /// placement; `camera_latency` (s), `potentiometer_noise` (bit, default Table 4.1's
-            /// 0.2233) and `pixel_noise` (px) tune the sensors. Starts at home.
+            /// 0.2233) and `pixel_noise` (px) tune the sensors. `drive_derivative_filter`: time constant
+            /// T_f (s) of the drive's derivative filter (0: eq. 5.5 as printed);
+            /// `friction_smoothing`: ε (rad/s) of the twin's Coulomb friction f_c tanh(θ̇/ε) (0:
+            /// sign; the rapier plant ignores it). Starts at home.
             #[new]
-            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None))]
+            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None, drive_derivative_filter=0.0, friction_smoothing=0.0))]
             #[allow(clippy::too_many_arguments)]
             fn py_new(
                 py: Python<'_>,
@@ -256,8 +263,10 @@ macro_rules! sim_class {
                 solver_iterations: Option<usize>,
                 potentiometer_noise: Option<f64>,
                 pixel_noise: Option<f64>,
+                drive_derivative_filter: f64,
+                friction_smoothing: f64,
             ) -> PyResult<Self> {
-                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise)?;
+                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise, drive_derivative_filter, friction_smoothing)?;
                 let robot = py.detach(move || <$ty>::new(cfg)).map_err(sim_error)?;
                 Ok($name { robot: Mutex::new(robot) })
             }

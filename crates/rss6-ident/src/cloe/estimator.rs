@@ -148,6 +148,21 @@ pub fn cloe<T: Trajectory + ?Sized>(
     guess: &LoopParams,
     options: &CloeOptions,
 ) -> Result<CloeResult> {
+    cloe_observed(data, cfg, reference, guess, options, &mut |_, _, _| true)
+}
+
+/// [`cloe`] that calls `progress(iteration, Φ, ψ)` after every accepted step (iteration 0: the
+/// guess; ψ as in [`Consistent`], anchored at `guess`), so a caller can keep the last iterate of a
+/// run that does not converge. When it returns `false` the estimation stops with
+/// [`IdentError::NotConverged`] and the cost history so far (the bindings' Ctrl-C).
+pub fn cloe_observed<T: Trajectory + ?Sized>(
+    data: &CloeData,
+    cfg: &LoopConfig,
+    reference: &T,
+    guess: &LoopParams,
+    options: &CloeOptions,
+    progress: &mut dyn FnMut(usize, f64, &[f64]) -> bool,
+) -> Result<CloeResult> {
     if data.t.is_empty() || data.t.len() != data.measured.len() {
         return Err(IdentError::NoCameraFrames(format!(
             "{} frame times and {} poses",
@@ -294,7 +309,8 @@ pub fn cloe<T: Trajectory + ?Sized>(
     let mut iterations = 1usize;
     let mut converged = false;
     let mut previous_invisible = false;
-    'outer: while iterations <= options.max_iterations {
+    let mut stopped = !progress(0, history[0], &psi);
+    'outer: while iterations <= options.max_iterations && !stopped {
         let g = cur
             .g
             .as_ref()
@@ -335,6 +351,10 @@ pub fn cloe<T: Trajectory + ?Sized>(
                     let rel_cost = (cur_total - total) / cur_total.max(f64::MIN_POSITIVE);
                     psi = trial;
                     history.push(total);
+                    if !progress(iterations, total, &psi) {
+                        stopped = true;
+                        break 'outer;
+                    }
                     lambda = (lambda / 10.0).max(1e-12);
                     // tol_2 of eq. 5.9, or a step below 10 % of every predicted σ (poorly
                     // identified quantities drift along flat directions without any effect).
@@ -384,7 +404,7 @@ pub fn cloe<T: Trajectory + ?Sized>(
             }
         }
     }
-    if !converged {
+    if !converged || stopped {
         return Err(IdentError::NotConverged {
             iterations: iterations.min(options.max_iterations),
             cost_history: history,

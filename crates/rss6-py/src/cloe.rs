@@ -1,0 +1,455 @@
+//! Bindings of the identification loop (Fig. 5.1) and of CLOE (thesis §5.3): the loop run on a
+//! robot with rss6-exp's runner ([`rss6_exp::ident::run`]), the loop simulated on the model
+//! ([`rss6_ident::simulate_loop`]) and the estimator ([`rss6_ident::cloe_observed`]).
+//! `rss6.identify` wraps them (`collect`, `simulate`, `cloe`).
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rss6_core::Vec6;
+use rss6_ctrl::PidGains;
+use rss6_exp::ident::{self, IdentSpec};
+use rss6_exp::{Externals, Flow, Observer, Progress, Record};
+use rss6_ident::{
+    cloe_observed, simulate_loop, table_5_2_truth, CloeData, CloeOptions, Consistent, Excitation,
+    IdentError, LoopConfig, LoopParams,
+};
+
+use crate::calib::ident_err;
+use crate::convert::{out1, out_rows6, rows6, vec6};
+use crate::errors::{invalid, make, shape, Attr};
+use crate::exp::{create_log, finish_log, Interrupt};
+use crate::identify::excitation;
+use crate::params::{PyDynamicParams, PyKinematicParams};
+use crate::plant::with_robot;
+
+/// Maps the identification errors of rss6-ident onto `rss6.IdentificationError` (attributes: `names`
+/// for a parameter that is not identifiable, `iterations` and `cost_history` for no convergence) or
+/// `rss6.SimulationError`; the others as for calibration.
+fn cloe_err(e: IdentError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        IdentError::Unidentifiable { names } => {
+            make("IdentificationError", msg, vec![("names", Attr::SL(names))])
+        }
+        IdentError::NotConverged {
+            iterations,
+            cost_history,
+        } => make(
+            "IdentificationError",
+            msg,
+            vec![
+                ("iterations", Attr::I(iterations as i64)),
+                ("cost_history", Attr::FL(cost_history)),
+            ],
+        ),
+        IdentError::NoCameraFrames(_) => make("IdentificationError", msg, vec![]),
+        IdentError::Simulation { time, .. } => {
+            make("SimulationError", msg, vec![("time", Attr::F(time))])
+        }
+        other => ident_err(other),
+    }
+}
+
+/// Per tick and per consumed camera frame, what an identification run shows its observer.
+#[derive(Default)]
+struct Collector {
+    t: Vec<f64>,
+    kappa: Vec<Vec6>,
+    theta_cmd: Vec<Vec6>,
+    reference: Vec<Vec6>,
+    true_pose: Vec<Vec6>,
+    frame_t: Vec<f64>,
+    measured: Vec<Vec6>,
+    progress: Option<Py<PyAny>>,
+    interrupt: Interrupt,
+}
+
+impl Observer for Collector {
+    fn record(&mut self, r: &Record) -> Flow {
+        self.t.push(r.t);
+        self.kappa.push(r.kappa);
+        self.theta_cmd.push(r.theta_cmd);
+        self.reference.push(
+            r.reference
+                .map_or(Vec6::repeat(f64::NAN), |reference| reference.pose),
+        );
+        self.true_pose
+            .push(r.truth.map_or(Vec6::repeat(f64::NAN), |truth| truth.pose));
+        if let Some(chi) = r.camera {
+            self.frame_t.push(r.t);
+            self.measured.push(chi);
+        }
+        Flow::Continue
+    }
+
+    fn progress(&mut self, p: &Progress) -> Flow {
+        let cb = &self.progress;
+        self.interrupt.call(|py| {
+            if let Some(cb) = cb {
+                cb.call1(py, (p.done, p.total))?;
+            }
+            Ok(())
+        })
+    }
+}
+
+/// Runs the identification loop of Fig. 5.1 (rss6-exp's runner) on `robot` (rss6.Plant,
+/// rss6.ModelSim or any object implementing rss6.types.Robot) for `duration` s from its current
+/// state at rest, following the Fourier trajectory (`f0` Hz, `coefficients` (6, 2n + 1)); the
+/// visual PID (eq. 5.4, thesis gains) uses `kp_model`'s J_θ and the frames through
+/// `sensor_in_base` (ᴼχ_C) and `target_in_effector` (ᴱχ_t). Returns a dict: per tick `t`, `kappa`,
+/// `theta_cmd` (drive convention), `reference` (χ_d), `true_pose` (NaN rows on a real robot); per
+/// frame the visual PID consumed `frame_t` and `measured` (χ_E); `frames`, `ticks`, `fault`
+/// (None or (t, reason)). `progress(done_s, total_s)` every `segment` s of robot time; if it raises
+/// (KeyboardInterrupt included) the run stops and the exception propagates; Ctrl-C is checked at
+/// the same points. `mcap`: log the run there as it goes. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (robot, f0, coefficients, duration, kp_model, sensor_in_base, target_in_effector, *, segment=1.0, progress=None, mcap=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identification_run<'py>(
+    py: Python<'py>,
+    robot: &Bound<'py, PyAny>,
+    f0: f64,
+    coefficients: &Bound<'py, PyAny>,
+    duration: f64,
+    kp_model: &PyKinematicParams,
+    sensor_in_base: &Bound<'py, PyAny>,
+    target_in_effector: &Bound<'py, PyAny>,
+    segment: f64,
+    progress: Option<Py<PyAny>>,
+    mcap: Option<std::path::PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let exc = excitation(f0, coefficients)?;
+    let externals = Externals {
+        sensor_in_base: vec6(sensor_in_base, "sensor_in_base")?,
+        target_in_effector: vec6(target_in_effector, "target_in_effector")?,
+    };
+    let mut spec = IdentSpec::new(kp_model.inner, externals);
+    spec.duration = duration;
+    spec.segment = segment;
+    let mut log = match &mcap {
+        Some(path) => Some(create_log(
+            path,
+            &[
+                ("kind", "rss6.identify.collect".to_string()),
+                ("f0", format!("{f0:?}")),
+                ("harmonics", exc.harmonics().to_string()),
+                ("duration", format!("{duration:?}")),
+            ],
+        )?),
+        None => None,
+    };
+    let mut coll = Collector {
+        progress,
+        ..Collector::default()
+    };
+    let outcome = with_robot(robot, |r| {
+        py.detach(|| match log.as_mut() {
+            // The log first: a segment is on disk before `progress` hears of it.
+            Some(l) => ident::run(r, &spec, &exc, &mut (l, &mut coll)),
+            None => ident::run(r, &spec, &exc, &mut coll),
+        })
+    })?;
+    let fault = outcome
+        .as_ref()
+        .ok()
+        .and_then(|o| o.first_fault)
+        .map(|(t, r)| (t, r.to_string()));
+    let end: Vec<(&str, String)> = fault
+        .iter()
+        .map(|(t, r)| ("fault", format!("t = {t:.3} s: {r}")))
+        .collect();
+    let outcome = finish_log(py, log, outcome, coll.interrupt.take(), &end)?;
+    let d = PyDict::new(py);
+    d.set_item("t", out1(py, &coll.t))?;
+    for (key, v) in [
+        ("kappa", &coll.kappa),
+        ("theta_cmd", &coll.theta_cmd),
+        ("reference", &coll.reference),
+        ("true_pose", &coll.true_pose),
+        ("measured", &coll.measured),
+    ] {
+        d.set_item(key, out_rows6(py, v))?;
+    }
+    d.set_item("frame_t", out1(py, &coll.frame_t))?;
+    d.set_item("frames", outcome.frames)?;
+    d.set_item("ticks", outcome.ticks)?;
+    d.set_item("fault", fault)?;
+    Ok(d)
+}
+
+/// (frame times (F,), χ_s (F, 6), clamped joint-ticks).
+type SimulatedFrames<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+    usize,
+);
+
+/// (ψ (43,), dynamics, (l_p, l_i, l_d)).
+type PsiAndParams<'py> = (Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64, f64));
+
+fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
+    PidGains { lp, li, ld }
+}
+
+/// The loop's configuration: `LoopConfig::new` with the given fields set.
+#[allow(clippy::too_many_arguments)]
+fn loop_config(
+    kp: &PyKinematicParams,
+    start: &Bound<'_, PyAny>,
+    duration: f64,
+    torque_limit: f64,
+    camera_latency: f64,
+    dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
+) -> PyResult<LoopConfig> {
+    let mut cfg = LoopConfig::new(kp.inner, vec6(start, "start")?, duration);
+    cfg.torque_limit = torque_limit;
+    cfg.derivative_filter = derivative_filter;
+    cfg.friction_smoothing = friction_smoothing;
+    cfg.camera_latency = camera_latency;
+    cfg.dt = dt;
+    Ok(cfg)
+}
+
+/// Simulates the identification loop on the model (`kp`, `dp`, drive gains `pid` = (l_p, l_i,
+/// l_d)) from rest at `start` for `duration` s following the Fourier trajectory (`f0`,
+/// `coefficients`). `derivative_filter` T_f (s) of the drive's derivative and `friction_smoothing` ε
+/// (rad/s) of the model's Coulomb friction (0: as printed). Returns (frame times (F,), χ_s (F, 6),
+/// joint-ticks with the torque clamped).
+#[pyfunction]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simulate_identification<'py>(
+    py: Python<'py>,
+    kp: &PyKinematicParams,
+    dp: &PyDynamicParams,
+    pid: (f64, f64, f64),
+    f0: f64,
+    coefficients: &Bound<'py, PyAny>,
+    start: &Bound<'py, PyAny>,
+    duration: f64,
+    torque_limit: f64,
+    camera_latency: f64,
+    dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
+) -> PyResult<SimulatedFrames<'py>> {
+    let exc = excitation(f0, coefficients)?;
+    let cfg = loop_config(
+        kp,
+        start,
+        duration,
+        torque_limit,
+        camera_latency,
+        dt,
+        derivative_filter,
+        friction_smoothing,
+    )?;
+    let a = LoopParams {
+        dynamics: dp.inner,
+        pid: pid_gains(pid),
+    };
+    let run = py
+        .detach(|| simulate_loop(&cfg, &a, &exc, None))
+        .map_err(cloe_err)?;
+    Ok((out1(py, &run.t), out_rows6(py, &run.chi), run.saturated))
+}
+
+/// CLOE (eq. 5.6–5.9) of the measured frames `measured` (F, 6) at times `t` (F,) collected with the
+/// identification loop following the Fourier trajectory (`f0`, `coefficients`) from rest at
+/// `start`, from the guess (`dp_guess`, `pid_guess`). `parameters`: names to estimate (see
+/// `cloe_parameter_names`), None for every identifiable one. `derivative_filter`,
+/// `friction_smoothing`: as for `simulate_identification`. `prior_log_std`: σ of the Gaussian prior
+/// on every estimated log-quantity, centred at the guess (0: none, the pure output error of eq. 5.7). No convergence raises
+/// `rss6.IdentificationError` with `iterations`, `cost_history` and the last accepted iterate
+/// `last_dynamics`, `last_pid`. The loop's model: `kp`,
+/// `torque_limit`, `camera_latency`, `dt`, run for `duration` s. `progress(iteration, cost)` after
+/// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
+/// propagates. Returns a dict (see `rss6.identify.IdentificationResult`). Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cloe_identify<'py>(
+    py: Python<'py>,
+    t: Vec<f64>,
+    measured: &Bound<'py, PyAny>,
+    f0: f64,
+    coefficients: &Bound<'py, PyAny>,
+    kp: &PyKinematicParams,
+    dp_guess: &PyDynamicParams,
+    pid_guess: (f64, f64, f64),
+    start: &Bound<'py, PyAny>,
+    duration: f64,
+    parameters: Option<Vec<String>>,
+    max_iterations: usize,
+    torque_limit: f64,
+    camera_latency: f64,
+    dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
+    noise: Option<(f64, f64)>,
+    per_tick_jacobians: bool,
+    tol_cost: f64,
+    tol_step: f64,
+    identifiability_threshold: f64,
+    poor_std: f64,
+    prior_log_std: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let measured = rows6(measured, "measured")?;
+    if measured.len() != t.len() {
+        return Err(shape(format!(
+            "measured must have shape ({}, 6) like t, got {} rows",
+            t.len(),
+            measured.len()
+        )));
+    }
+    let exc: Excitation = excitation(f0, coefficients)?;
+    let cfg = loop_config(
+        kp,
+        start,
+        duration,
+        torque_limit,
+        camera_latency,
+        dt,
+        derivative_filter,
+        friction_smoothing,
+    )?;
+    let guess = LoopParams {
+        dynamics: dp_guess.inner,
+        pid: pid_gains(pid_guess),
+    };
+    let mut options = CloeOptions {
+        max_iterations,
+        tol_cost,
+        tol_step,
+        parameters,
+        identifiability_threshold,
+        poor_std,
+        per_tick_jacobians,
+        prior_log_std: (prior_log_std != 0.0).then_some(prior_log_std),
+        ..CloeOptions::default()
+    };
+    if let Some((p, a)) = noise {
+        options.noise = [p, a];
+    }
+    let data = CloeData { t, measured };
+    let mut interrupt = Interrupt::default();
+    let mut last: Vec<f64> = Vec::new();
+    let result = py.detach(|| {
+        cloe_observed(&data, &cfg, &exc, &guess, &options, &mut |k, cost, psi| {
+            last.clear();
+            last.extend_from_slice(psi);
+            interrupt.call(|py| {
+                if let Some(cb) = &progress {
+                    cb.call1(py, (k, cost))?;
+                }
+                Ok(())
+            }) == Flow::Continue
+        })
+    });
+    if let Some(e) = interrupt.take() {
+        return Err(e);
+    }
+    let r = match result {
+        Ok(r) => r,
+        Err(e @ IdentError::NotConverged { .. }) => {
+            // The last accepted iterate goes with the error (`last_dynamics`, `last_pid`): what a
+            // report of a run that did not converge shows.
+            let err = cloe_err(e);
+            if let (Ok(cons), false) = (Consistent::new(&guess), last.is_empty()) {
+                let a = cons.params(&last);
+                let v = err.value(py);
+                v.setattr(
+                    "last_dynamics",
+                    Py::new(py, PyDynamicParams { inner: a.dynamics })?,
+                )?;
+                v.setattr("last_pid", (a.pid.lp, a.pid.li, a.pid.ld))?;
+            }
+            return Err(err);
+        }
+        Err(e) => return Err(cloe_err(e)),
+    };
+    let d = PyDict::new(py);
+    d.set_item(
+        "dynamics",
+        Py::new(
+            py,
+            PyDynamicParams {
+                inner: r.params.dynamics,
+            },
+        )?,
+    )?;
+    let g = r.params.pid;
+    d.set_item("pid", (g.lp, g.li, g.ld))?;
+    d.set_item("identified", r.identified)?;
+    d.set_item("unidentifiable", r.unidentifiable)?;
+    d.set_item("relative_std", out1(py, &r.relative_std))?;
+    d.set_item("poorly_identified", r.poorly_identified)?;
+    d.set_item("rms_before", out1(py, r.rms_before.as_slice()))?;
+    d.set_item("rms_after", out1(py, r.rms_after.as_slice()))?;
+    d.set_item("cost_history", out1(py, &r.cost_history))?;
+    d.set_item("iterations", r.iterations)?;
+    d.set_item("reduced_chi2", r.reduced_chi2)?;
+    d.set_item("simulations", r.simulations)?;
+    d.set_item("psi", out1(py, &r.psi))?;
+    Ok(d)
+}
+
+/// Names of the quantities CLOE estimates (the consistent parameters ψ: "platform.m",
+/// "platform.Sxx", …, "wrench1.Iz", "link1.It", "fc1", "fv1", "lp", "li", "ld").
+#[pyfunction]
+pub(crate) fn cloe_parameter_names() -> Vec<String> {
+    Consistent::names()
+}
+
+/// The documented simulated truth shaped like Table 5.2 (`rss6_ident::table_5_2_truth`):
+/// (DynamicParams, (l_p, l_i, l_d)).
+#[pyfunction]
+pub(crate) fn table_5_2_truth_params() -> (PyDynamicParams, (f64, f64, f64)) {
+    let a = table_5_2_truth();
+    (
+        PyDynamicParams { inner: a.dynamics },
+        (a.pid.lp, a.pid.li, a.pid.ld),
+    )
+}
+
+/// The parameters of the loop with consistent ψ (43,) anchored at the guess (`dp`, `pid`): ψ ↦
+/// (DynamicParams, (l_p, l_i, l_d)); with `psi` None, ψ of the guess.
+#[pyfunction]
+#[pyo3(signature = (dp, pid, psi=None))]
+pub(crate) fn cloe_psi<'py>(
+    py: Python<'py>,
+    dp: &PyDynamicParams,
+    pid: (f64, f64, f64),
+    psi: Option<Vec<f64>>,
+) -> PyResult<PsiAndParams<'py>> {
+    let guess = LoopParams {
+        dynamics: dp.inner,
+        pid: pid_gains(pid),
+    };
+    let cons = Consistent::new(&guess).map_err(cloe_err)?;
+    let p: Vec<f64> = match psi {
+        Some(p) if p.len() == rss6_ident::N_PSI => p,
+        Some(p) => {
+            return Err(shape(format!(
+                "psi must have {} entries, got {}",
+                rss6_ident::N_PSI,
+                p.len()
+            )))
+        }
+        None => cons.psi(&guess).map_err(cloe_err)?.to_vec(),
+    };
+    if p.iter().any(|v| !v.is_finite()) {
+        return Err(invalid("psi must be finite"));
+    }
+    let a = cons.params(&p);
+    Ok((
+        out1(py, &p),
+        PyDynamicParams { inner: a.dynamics },
+        (a.pid.lp, a.pid.li, a.pid.ld),
+    ))
+}
