@@ -587,6 +587,9 @@ def simulate_identification(
     dt: float = 1e-3,
     derivative_filter: float = 0.0,
     friction_smoothing: float = 0.0,
+    gravity: ArrayLike | None = None,
+    load: tuple[float, ArrayLike, ArrayLike] | None = None,
+    offset_drift: ArrayLike | None = None,
 ) -> tuple[_F64, _F64, int]: ...
 def cloe_identify(
     t: ArrayLike,

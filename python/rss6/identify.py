@@ -419,10 +419,16 @@ def simulate(
     dt: float = 1e-3,
     derivative_filter: float = 0.0,
     friction_smoothing: float = 0.0,
+    gravity: ArrayLike | None = None,
+    load: tuple[float, ArrayLike, ArrayLike] | None = None,
+    offset_drift: ArrayLike | None = None,
 ) -> F64:
     """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
     Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
-    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed): the model's camera frames at ``times``
+    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed). Effects the model can express:
+    ``gravity`` (3,) m/s² in the base frame (a tilted base), ``load`` = (mass kg, centre of mass (3,)
+    m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform, ``offset_drift`` (6,) rad/s of the
+    potentiometer offsets. Returns the model's camera frames at ``times``
     (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
     otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
@@ -441,6 +447,15 @@ def simulate(
         dt=dt,
         derivative_filter=derivative_filter,
         friction_smoothing=friction_smoothing,
+        gravity=None if gravity is None else np.asarray(gravity, dtype=np.float64),
+        load=None
+        if load is None
+        else (
+            float(load[0]),
+            np.asarray(load[1], dtype=np.float64),
+            np.asarray(load[2], dtype=np.float64),
+        ),
+        offset_drift=None if offset_drift is None else np.asarray(offset_drift, dtype=np.float64),
     )
     ts = np.asarray(ts)
     k = np.clip(np.searchsorted(ts, tt), 0, max(ts.size - 1, 0))

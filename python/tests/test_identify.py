@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import rss6
 from rss6 import identify
+from scipy.spatial.transform import Rotation
 
 
 @pytest.fixture(scope="module")
@@ -314,3 +315,49 @@ def test_an_exception_in_progress_stops_collect_and_cloe(kp: rss6.KinematicParam
     data = _collect(_twin(dp, pid), exc)
     with pytest.raises(Stop):
         identify.cloe(data, kp, dp, pid, parameters=SUBSET, torque_limit=1e4, progress=stop)
+
+
+def test_simulate_expresses_the_twins_payload_tilt_and_offset_drift(
+    kp: rss6.KinematicParams,
+) -> None:
+    """The model in the loop with a payload (COM offset), a tilted base and a drifting
+    potentiometer offset equals the twin with those hidden effects: the discrepancy workflow's
+    candidates are simulatable (measured 8.9e-14; without the effects the gap is 1.5e-4)."""
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+    roll, pitch = 2e-3, -1e-3
+    twin = rss6.ModelSim(
+        kp,
+        dp,
+        pid=pid,
+        torque_limit=1e4,
+        potentiometer_noise=0.0,
+        pixel_noise=0.0,
+        effects={
+            "payload": {"mass": 2.0, "x": 0.05, "y": 0.02, "z": 0.03, "inertia": 1e-3},
+            "base_tilt": {"roll": roll, "pitch": pitch},
+            "joint_offset_drift": {"rate": 2e-3, "joint": 1.0},
+        },
+    )
+    data = _collect(twin, exc)
+    # The tilted base's gravity: Rx(roll)·Ry(pitch) (eq. 3.2's convention) transposed onto −9.81 ẑ.
+    r = Rotation.from_euler("XY", [roll, pitch]).as_matrix()
+    g = r.T @ np.array([0.0, 0.0, -9.81])
+    drift = np.zeros(6)
+    drift[1] = 2e-3
+    chi = identify.simulate(
+        kp,
+        dp,
+        pid,
+        exc,
+        times=data.t,
+        torque_limit=1e4,
+        gravity=g,
+        load=(2.0, [0.05, 0.02, 0.03], np.eye(3) * 1e-3),
+        offset_drift=drift,
+    )
+    plain = identify.simulate(kp, dp, pid, exc, times=data.t, torque_limit=1e4)
+    assert np.abs(chi - data.measured).max() < 3e-13
+    assert np.abs(plain - data.measured).max() > 1e-5
+    with pytest.raises(rss6.InvalidInputError):
+        identify.simulate(kp, dp, pid, exc, times=data.t, load=(2.0, [0.0, 0.0], np.eye(3)))

@@ -6,7 +6,7 @@
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rss6_core::Vec6;
+use rss6_core::{Mat3, PlatformLoad, Vec3, Vec6};
 use rss6_ctrl::PidGains;
 use rss6_exp::ident::{self, IdentSpec};
 use rss6_exp::{Externals, Flow, Observer, Progress, Record};
@@ -16,7 +16,7 @@ use rss6_ident::{
 };
 
 use crate::calib::ident_err;
-use crate::convert::{out1, out_rows6, rows6, vec6};
+use crate::convert::{exact, out1, out_rows6, rows6, vec6, vecn};
 use crate::errors::{invalid, make, shape, Attr};
 use crate::exp::{create_log, finish_log, Interrupt};
 use crate::identify::excitation;
@@ -217,10 +217,13 @@ fn loop_config(
 /// Simulates the identification loop on the model (`kp`, `dp`, drive gains `pid` = (l_p, l_i,
 /// l_d)) from rest at `start` for `duration` s following the Fourier trajectory (`f0`,
 /// `coefficients`). `derivative_filter` T_f (s) of the drive's derivative and `friction_smoothing` ε
-/// (rad/s) of the model's Coulomb friction (0: as printed). Returns (frame times (F,), χ_s (F, 6),
+/// (rad/s) of the model's Coulomb friction (0: as printed). Effects the model can express (the
+/// discrepancy workflow's candidates): `gravity` (3,) in the base frame (a tilted base), `load` =
+/// (mass kg, centre of mass (3,) m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform,
+/// `offset_drift` (6,) rad/s of the potentiometer offsets. Returns (frame times (F,), χ_s (F, 6),
 /// joint-ticks with the torque clamped).
 #[pyfunction]
-#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0))]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, gravity=None, load=None, offset_drift=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_identification<'py>(
     py: Python<'py>,
@@ -236,9 +239,12 @@ pub(crate) fn simulate_identification<'py>(
     dt: f64,
     derivative_filter: f64,
     friction_smoothing: f64,
+    gravity: Option<&Bound<'py, PyAny>>,
+    load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
+    offset_drift: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
-    let cfg = loop_config(
+    let mut cfg = loop_config(
         kp,
         start,
         duration,
@@ -248,6 +254,21 @@ pub(crate) fn simulate_identification<'py>(
         derivative_filter,
         friction_smoothing,
     )?;
+    if let Some(g) = gravity {
+        cfg.gravity = Vec3::from(vecn::<3>(g, "gravity")?);
+    }
+    if let Some((mass, com, inertia)) = load {
+        let c = vecn::<3>(&com, "load centre of mass")?;
+        let i = exact(&inertia, "load inertia", &[3, 3])?;
+        cfg.load = Some(PlatformLoad::new(
+            mass,
+            Vec3::from(c),
+            Mat3::from_row_slice(&i),
+        ));
+    }
+    if let Some(d) = offset_drift {
+        cfg.offset_drift = vec6(d, "offset_drift")?;
+    }
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
