@@ -617,6 +617,9 @@ def cloe_identify(
     poor_std: float = 0.1,
     prior_log_std: float = 1.0,
     progress: Callable[[int, float], Any] | None = None,
+    gravity: ArrayLike | None = None,
+    load: tuple[float, ArrayLike, ArrayLike] | None = None,
+    offset_drift: ArrayLike | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...
 def table_5_2_truth_params() -> tuple[DynamicParams, tuple[float, float, float]]: ...

@@ -447,15 +447,7 @@ def simulate(
         dt=dt,
         derivative_filter=derivative_filter,
         friction_smoothing=friction_smoothing,
-        gravity=None if gravity is None else np.asarray(gravity, dtype=np.float64),
-        load=None
-        if load is None
-        else (
-            float(load[0]),
-            np.asarray(load[1], dtype=np.float64),
-            np.asarray(load[2], dtype=np.float64),
-        ),
-        offset_drift=None if offset_drift is None else np.asarray(offset_drift, dtype=np.float64),
+        **_effect_kwargs(gravity, load, offset_drift),
     )
     ts = np.asarray(ts)
     k = np.clip(np.searchsorted(ts, tt), 0, max(ts.size - 1, 0))
@@ -505,6 +497,27 @@ class IdentificationResult:
             raise InvalidInputError(f"{name!r} was not identified") from None
 
 
+def _effect_kwargs(
+    gravity: ArrayLike | None,
+    load: tuple[float, ArrayLike, ArrayLike] | None,
+    offset_drift: ArrayLike | None,
+) -> dict[str, Any]:
+    """The model effects as the bindings take them (arrays of float64; None: absent)."""
+    return {
+        "gravity": None if gravity is None else np.asarray(gravity, dtype=np.float64),
+        "load": None
+        if load is None
+        else (
+            float(load[0]),
+            np.asarray(load[1], dtype=np.float64),
+            np.asarray(load[2], dtype=np.float64),
+        ),
+        "offset_drift": None
+        if offset_drift is None
+        else np.asarray(offset_drift, dtype=np.float64),
+    }
+
+
 def cloe(
     data: IdentificationData,
     kp: _rss6.KinematicParams,
@@ -524,6 +537,9 @@ def cloe(
     tol_cost: float = 1e-6,
     tol_step: float = 1e-5,
     prior_log_std: float | None = 1.0,
+    gravity: ArrayLike | None = None,
+    load: tuple[float, ArrayLike, ArrayLike] | None = None,
+    offset_drift: ArrayLike | None = None,
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
@@ -538,7 +554,8 @@ def cloe(
     ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1).
     ``prior_log_std``: σ of a Gaussian prior on every estimated log-quantity centred at the guess
     (keeps quantities the run hardly sees near it); ``None``: the pure output error of eq. 5.7.
-    ``cost_history`` includes the prior's term.
+    ``cost_history`` includes the prior's term. ``gravity``, ``load``, ``offset_drift``: effects of
+    the model, as for :func:`simulate` (re-identification with named effects).
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
@@ -590,6 +607,7 @@ def cloe(
         tol_step=tol_step,
         prior_log_std=0.0 if prior_log_std is None else float(prior_log_std),
         progress=progress,
+        **_effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]
     return IdentificationResult(

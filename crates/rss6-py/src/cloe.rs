@@ -214,6 +214,32 @@ fn loop_config(
     Ok(cfg)
 }
 
+/// The effects the model can express, on a loop configuration: `gravity` (3,), `load` = (mass,
+/// centre of mass (3,), inertia (3, 3)), `offset_drift` (6,).
+fn apply_effects(
+    cfg: &mut LoopConfig,
+    gravity: Option<&Bound<'_, PyAny>>,
+    load: Option<(f64, Bound<'_, PyAny>, Bound<'_, PyAny>)>,
+    offset_drift: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    if let Some(g) = gravity {
+        cfg.gravity = Vec3::from(vecn::<3>(g, "gravity")?);
+    }
+    if let Some((mass, com, inertia)) = load {
+        let c = vecn::<3>(&com, "load centre of mass")?;
+        let i = exact(&inertia, "load inertia", &[3, 3])?;
+        cfg.load = Some(PlatformLoad::new(
+            mass,
+            Vec3::from(c),
+            Mat3::from_row_slice(&i),
+        ));
+    }
+    if let Some(d) = offset_drift {
+        cfg.offset_drift = vec6(d, "offset_drift")?;
+    }
+    Ok(())
+}
+
 /// Simulates the identification loop on the model (`kp`, `dp`, drive gains `pid` = (l_p, l_i,
 /// l_d)) from rest at `start` for `duration` s following the Fourier trajectory (`f0`,
 /// `coefficients`). `derivative_filter` T_f (s) of the drive's derivative and `friction_smoothing` ε
@@ -254,21 +280,7 @@ pub(crate) fn simulate_identification<'py>(
         derivative_filter,
         friction_smoothing,
     )?;
-    if let Some(g) = gravity {
-        cfg.gravity = Vec3::from(vecn::<3>(g, "gravity")?);
-    }
-    if let Some((mass, com, inertia)) = load {
-        let c = vecn::<3>(&com, "load centre of mass")?;
-        let i = exact(&inertia, "load inertia", &[3, 3])?;
-        cfg.load = Some(PlatformLoad::new(
-            mass,
-            Vec3::from(c),
-            Mat3::from_row_slice(&i),
-        ));
-    }
-    if let Some(d) = offset_drift {
-        cfg.offset_drift = vec6(d, "offset_drift")?;
-    }
+    apply_effects(&mut cfg, gravity, load, offset_drift)?;
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
@@ -289,9 +301,11 @@ pub(crate) fn simulate_identification<'py>(
 /// `last_dynamics`, `last_pid`. The loop's model: `kp`,
 /// `torque_limit`, `camera_latency`, `dt`, run for `duration` s. `progress(iteration, cost)` after
 /// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
-/// propagates. Returns a dict (see `rss6.identify.IdentificationResult`). Releases the GIL.
+/// propagates. `gravity`, `load`, `offset_drift`: effects of the model, as for
+/// `simulate_identification` (re-identification with named effects). Returns a dict (see
+/// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -319,6 +333,9 @@ pub(crate) fn cloe_identify<'py>(
     poor_std: f64,
     prior_log_std: f64,
     progress: Option<Py<PyAny>>,
+    gravity: Option<&Bound<'py, PyAny>>,
+    load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
+    offset_drift: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -329,7 +346,7 @@ pub(crate) fn cloe_identify<'py>(
         )));
     }
     let exc: Excitation = excitation(f0, coefficients)?;
-    let cfg = loop_config(
+    let mut cfg = loop_config(
         kp,
         start,
         duration,
@@ -339,6 +356,7 @@ pub(crate) fn cloe_identify<'py>(
         derivative_filter,
         friction_smoothing,
     )?;
+    apply_effects(&mut cfg, gravity, load, offset_drift)?;
     let guess = LoopParams {
         dynamics: dp_guess.inner,
         pid: pid_gains(pid_guess),
