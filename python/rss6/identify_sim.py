@@ -5,10 +5,10 @@
    whose dynamics and drive gains are :func:`rss6.identify.table_5_2_truth` — logged to MCAP.
 3. CLOE (§5.3) from the initial model: Table 5.1, the tuned drive gains (400, 2000, 4) and small
    positive friction (0.1 N·m, 0.1 N·m·s/rad: the log-parametrisation cannot start at the thesis's 0).
-4. Tables 5.2 (initial, identified, truth, relative σ, flag > 10 %, beside the thesis's values),
-   5.3 (RMS before/after), 5.4 (validation on fresh random feasible trajectories, RMS of the
-   identified and of the initial model) and 5.5 (variation over re-identifications on the
-   validation runs); Figs. 5.7–5.9 as PNG; an MCAP log per run.
+4. Tables 5.2 (initial, identified, truth, relative σ, flag > 10 %, beside the thesis's values), 5.3
+   (RMS before/after), 5.4 (validation on fresh random feasible trajectories, RMS of the identified
+   and initial models), 5.5 (variation over re-identifications on the validation runs); Figs.
+   5.7–5.9 as PNG; an MCAP log per run.
 
 If CLOE does not converge the report says so, shows its cost history and uses the last accepted
 iterate (marked as such) for the tables and figures.
@@ -34,8 +34,7 @@ __all__ = ["IdentifyReport", "run"]
 INITIAL_FRICTION = (0.1, 0.1)
 #: Drive gains of the initial model (rss6's tuned gains, PidGains::tuned).
 INITIAL_PID = (400.0, 2000.0, 4.0)
-#: Time constant (s) of the drive's derivative filter, on the plant and in the model (as in
-#: rss6-ident's identification_study example).
+#: Time constant (s) of the drive's derivative filter, on the plant and in the model.
 DRIVE_DERIVATIVE_FILTER = 5e-3
 #: ε (rad/s) of the model's smoothed Coulomb friction f_c tanh(θ̇/ε): 1 rad/s, what the multi-start
 #: benchmark needs for ±30 % guesses of Table 5.2's friction (docs/identification.md).

@@ -5,9 +5,14 @@
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
 use rss6_core::{
-    DynamicParams, Environment, KinematicParams, PlatformLoad, Vec3, Vec6, GRAVITY, LEGS, N_DYN,
+    jacobian_theta, mass_matrix_with_env, DynamicParams, Environment, KinematicParams, Mat6,
+    PlatformLoad, Vec3, Vec6, GRAVITY, LEGS, N_DYN,
 };
 use rss6_ctrl::{CartesianPidGains, PidGains};
+
+/// Largest λ·dt of the friction's linearisation M_θ⁻¹ diag(f_c/ε + f_v) that RK4 (stable on the
+/// real axis up to 2.785) is allowed at the start pose: 2.0 leaves room for the drive's damping.
+const MAX_FRICTION_STIFFNESS: f64 = 2.0;
 
 /// Length of the identification vector A = [Ξ (64); l_p, l_i, l_d] (eq. 5.6).
 pub const N_A: usize = N_DYN + 3;
@@ -130,6 +135,47 @@ impl LoopConfig {
         }
         self.kp.validate()?;
         self.drive.validate()?;
+        Ok(())
+    }
+
+    /// With smoothed friction, f_c tanh(θ̇/ε) acts like a viscous f_c/ε near θ̇ = 0; integrated
+    /// explicitly at `dt` it must stay inside RK4's stability region, or the loop chatters and χ_s
+    /// stops being a smooth function of A (measured: ε = 0.1 rad/s with Table 5.2's friction, λ·dt ≈ 3,
+    /// leaves LM stuck). The check is at the start pose, where the run rests.
+    pub(super) fn check_friction_stiffness(&self, dp: &DynamicParams) -> Result<()> {
+        let cfg = self;
+        let eps = cfg.friction_smoothing;
+        let m = mass_matrix_with_env(&cfg.kp, dp, &cfg.start, &cfg.environment())?;
+        let j = jacobian_theta(&cfg.kp, &cfg.start)?;
+        let Some(m_inv) = m.try_inverse() else {
+            return Err(IdentError::InvalidInput(
+                "the mass matrix at the start pose is singular".into(),
+            ));
+        };
+        // M_θ⁻¹ = J_θ M̃⁻¹ J_θᵀ; the eigenvalues of M_θ⁻¹ D are those of D^½ M_θ⁻¹ D^½ (symmetric).
+        let d = Vec6::from_fn(|i, _| {
+            let c = if eps > 0.0 { dp.coulomb[i] / eps } else { 0.0 };
+            (c + dp.viscous[i]).max(0.0).sqrt()
+        });
+        let s = Mat6::from_diagonal(&d) * (j * m_inv * j.transpose()) * Mat6::from_diagonal(&d);
+        let s = (s + s.transpose()) * 0.5;
+        let lambda = s.symmetric_eigenvalues().max();
+        let stiff = lambda * cfg.dt;
+        if stiff.is_nan() || stiff > MAX_FRICTION_STIFFNESS {
+            let need = if eps > 0.0 {
+                format!(
+                    "; with this friction ε must be at least ≈ {:.3} rad/s",
+                    eps * stiff / MAX_FRICTION_STIFFNESS
+                )
+            } else {
+                String::new()
+            };
+            return Err(IdentError::InvalidInput(format!(
+                "joint friction too stiff for dt = {} s: λ·dt = {stiff:.2} > {MAX_FRICTION_STIFFNESS} \
+                 (friction smoothing ε = {eps} rad/s){need}",
+                cfg.dt
+            )));
+        }
         Ok(())
     }
 
