@@ -303,6 +303,25 @@ def run(
     use_rapier = plant == "rapier" or (plant == "auto" and rss6.Plant is not None)
     t_f = 0.0 if as_printed else DRIVE_DERIVATIVE_FILTER
     eps = 0.0 if as_printed else FRICTION_SMOOTHING
+
+    def frames(
+        dp: rss6.DynamicParams,
+        pid: tuple[float, float, float],
+        reference: identify.Excitation,
+        d: identify.IdentificationData,
+    ) -> np.ndarray:
+        """χ_s of the model (dp, pid) in this run's loop at the frames of `d`."""
+        return identify.simulate(
+            kp,
+            dp,
+            pid,
+            reference,
+            times=d.t,
+            dt=d.dt,
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+        )
+
     smooth = {"derivative_filter": t_f, "friction_smoothing": eps}
 
     def bar(total: int, desc: str) -> Any:
@@ -431,28 +450,13 @@ def run(
         hist = np.asarray(e.cost_history)  # type: ignore[attr-defined]
         its, chi2 = int(e.iterations), float("nan")  # type: ignore[attr-defined]
         identified, rel, unid = (), np.zeros(0), ()
-        chi0 = identify.simulate(
-            kp,
-            dp0,
-            pid0,
-            exc,
-            times=data.t,
-            dt=data.dt,
-            derivative_filter=t_f,
-            friction_smoothing=eps,
-        )
-        chi1 = identify.simulate(
-            kp,
-            est_dp,
-            est_pid,
-            exc,
-            times=data.t,
-            dt=data.dt,
-            derivative_filter=t_f,
-            friction_smoothing=eps,
-        )
-        rms_b = np.sqrt(np.mean((data.measured - chi0) ** 2, axis=0))
-        rms_a = np.sqrt(np.mean((data.measured - chi1) ** 2, axis=0))
+        # The report's figures need these frames anyway (`sims` below).
+        sims = {
+            "initial": frames(dp0, pid0, exc, data),
+            "identified": frames(est_dp, est_pid, exc, data),
+        }
+        rms_b = np.sqrt(np.mean((data.measured - sims["initial"]) ** 2, axis=0))
+        rms_a = np.sqrt(np.mean((data.measured - sims["identified"]) ** 2, axis=0))
         result = identify.IdentificationResult(
             dynamics=est_dp,
             pid=est_pid,
@@ -473,28 +477,11 @@ def run(
         b.close()
     elapsed["cloe"] = time.perf_counter() - t0
 
-    sims = {
-        "initial": identify.simulate(
-            kp,
-            dp0,
-            pid0,
-            exc,
-            times=data.t,
-            dt=data.dt,
-            derivative_filter=t_f,
-            friction_smoothing=eps,
-        ),
-        "identified": identify.simulate(
-            kp,
-            est_dp,
-            est_pid,
-            exc,
-            times=data.t,
-            dt=data.dt,
-            derivative_filter=t_f,
-            friction_smoothing=eps,
-        ),
-    }
+    if converged:
+        sims = {
+            "initial": frames(dp0, pid0, exc, data),
+            "identified": frames(est_dp, est_pid, exc, data),
+        }
     plots.identification_fit(
         data.t,
         data.measured,
@@ -525,18 +512,7 @@ def run(
     plots.identification_fit(
         d1.t,
         d1.measured,
-        {
-            "identified": identify.simulate(
-                kp,
-                est_dp,
-                est_pid,
-                val.excitations[0],
-                times=d1.t,
-                dt=d1.dt,
-                derivative_filter=t_f,
-                friction_smoothing=eps,
-            )
-        },
+        {"identified": frames(est_dp, est_pid, val.excitations[0], d1)},
         outdir / "fig5_9_validation.png",
         "Validation trajectory 1: measured and identified model (Fig. 5.9)",
     )

@@ -204,6 +204,7 @@ fn loop_config(
     dt: f64,
     derivative_filter: f64,
     friction_smoothing: f64,
+    effects: Effects<'_>,
 ) -> PyResult<LoopConfig> {
     let mut cfg = LoopConfig::new(kp.inner, vec6(start, "start")?, duration);
     cfg.torque_limit = torque_limit;
@@ -211,8 +212,17 @@ fn loop_config(
     cfg.friction_smoothing = friction_smoothing;
     cfg.camera_latency = camera_latency;
     cfg.dt = dt;
+    let (gravity, load, offset_drift) = effects;
+    apply_effects(&mut cfg, gravity, load, offset_drift)?;
     Ok(cfg)
 }
+
+/// The model effects of a binding call: `gravity`, `load`, `offset_drift` (see [`apply_effects`]).
+type Effects<'a> = (
+    Option<&'a Bound<'a, PyAny>>,
+    Option<(f64, Bound<'a, PyAny>, Bound<'a, PyAny>)>,
+    Option<&'a Bound<'a, PyAny>>,
+);
 
 /// The effects the model can express, on a loop configuration: `gravity` (3,), `load` = (mass,
 /// centre of mass (3,), inertia (3, 3)), `offset_drift` (6,).
@@ -270,7 +280,7 @@ pub(crate) fn simulate_identification<'py>(
     offset_drift: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
-    let mut cfg = loop_config(
+    let cfg = loop_config(
         kp,
         start,
         duration,
@@ -279,8 +289,8 @@ pub(crate) fn simulate_identification<'py>(
         dt,
         derivative_filter,
         friction_smoothing,
+        (gravity, load, offset_drift),
     )?;
-    apply_effects(&mut cfg, gravity, load, offset_drift)?;
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
@@ -346,7 +356,7 @@ pub(crate) fn cloe_identify<'py>(
         )));
     }
     let exc: Excitation = excitation(f0, coefficients)?;
-    let mut cfg = loop_config(
+    let cfg = loop_config(
         kp,
         start,
         duration,
@@ -355,8 +365,8 @@ pub(crate) fn cloe_identify<'py>(
         dt,
         derivative_filter,
         friction_smoothing,
+        (gravity, load, offset_drift),
     )?;
-    apply_effects(&mut cfg, gravity, load, offset_drift)?;
     let guess = LoopParams {
         dynamics: dp_guess.inner,
         pid: pid_gains(pid_guess),
