@@ -10,16 +10,16 @@ Built so far — the statistical core, the data model and the report (docs/discr
 * :mod:`~rss6.discrepancy.report` — :class:`DiscrepancyReport` (``.table()``, ``.save(dir)``),
   :class:`NamedEffect`, :func:`from_detection`.
 
-Not built: the effect library (``CANDIDATES``) and :func:`diagnose`, which replay the model in the
-closed loop with effects — that simulation is to come from the Rust side. :func:`diagnose` raises
-``NotImplementedError`` until then; :class:`Model` is the model description it will take.
+and the workflow itself:
+
+* :mod:`~rss6.discrepancy.effects` — the effect library, one file per effect (:data:`CANDIDATES`);
+* :mod:`~rss6.discrepancy.model` — :class:`Model` (with its effects, saved as TOML),
+  :class:`Run`, :func:`replay` (the model twin in the run's closed loop);
+* :func:`diagnose` — detect, name, add, show the gap shrink on a held-out run
+  (:mod:`~rss6.discrepancy.diagnose`, numerics in :mod:`~rss6.discrepancy.search`).
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Any
 
 from rss6.discrepancy import stats
 from rss6.discrepancy.detect import (
@@ -30,6 +30,9 @@ from rss6.discrepancy.detect import (
     detect,
     reference_signatures,
 )
+from rss6.discrepancy.diagnose import diagnose
+from rss6.discrepancy.effects import CANDIDATES, EFFECTS
+from rss6.discrepancy.model import AppliedEffect, Model, Run, replay, run_of
 from rss6.discrepancy.noise import (
     NoiseModel,
     noise_from_differences,
@@ -50,7 +53,10 @@ from rss6.discrepancy.report import (
 
 __all__ = [
     "AXES",
+    "CANDIDATES",
+    "EFFECTS",
     "Ambiguity",
+    "AppliedEffect",
     "CandidateRow",
     "Detection",
     "DiscrepancyReport",
@@ -58,6 +64,7 @@ __all__ = [
     "Model",
     "NamedEffect",
     "NoiseModel",
+    "Run",
     "TestRow",
     "Unexplained",
     "Window",
@@ -69,40 +76,8 @@ __all__ = [
     "noise_from_periods",
     "noise_from_repeats",
     "reference_signatures",
+    "replay",
+    "run_of",
     "stats",
     "unexplained",
 ]
-
-
-@dataclass(frozen=True)
-class Model:
-    """The model a discrepancy search replays in the closed loop (issue 14): kinematics
-    (:class:`rss6.KinematicParams`), dynamics (:class:`rss6.DynamicParams`), the drive ``pid``
-    gains, ᴼχ_C ``sensor_in_base`` and ᴱχ_t ``target_in_effector`` (6,), and the ``effects`` it
-    already includes (names with parameters). A description only: nothing simulates it yet."""
-
-    kinematics: Any
-    dynamics: Any
-    pid: Any
-    sensor_in_base: Any
-    target_in_effector: Any
-    effects: Sequence[Any] = ()
-
-
-def diagnose(
-    measured: Any,
-    model: Model,
-    *,
-    validation: Any = None,
-    candidates: Sequence[Any] | None = None,
-    alpha: float = 0.01,
-    progress: Callable[..., Any] | None = None,
-) -> DiscrepancyReport:
-    """Not built yet: the full workflow needs the closed-loop simulation of ``model`` with effects
-    (replay, residual Jacobians of every candidate, refits) from the Rust side. Use :func:`detect`
-    on a residual you computed and :func:`from_detection` for its report."""
-    raise NotImplementedError(
-        "rss6.discrepancy.diagnose needs the closed-loop simulation with effects and the effect "
-        "library (CANDIDATES), which are not built yet; detect() and from_detection() work on a "
-        "residual you computed (docs/discrepancy.md)"
-    )

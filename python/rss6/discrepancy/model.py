@@ -1,0 +1,408 @@
+"""The model a discrepancy search replays, the measured runs it compares with, and the replay.
+
+A :class:`Model` is what a user has after calibration and identification (kinematics, dynamics,
+drive gains, ᴼχ_C, ᴱχ_t, the loop's smoothing options) plus a list of named effects
+(:class:`AppliedEffect`); ``save``/``load`` keep it as TOML files (``kinematics.toml``,
+``dynamics.toml``, ``model.toml`` with the gains, the poses, the options and the effects list).
+
+A :class:`Run` is one measured identification run (the loop of Fig. 5.1): its reference
+(an :class:`~rss6.identify.Excitation`), the camera frames, and — when they were measured — the
+potentiometers and the joint commands, averaged over each camera interval. Every channel is used:
+poses (6), potentiometers (6, bit), commands (6, rad).
+
+:func:`replay` runs the model twin (``rss6.ModelSim``: the same closed loop, reference and camera
+timing; every library effect is one of its hidden effects) and returns the same channels at the
+run's frame times; with a ``seed`` the twin's sensors are noisy (Table 4.1), which is how the noise
+of the closed loop is learnt.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+import rss6
+from rss6 import _rss6
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python < 3.11
+    import tomli as tomllib
+from rss6 import identify
+from rss6.discrepancy.effects import Change, get
+from rss6.errors import InvalidInputError, ShapeError
+
+__all__ = ["CHANNELS", "AppliedEffect", "Model", "Replay", "Run", "replay", "run_of", "simulate"]
+
+F64 = NDArray[np.float64]
+
+CHANNELS: tuple[str, ...] = (
+    *("x", "y", "z", "α", "β", "γ"),
+    *(f"κ{i}" for i in range(6)),
+    *(f"θcmd{i}" for i in range(6)),
+)
+"""The channels compared: camera pose χ_E (m, rad), potentiometers κ (bit), joint commands (rad)."""
+
+
+@dataclass(frozen=True)
+class AppliedEffect:
+    """A library effect in a model: ``name`` (see :data:`rss6.discrepancy.CANDIDATES`), ``scope``
+    and its parameters (SI; missing ones at their null value)."""
+
+    name: str
+    scope: str
+    params: Mapping[str, float] = field(default_factory=dict)
+
+    def change(self) -> Change:
+        """What it does to the simulated model."""
+        return get(self.name).apply(self.params, self.scope)
+
+
+@dataclass(frozen=True)
+class Model:
+    """The model a discrepancy search replays in the closed loop (issue 14): ``kinematics``
+    (:class:`rss6.KinematicParams`), ``dynamics`` (:class:`rss6.DynamicParams`), the drive ``pid``
+    gains (l_p, l_i, l_d), ᴼχ_C ``sensor_in_base`` and ᴱχ_t ``target_in_effector`` (6,), the
+    ``effects`` it includes (:class:`AppliedEffect` or (name, scope, params) tuples), and the
+    loop's options: drive derivative filter T_f (s), Coulomb friction smoothing ε (rad/s), torque
+    limit (N·m), camera latency (s)."""
+
+    kinematics: Any
+    dynamics: Any
+    pid: Any
+    sensor_in_base: Any
+    target_in_effector: Any
+    effects: Sequence[Any] = ()
+    derivative_filter: float = 0.0
+    friction_smoothing: float = 0.0
+    torque_limit: float = 30.0
+    camera_latency: float = 0.0
+
+    def applied(self) -> tuple[AppliedEffect, ...]:
+        """The effects as :class:`AppliedEffect` (checked against the library)."""
+        out = []
+        for e in self.effects:
+            a = e if isinstance(e, AppliedEffect) else AppliedEffect(*e)
+            get(a.name).check(a.params, a.scope)
+            out.append(a)
+        return tuple(out)
+
+    def change(self) -> Change:
+        """All its effects' changes, merged."""
+        c = Change()
+        for a in self.applied():
+            c = c.merged(a.change())
+        return c
+
+    def with_effects(self, effects: Sequence[AppliedEffect]) -> Model:
+        """This model with ``effects`` instead of its own."""
+        return replace(self, effects=tuple(effects))
+
+    def with_dynamics(self, dynamics: Any, pid: Any) -> Model:
+        """This model with other dynamics and gains (after a re-identification)."""
+        return replace(self, dynamics=dynamics, pid=tuple(float(g) for g in pid))
+
+    def save(self, directory: str | Path) -> list[Path]:
+        """Writes ``kinematics.toml``, ``dynamics.toml`` and ``model.toml`` (gains, ᴼχ_C, ᴱχ_t,
+        options and the effects list) into ``directory``; returns their paths."""
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        self.kinematics.to_toml(out / "kinematics.toml")
+        self.dynamics.to_toml(out / "dynamics.toml")
+        lines = [
+            "# rss6 discrepancy model: parameters beside kinematics.toml and dynamics.toml",
+            f"pid = [{', '.join(repr(float(g)) for g in self.pid)}]",
+            f"sensor_in_base = [{', '.join(repr(float(v)) for v in self.sensor_in_base)}]",
+            f"target_in_effector = [{', '.join(repr(float(v)) for v in self.target_in_effector)}]",
+            f"derivative_filter = {float(self.derivative_filter)!r}",
+            f"friction_smoothing = {float(self.friction_smoothing)!r}",
+            f"torque_limit = {float(self.torque_limit)!r}",
+            f"camera_latency = {float(self.camera_latency)!r}",
+        ]
+        for a in self.applied():
+            lines += ["", "[[effects]]", f'name = "{a.name}"', f'scope = "{a.scope}"']
+            lines.append(
+                "params = { "
+                + ", ".join(f"{k} = {float(v)!r}" for k, v in sorted(a.params.items()))
+                + " }"
+            )
+        (out / "model.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        return [out / "kinematics.toml", out / "dynamics.toml", out / "model.toml"]
+
+    @classmethod
+    def load(cls, directory: str | Path) -> Model:
+        """The model :meth:`save` wrote into ``directory``. Raises
+        :class:`rss6.InvalidInputError` naming a missing file or key."""
+        d = Path(directory)
+        for name in ("kinematics.toml", "dynamics.toml", "model.toml"):
+            if not (d / name).is_file():
+                raise InvalidInputError(f"model directory {d} has no {name}")
+        try:
+            doc = tomllib.loads((d / "model.toml").read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as e:
+            raise InvalidInputError(f"{d / 'model.toml'} is not valid TOML: {e}") from None
+        try:
+            effects = tuple(
+                AppliedEffect(str(e["name"]), str(e["scope"]), dict(e.get("params", {})))
+                for e in doc.get("effects", [])
+            )
+            model = cls(
+                kinematics=rss6.KinematicParams.load(d / "kinematics.toml"),
+                dynamics=rss6.DynamicParams.load(d / "dynamics.toml"),
+                pid=tuple(float(g) for g in doc["pid"]),
+                sensor_in_base=np.asarray(doc["sensor_in_base"], dtype=np.float64),
+                target_in_effector=np.asarray(doc["target_in_effector"], dtype=np.float64),
+                effects=effects,
+                derivative_filter=float(doc.get("derivative_filter", 0.0)),
+                friction_smoothing=float(doc.get("friction_smoothing", 0.0)),
+                torque_limit=float(doc.get("torque_limit", 30.0)),
+                camera_latency=float(doc.get("camera_latency", 0.0)),
+            )
+        except KeyError as e:
+            raise InvalidInputError(f"{d / 'model.toml'} has no {e.args[0]!r}") from None
+        model.applied()
+        return model
+
+
+@dataclass(frozen=True)
+class Run:
+    """One measured run of the identification loop: the ``reference`` excitation, ``duration`` (s),
+    frame times ``t`` (N,) s and ``channels`` (N, C) at them (:data:`CHANNELS`' first C: 6 without
+    the per-tick channels, 18 with them), the joint tick ``dt`` (s)."""
+
+    reference: identify.Excitation
+    duration: float
+    t: F64
+    channels: F64
+    dt: float = 1e-3
+
+    @property
+    def poses(self) -> F64:
+        """The camera poses (N, 6)."""
+        return self.channels[:, :6]
+
+    @property
+    def width(self) -> int:
+        """Number of channels."""
+        return int(self.channels.shape[1])
+
+
+def _interval_means(tick_t: F64, values: F64, frame_t: F64) -> F64:
+    """Mean of per-tick ``values`` over each camera interval (t_{k−1}, t_k] (the first: the ticks
+    up to t_0), so the potentiometers' and commands' noise averages as the camera's frames do."""
+    idx = np.searchsorted(tick_t, frame_t + 1e-9, side="right")
+    idx = np.clip(idx, 1, len(tick_t))
+    starts = np.r_[0, idx[:-1]]
+    csum = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values, axis=0)])
+    counts = np.maximum(idx - starts, 1)[:, None]
+    return np.asarray((csum[idx] - csum[starts]) / counts, dtype=np.float64)
+
+
+def run_of(data: Any, *, kinematics: Any = None) -> Run:
+    """A :class:`Run` from :class:`rss6.identify.IdentificationData` (every channel it has) or from
+    an MCAP path written by :func:`rss6.identify.collect` (its reference is refitted from the
+    logged desired poses with the logged f0 and harmonics; ``kinematics`` checks it)."""
+    if isinstance(data, Run):
+        return data
+    if isinstance(data, (str, Path)):
+        return _run_from_mcap(Path(data), kinematics)
+    if not isinstance(data, identify.IdentificationData):
+        raise InvalidInputError(
+            "measured data must be rss6.identify.IdentificationData, a Run or an MCAP path; "
+            f"got {type(data).__name__}"
+        )
+    if data.fault is not None:
+        raise InvalidInputError(
+            f"the run's visual PID faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}): the "
+            "loop was open after it; use data.before_fault() or another run"
+        )
+    ch = [np.asarray(data.measured, dtype=np.float64)]
+    if data.tick_t is not None and data.kappa is not None and data.theta_cmd is not None:
+        tt = np.asarray(data.tick_t, dtype=np.float64)
+        ch.append(_interval_means(tt, np.asarray(data.kappa, dtype=np.float64), data.t))
+        ch.append(_interval_means(tt, np.asarray(data.theta_cmd, dtype=np.float64), data.t))
+    return Run(
+        data.reference,
+        float(data.duration),
+        np.asarray(data.t, dtype=np.float64),
+        np.hstack(ch),
+        float(data.dt),
+    )
+
+
+def _run_from_mcap(path: Path, kinematics: Any) -> Run:
+    from rss6 import logs
+
+    if not path.is_file():
+        raise InvalidInputError(f"no such MCAP file: {path}")
+    log = logs.read_log(path)
+    meta = log.metadata
+    if meta.get("kind") != "rss6.identify.collect":
+        raise InvalidInputError(
+            f"{path} is not an identification run (metadata kind {meta.get('kind')!r})"
+        )
+    try:
+        f0, n, duration = float(meta["f0"]), int(meta["harmonics"]), float(meta["duration"])
+        t_f, frames = log.streams["camera_pose"]
+        tick_t, desired = log.streams["desired_pose"]
+        _, kappa = log.streams["kappa"]
+        _, theta_cmd = log.streams["theta_cmd"]
+    except KeyError as e:
+        raise InvalidInputError(f"{path} lacks {e.args[0]!r} (not a complete run?)") from None
+    if len(t_f) == 0:
+        raise InvalidInputError(f"{path} has no camera frames")
+    # The reference is a Fourier series of f0 with n harmonics (eq. 5.11): refit its coefficients
+    # exactly, on basis functions evaluated by the series itself (unit coefficients).
+    tick_t = np.asarray(tick_t, dtype=np.float64)
+    desired = np.asarray(desired, dtype=np.float64)
+    pick = np.unique(np.linspace(0, len(tick_t) - 1, min(len(tick_t), 600)).astype(int))
+    basis = np.empty((len(pick), 2 * n + 1))
+    for j in range(2 * n + 1):
+        unit = np.zeros((6, 2 * n + 1))
+        unit[0, j] = 1.0
+        basis[:, j] = [_rss6.excitation_at(f0, unit, float(t))[0][0] for t in tick_t[pick]]
+    coef, *_ = np.linalg.lstsq(basis, desired[pick], rcond=None)
+    err = float(np.max(np.abs(basis @ coef - desired[pick])))
+    if err > 1e-9:
+        raise InvalidInputError(
+            f"{path}: the logged reference is not a Fourier series of f0 = {f0} Hz with {n} "
+            f"harmonics (refit error {err:.3g})"
+        )
+    kp = kinematics if kinematics is not None else rss6.KinematicParams.nominal()
+    exc = identify.Excitation.from_coefficients(kp, coef.T, f0)
+    data = identify.IdentificationData(
+        t=np.asarray(t_f, dtype=np.float64),
+        reference=exc,
+        measured=np.asarray(frames, dtype=np.float64),
+        duration=duration,
+        dt=float(tick_t[1] - tick_t[0]) if len(tick_t) > 1 else 1e-3,
+        tick_t=np.asarray(tick_t, dtype=np.float64),
+        kappa=np.asarray(kappa, dtype=np.float64),
+        theta_cmd=np.asarray(theta_cmd, dtype=np.float64),
+    )
+    return run_of(data)
+
+
+def _dynamics_with(dp: Any, change: Change) -> Any:
+    if not any(change.coulomb) and not any(change.viscous):
+        return dp
+    d = dp.to_dict()
+    d["coulomb"] = np.asarray(d["coulomb"], dtype=np.float64) + np.asarray(change.coulomb)
+    d["viscous"] = np.asarray(d["viscous"], dtype=np.float64) + np.asarray(change.viscous)
+    return rss6.DynamicParams.from_dict(d)
+
+
+@dataclass(frozen=True)
+class Replay:
+    """One simulated run at the model's own camera frames: ``frame_t`` (F,) s, ``poses`` (F, 6),
+    and the per-tick channels averaged over the measured run's camera intervals (N, 12) or None."""
+
+    frame_t: F64
+    poses: F64
+    ticks: F64 | None
+
+    def at(self, run: Run) -> F64:
+        """The channels (N, C) at the run's frame times: the model's frames themselves where their
+        times agree with the run's (within 0.5 ms), else a cubic spline through them (a smooth,
+        noise-free replay: the spline's error is O((ωΔt)⁴))."""
+        out = np.empty_like(run.channels)
+        if self.frame_t.shape == run.t.shape and np.all(np.abs(self.frame_t - run.t) < 5e-4):
+            out[:, :6] = self.poses
+        else:
+            from scipy.interpolate import CubicSpline
+
+            out[:, :6] = CubicSpline(self.frame_t, self.poses, axis=0, extrapolate=True)(run.t)
+        if run.width > 6:
+            if self.ticks is None:
+                raise ShapeError("the replay has no per-tick channels")
+            out[:, 6:] = self.ticks
+        return out
+
+    def noise(self, clean: Replay, run: Run) -> F64:
+        """This noisy replay minus the ``clean`` one at the model's own frames, taken at the frame
+        nearest each of the run's times (N, C): the loop's noise, not smoothed by interpolation."""
+        if self.frame_t.shape != clean.frame_t.shape:
+            raise ShapeError("noisy and clean replays have different frames")
+        k = np.clip(np.searchsorted(self.frame_t, run.t), 1, len(self.frame_t) - 1)
+        k = np.where(
+            np.abs(self.frame_t[k - 1] - run.t) <= np.abs(self.frame_t[k] - run.t), k - 1, k
+        )
+        out = np.empty_like(run.channels)
+        out[:, :6] = (self.poses - clean.poses)[k]
+        if run.width > 6:
+            if self.ticks is None or clean.ticks is None:
+                raise ShapeError("the replay has no per-tick channels")
+            out[:, 6:] = self.ticks - clean.ticks
+        return out
+
+
+def replay(model: Model, run: Run, change: Change | None = None, *, seed: int | None = None) -> F64:
+    """The model's noise-free replay of ``run`` (with its effects and ``change`` on top): the run's
+    channels (N, C) at its frame times (:meth:`Replay.at`). See :func:`simulate`."""
+    return simulate(model, run, change, seed=seed).at(run)
+
+
+def simulate(
+    model: Model, run: Run, change: Change | None = None, *, seed: int | None = None
+) -> Replay:
+    """The model (with its effects and ``change`` on top) in the run's loop from a fresh model twin
+    at rest at the reference's start. Noise-free unless ``seed`` is given (then the twin's sensors
+    add Table 4.1's noise with that seed). Raises :class:`rss6.InvalidInputError` if the change is
+    not physical (e.g. friction below 0) and :class:`rss6.IdentificationError` if the replay's
+    visual PID faults."""
+    c = model.change() if change is None else model.change().merged(change)
+    dp = _dynamics_with(model.dynamics, c)
+    if np.any(np.asarray(dp.coulomb) < 0) or np.any(np.asarray(dp.viscous) < 0):
+        raise InvalidInputError("friction below 0 after the effects: not a physical model")
+    g0 = [float(g) for g in model.pid]
+    pid = (g0[0] * (1 + c.gains[0]), g0[1] * (1 + c.gains[1]), g0[2] * (1 + c.gains[2]))
+    if min(pid) <= 0:
+        raise InvalidInputError(f"drive gains {pid} are not positive")
+    quiet: dict[str, Any] = (
+        {} if seed is not None else {"pixel_noise": 0.0, "potentiometer_noise": 0.0}
+    )
+    twin = rss6.ModelSim(
+        model.kinematics,
+        dp,
+        pid=pid,
+        effects=c.twin or None,
+        seed=0 if seed is None else int(seed),
+        dt=run.dt,
+        sensor_in_base=np.asarray(model.sensor_in_base, dtype=np.float64),
+        target_in_effector=np.asarray(model.target_in_effector, dtype=np.float64),
+        torque_limit=model.torque_limit,
+        camera_latency=model.camera_latency,
+        drive_derivative_filter=model.derivative_filter,
+        friction_smoothing=model.friction_smoothing,
+        **quiet,
+    )
+    periods = max(1, round(run.duration / run.reference.duration))
+    data = identify.collect(
+        twin,
+        run.reference,
+        kp_model=model.kinematics,
+        sensor_in_base=model.sensor_in_base,
+        target_in_effector=model.target_in_effector,
+        periods=periods,
+    )
+    if data.fault is not None:
+        raise rss6.IdentificationError(
+            f"the model's loop faulted at t = {data.fault[0]:.3f} s ({data.fault[1]})"
+        )
+    ticks = None
+    if run.width > 6:
+        if data.tick_t is None or data.kappa is None or data.theta_cmd is None:
+            raise ShapeError("the replay has no per-tick channels")
+        ticks = np.hstack(
+            [
+                _interval_means(data.tick_t, data.kappa, run.t),
+                _interval_means(data.tick_t, data.theta_cmd, run.t),
+            ]
+        )
+    return Replay(np.asarray(data.t), np.asarray(data.measured), ticks)

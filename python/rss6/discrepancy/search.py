@@ -1,0 +1,300 @@
+"""The numerical pieces of :func:`rss6.discrepancy.diagnose`: whitening of multi-channel residuals,
+candidate signatures, the score test calibrated on noisy replays, fits of effect parameters by
+simulation, and the held-out test of a fitted effect.
+
+Noise: the closed loop colours the sensors' noise and couples the channels (the commands are the
+visual PID's response to the camera's noise). Residuals are whitened channel by channel with an
+AR model learnt from K noisy replays of the model (:func:`rss6.discrepancy.noise_from_repeats`);
+what per-channel whitening misses (the coupling between channels, an imperfect AR fit) is absorbed
+by calibrating every test statistic on the same replays: the score vector's covariance is
+estimated from them (Hotelling's T², an F reference with K − q + 1 degrees of freedom), and a
+held-out projection's variance likewise (a t reference with K degrees of freedom)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rss6.discrepancy.effects import Change, EffectDef
+from rss6.discrepancy.noise import NoiseModel, noise_from_repeats
+from rss6.errors import InvalidInputError
+
+F64 = NDArray[np.float64]
+
+__all__ = [
+    "Calibration",
+    "Fit",
+    "Screen",
+    "Whitener",
+    "calibrate",
+    "fit_effects",
+    "heldout_test",
+    "hotelling",
+    "mimicry",
+    "signature",
+]
+
+
+@dataclass(frozen=True)
+class Whitener:
+    """Channel-wise AR prewhitening to unit variance (the first p samples of each channel, which
+    are not innovations, dropped) of (N, C) series into one vector."""
+
+    noise: NoiseModel
+
+    def vec(self, x: F64) -> F64:
+        """(N, C) → (M,)."""
+        return np.concatenate([self.noise.whiten(x[:, c], c) for c in range(x.shape[1])])
+
+    def cols(self, j: F64) -> F64:
+        """(N, C, q) → (M, q)."""
+        return np.concatenate([self.noise.whiten(j[:, c, :], c) for c in range(j.shape[1])])
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What the noisy replays of the null model give: the noise model (σ and AR colour per
+    channel), the whitener, and the K whitened noise realisations (K, M) the tests are calibrated
+    on."""
+
+    noise: NoiseModel
+    whitener: Whitener
+    replicates: F64
+
+    @property
+    def k(self) -> int:
+        """Number of replicates."""
+        return int(self.replicates.shape[0])
+
+
+def calibrate(noise: Sequence[F64], *, max_order: int = 20) -> Calibration:
+    """The calibration from K noise realisations of the closed loop (each (N, C): noisy replays of
+    the model minus its noise-free replay): noise model (repeats), whitened replicates for the
+    tests."""
+    if len(noise) < 4:
+        raise InvalidInputError(f"need at least 4 noisy replays, got {len(noise)}")
+    devs = [np.asarray(n, dtype=np.float64) for n in noise]
+    model = noise_from_repeats(devs, max_order=max_order)
+    w = Whitener(model)
+    reps = np.array([w.vec(d) for d in devs])
+    return Calibration(model, w, reps)
+
+
+def hotelling(g: F64, g_reps: F64) -> tuple[float, float]:
+    """(T², p) of the score vector ``g`` (q,) against K zero-mean replicates ``g_reps`` (K, q) of
+    it under the null: T² = gᵀS⁻¹g with S = Σ g_k g_kᵀ/K; (K − q + 1)/(K q)·T² ~ F(q, K − q + 1)
+    for Gaussian noise. Directions the replicates do not see (rank deficiency) are dropped."""
+    from scipy.stats import f as f_dist
+
+    k = g_reps.shape[0]
+    s = g_reps.T @ g_reps / k
+    u, sv, _ = np.linalg.svd(s)
+    keep = sv > 1e-12 * max(float(sv[0]), 1e-300)
+    q = int(keep.sum())
+    if q == 0 or k - q + 1 <= 0:
+        return 0.0, 1.0
+    z = u[:, keep].T @ g
+    t2 = float(np.sum(z * z / sv[keep]))
+    stat = (k - q + 1) / (k * q) * t2
+    return t2, float(f_dist.sf(stat, q, k - q + 1))
+
+
+@dataclass(frozen=True)
+class Screen:
+    """A candidate's screening at the null: its whitened signature columns (M, q), the score
+    statistic T² and p-value (Hotelling, calibrated on the replicates), the one-step estimate of
+    its parameters (in the signature's coordinates) and its names."""
+
+    effect: EffectDef
+    scope: str
+    columns: F64
+    coords: tuple[str, ...]
+    t2: float
+    p_value: float
+    step: F64
+
+
+def signature(
+    effect: EffectDef,
+    scope: str,
+    simulate: Callable[[Change], F64],
+    clean: F64,
+) -> tuple[F64, tuple[str, ...]]:
+    """Raw signature columns (N, C, q) of ``effect`` on ``scope`` at the null model and their
+    coordinate names: forward differences of the replay at each parameter's scale ("score"
+    effects; the payload in mass and first moments m·x, m·y, m·z, which are linear at null), or the
+    output changes over the effect's grid ("span" effects)."""
+    cols: list[F64] = []
+    names: list[str] = []
+    if effect.screen == "span":
+        p = effect.params[0]
+        for v in effect.grid:
+            cols.append(simulate(effect.apply({p.name: v}, scope)) - clean)
+            names.append(f"{p.name}={v:g}")
+        return np.stack(cols, axis=-1), tuple(names)
+    if effect.name == "payload":
+        m = effect.param("mass").scale * 4.0
+        c = 0.05
+        base = simulate(effect.apply({"mass": m}, scope))
+        cols.append((base - clean) / m)
+        names.append("mass")
+        for ax in ("x", "y", "z"):
+            out = simulate(effect.apply({"mass": m, ax: c}, scope))
+            cols.append((out - base) / (m * c))
+            names.append(f"mass·{ax}")
+        return np.stack(cols, axis=-1), tuple(names)
+    for p in effect.params:
+        h = p.scale if p.bounds[1] > p.null else -p.scale
+        cols.append((simulate(effect.apply({p.name: p.null + h}, scope)) - clean) / h)
+        names.append(p.name)
+    return np.stack(cols, axis=-1), tuple(names)
+
+
+def screen(
+    effect: EffectDef,
+    scope: str,
+    raw: F64,
+    coords: tuple[str, ...],
+    residual_w: F64,
+    cal: Calibration,
+) -> Screen:
+    """The score test of one candidate: its whitened columns J, g = Jᵀr, T² against the
+    replicates' Jᵀe_k. "span" candidates use the two leading directions of their grid's output
+    changes (an orthonormal basis: the test is of that span)."""
+    j = cal.whitener.cols(raw)
+    if effect.screen == "span":
+        u, sv, _ = np.linalg.svd(j, full_matrices=False)
+        keep = min(2, int(np.sum(sv > 1e-9 * max(float(sv[0]), 1e-300))))
+        j = u[:, :keep] * sv[:keep]
+    g = j.T @ residual_w
+    t2, p = hotelling(g, cal.replicates @ j)
+    info = j.T @ j
+    step = np.asarray(np.linalg.lstsq(info, g, rcond=None)[0], dtype=np.float64)
+    return Screen(effect, scope, j, coords, t2, p, step)
+
+
+@dataclass(frozen=True)
+class Fit:
+    """Fitted effect parameters: ``values`` per effect (list of dicts in the order of the
+    effects fitted), their Wald standard errors, the whitened residual, its sum of squares, the
+    whitened Jacobian at the optimum (M, n), whether the optimiser converged, and its message."""
+
+    values: list[dict[str, float]]
+    se: list[dict[str, float]]
+    residual_w: F64
+    cost: float
+    jacobian: F64
+    converged: bool
+    message: str
+
+
+def fit_effects(
+    effects: Sequence[tuple[EffectDef, str]],
+    starts: Sequence[dict[str, float]],
+    measured: F64,
+    simulate: Callable[[Change], F64],
+    whitener: Whitener,
+    *,
+    max_nfev: int = 12,
+) -> Fit:
+    """Least squares of the whitened residual over the parameters of ``effects`` jointly (bounded
+    trust region, forward-difference Jacobian by simulation at each parameter's scale), from
+    ``starts``. Effects that are not smooth (backlash) are fitted the same way on their own
+    parameter; the replay is deterministic, so the differences are of the model, not of noise."""
+    from scipy.optimize import least_squares
+
+    layout = [(e, s, p) for e, s in effects for p in e.params]
+    x0 = np.array(
+        [starts[i].get(p.name, p.null) for i, (e, s) in enumerate(effects) for p in e.params]
+    )
+    lo = np.array([p.bounds[0] for _, _, p in layout])
+    hi = np.array([p.bounds[1] for _, _, p in layout])
+    scale = np.array([p.scale for _, _, p in layout])
+    x0 = np.clip(x0, lo, hi)
+
+    def values(x: F64) -> list[dict[str, float]]:
+        out: list[dict[str, float]] = []
+        k = 0
+        for e, _ in effects:
+            out.append({p.name: float(x[k + i]) for i, p in enumerate(e.params)})
+            k += len(e.params)
+        return out
+
+    def change(x: F64) -> Change:
+        c = Change()
+        for (e, s), v in zip(effects, values(x), strict=True):
+            c = c.merged(e.apply(v, s))
+        return c
+
+    cache: dict[bytes, F64] = {}
+
+    def res(x: F64) -> F64:
+        key = np.asarray(x, dtype=np.float64).tobytes()
+        if key not in cache:
+            cache[key] = whitener.vec(measured - simulate(change(x)))
+        return cache[key]
+
+    def jac(x: F64) -> F64:
+        r0 = res(x)
+        cols = []
+        for i in range(len(x)):
+            h = scale[i] if x[i] + scale[i] <= hi[i] else -scale[i]
+            xi = x.copy()
+            xi[i] += h
+            cols.append((res(xi) - r0) / h)
+        return np.column_stack(cols)
+
+    sol = least_squares(
+        res, x0, jac=jac, bounds=(lo, hi), x_scale=scale, max_nfev=max_nfev, method="trf"
+    )
+    r = res(sol.x)
+    jm = jac(sol.x)
+    cov = np.linalg.pinv(jm.T @ jm)
+    se_all = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    se: list[dict[str, float]] = []
+    k = 0
+    for e, _ in effects:
+        se.append({p.name: float(se_all[k + i]) for i, p in enumerate(e.params)})
+        k += len(e.params)
+    return Fit(values(sol.x), se, r, float(r @ r), jm, bool(sol.success), str(sol.message))
+
+
+def heldout_test(delta_w: F64, residual_w: F64, replicates: F64) -> tuple[float, float]:
+    """(z, one-sided p) that the held-out residual contains the change ``delta_w`` a fitted effect
+    predicts there (both whitened, (M,)): s = ⟨δ, r⟩, its null variance from the held-out run's
+    replicates (K, M), p from Student's t with K degrees of freedom."""
+    from scipy.stats import t as t_dist
+
+    s = float(delta_w @ residual_w)
+    reps = replicates @ delta_w
+    v = float(np.mean(reps * reps))
+    if v <= 0:
+        return 0.0, 1.0
+    z = s / np.sqrt(v)
+    return z, float(t_dist.sf(z, replicates.shape[0]))
+
+
+def mimicry(screens: Sequence[Screen]) -> F64:
+    """How well each candidate's signature *as the data shows it* can be produced by another:
+    ρ_ab = ‖P_b d_a‖/‖d_a‖ with d_a = J_a δ̂_a (the one-step fitted direction of a) and P_b the
+    projector on b's columns; the matrix holds min(ρ_ab, ρ_ba) — two candidates are confounded
+    when each can mimic the other's fit. For one-parameter candidates this is |ρ| of their Fisher
+    information."""
+    n = len(screens)
+    dirs = []
+    spans = []
+    for s in screens:
+        d = s.columns @ s.step
+        nd = float(np.linalg.norm(d))
+        dirs.append(d / nd if nd > 0 else d)
+        spans.append(np.linalg.qr(s.columns)[0])
+    rho = np.eye(n)
+    for a in range(n):
+        for b in range(a + 1, n):
+            ab = float(np.linalg.norm(spans[b].T @ dirs[a]))
+            ba = float(np.linalg.norm(spans[a].T @ dirs[b]))
+            rho[a, b] = rho[b, a] = min(ab, ba)
+    return rho
