@@ -26,6 +26,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+import rss6
 from rss6.discrepancy import stats
 from rss6.discrepancy.detect import Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
@@ -265,6 +266,7 @@ def _diagnose(
     current_fit, current_held = clean_fit, clean_held
     excluded: set[tuple[str, str]] = set()
     dropped: list[str] = []
+    notes_fit: list[str] = []
 
     for round_ in range(max_effects):
         cands = [
@@ -324,8 +326,25 @@ def _diagnose(
                     fit.rows
                 ]
 
-            fits.append((i, fit_effects(effs, starts, fit.measured, simulate, cal.whitener)))
+            try:
+                fits.append(
+                    (
+                        i,
+                        fit_effects(
+                            effs,
+                            starts,
+                            fit.measured,
+                            simulate,
+                            cal.whitener,
+                            bounds=partial(_physical, base_model),
+                        ),
+                    )
+                )
+            except (InvalidInputError, rss6.IdentificationError) as err:
+                notes_fit.append(f"{s.effect.name} ({s.scope}) not fitted: {err}")
             _tell(progress, f"fit round {round_ + 1}", j + 1, len(top))
+        if not fits:
+            break
         i_best, best = min(fits, key=lambda f: f[1].cost)
         s = screens[i_best]
         new_effects = list(base_model.applied()) + [
@@ -403,6 +422,26 @@ def _diagnose(
     held_named = held.measured - current_held[held.rows]
     held_after = held_named
     after_model = final_model
+    notes = list(dropped) + notes_fit
+    if reidentify and named:
+        from rss6 import identify
+
+        last = fit.t[-1] + fit.run.dt
+        data = identify.IdentificationData(
+            t=fit.t,
+            reference=fit.run.reference,
+            measured=fit.measured[:, :6],
+            duration=float(last),
+            dt=fit.run.dt,
+        )
+        _tell(progress, "re-identification", 0, 1)
+        try:
+            after_model, note = _reidentify(final_model, data, reidentify)
+            held_after = held.measured - replay(after_model, held.run)[held.rows]
+            notes.append(note)
+        except (InvalidInputError, rss6.IdentificationError) as e:
+            notes.append(f"not re-identified: {e}")
+        _tell(progress, "re-identification", 1, 1)
     h_det = detect(
         held.t,
         held_named[:, :6],
@@ -423,9 +462,23 @@ def _diagnose(
         noise_floor=hcal.noise.sigma[:6].copy(),
         model=after_model,
         candidates=rows,
+        notes=notes,
         held_out=HeldOut(held.t, held_before[:, :6], held_named[:, :6], held_after[:, :6]),
         signatures=sig,
     )
+
+
+def _physical(model: Model, e: EffectDef, scope: str) -> dict[str, tuple[float, float]]:
+    """Bounds that keep the model physical: added friction may not take the model's own below 0
+    (on the joint of the scope, or on every joint)."""
+    if e.name != "joint_friction":
+        return {}
+    fc = np.asarray(model.dynamics.coulomb, dtype=np.float64)
+    fv = np.asarray(model.dynamics.viscous, dtype=np.float64)
+    j = None if scope == "all joints" else int(scope.removeprefix("joint "))
+    c_min = float(fc.min() if j is None else fc[j])
+    v_min = float(fv.min() if j is None else fv[j])
+    return {"coulomb": (-c_min, np.inf), "viscous": (-v_min, np.inf)}
 
 
 def _def(name: str) -> EffectDef:
@@ -511,3 +564,76 @@ def _signature_parallel(
     results = sim.many([partial(simulate, c) for c in changes])
     it = iter(results)
     return signature(e, s, lambda c: next(it), clean)
+
+
+REIDENTIFY_DEFAULT: tuple[str, ...] = (
+    *(f"fc{i}" for i in range(1, 7)),
+    *(f"fv{i}" for i in range(1, 7)),
+    "lp",
+    "li",
+    "ld",
+)
+"""What ``reidentify=True`` re-identifies: the friction and the drive gains (the quantities CLOE
+sees best in this loop; docs/identification.md)."""
+
+
+def loop_effects(model: Model) -> tuple[Any, tuple[float, float, float], dict[str, Any]]:
+    """The model's effects as the identification loop takes them: (dynamics with the named
+    friction, drive gains with the named mismatch, keyword arguments of
+    :func:`rss6.identify.cloe` / :func:`rss6.identify.simulate`: camera latency, gravity of a
+    tilted base, payload as a load, offset drift). Raises :class:`rss6.InvalidInputError` for an
+    effect the identification loop cannot express (backlash)."""
+    from scipy.spatial.transform import Rotation
+
+    from rss6.discrepancy.model import dynamics_with
+
+    c = model.change()
+    dp = dynamics_with(model.dynamics, c)
+    g0 = [float(g) for g in model.pid]
+    pid = (g0[0] * (1 + c.gains[0]), g0[1] * (1 + c.gains[1]), g0[2] * (1 + c.gains[2]))
+    kw: dict[str, Any] = {"camera_latency": model.camera_latency}
+    for name, params in c.twin.items():
+        if name == "camera_latency":
+            kw["camera_latency"] += params["latency"]
+        elif name == "base_tilt":
+            r = Rotation.from_euler("XY", [params["roll"], params["pitch"]]).as_matrix()
+            kw["gravity"] = r.T @ np.array([0.0, 0.0, -9.81])
+        elif name == "payload":
+            com = [params["x"], params["y"], params["z"]]
+            kw["load"] = (params["mass"], com, np.eye(3) * params.get("inertia", 0.0))
+        elif name == "joint_offset_drift":
+            rate = np.zeros(6)
+            if "joint" in params:
+                rate[int(params["joint"])] = params["rate"]
+            else:
+                rate[:] = params["rate"]
+            kw["offset_drift"] = rate
+        else:
+            raise InvalidInputError(
+                f"the identification loop cannot express {name!r}: re-identify without it"
+            )
+    return dp, pid, kw
+
+
+def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[Model, str]:
+    """CLOE of ``which`` (True: :data:`REIDENTIFY_DEFAULT`) on the fitting run with the named
+    effects; the re-identified model (its named friction and gain mismatch folded into the
+    dynamics and gains, the other effects kept) and a note."""
+    from rss6 import identify
+
+    names = list(REIDENTIFY_DEFAULT) if which is True else list(which)
+    dp, pid, kw = loop_effects(model)
+    res = identify.cloe(
+        data,
+        model.kinematics,
+        dp,
+        pid,
+        parameters=names,
+        derivative_filter=model.derivative_filter,
+        friction_smoothing=model.friction_smoothing,
+        torque_limit=model.torque_limit,
+        **kw,
+    )
+    kept = [a for a in model.applied() if a.name not in ("joint_friction", "pid_gains")]
+    out = model.with_effects(kept).with_dynamics(res.dynamics, res.pid)
+    return out, f"re-identified {len(names)} quantities in {res.iterations} CLOE iterations"

@@ -289,7 +289,8 @@ def _run_from_mcap(path: Path, kinematics: Any) -> Run:
     return run_of(data)
 
 
-def _dynamics_with(dp: Any, change: Change) -> Any:
+def dynamics_with(dp: Any, change: Change) -> Any:
+    """``dp`` with the change's friction added to its Coulomb and viscous coefficients."""
     if not any(change.coulomb) and not any(change.viscous):
         return dp
     d = dp.to_dict()
@@ -357,7 +358,7 @@ def simulate(
     not physical (e.g. friction below 0) and :class:`rss6.IdentificationError` if the replay's
     visual PID faults."""
     c = model.change() if change is None else model.change().merged(change)
-    dp = _dynamics_with(model.dynamics, c)
+    dp = dynamics_with(model.dynamics, c)
     if np.any(np.asarray(dp.coulomb) < 0) or np.any(np.asarray(dp.viscous) < 0):
         raise InvalidInputError("friction below 0 after the effects: not a physical model")
     g0 = [float(g) for g in model.pid]

@@ -142,7 +142,8 @@ class DiscrepancyReport:
     what the search concluded; ``gap_before``, ``gap_named``, ``gap_after``, ``noise_floor`` (6,):
     held-out residual RMS per axis of the original model, with the named effects, after
     re-identification, and σ (m, rad); ``model``: the final model; ``candidates``: the candidate
-    table; ``held_out``: the residual traces; ``signatures``: what the residual was binned by."""
+    table; ``held_out``: the residual traces; ``signatures``: what the residual was binned by; ``notes``: what the
+    workflow dropped or could not do (e.g. an effect the identification loop cannot express)."""
 
     detected: Detection
     named: list[NamedEffect]
@@ -156,6 +157,7 @@ class DiscrepancyReport:
     candidates: list[CandidateRow] = field(default_factory=list)
     held_out: HeldOut | None = None
     signatures: dict[str, F64] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def verdict(self) -> str:
@@ -218,6 +220,8 @@ class DiscrepancyReport:
                 lines.append(
                     f"  {c.effect:22s} {c.scope:12s} {c.delta_loglik:9.3g} {c.p_adjusted:9.3g} {best:24.3g}  {est}{flag}"
                 )
+        if self.notes:
+            lines += ["", "notes:", *(f"  {n}" for n in self.notes)]
         for amb in self.ambiguous:
             lines.append(
                 f"ambiguous {{{', '.join(amb.candidates)}}}: |ρ| = {amb.correlation:.3f}; "

@@ -199,10 +199,12 @@ def fit_effects(
     whitener: Whitener,
     *,
     max_nfev: int = 12,
+    bounds: Callable[[EffectDef, str], dict[str, tuple[float, float]]] | None = None,
 ) -> Fit:
     """Least squares of the whitened residual over the parameters of ``effects`` jointly (bounded
     trust region, forward-difference Jacobian by simulation at each parameter's scale), from
-    ``starts``. Effects that are not smooth (backlash) are fitted the same way on their own
+    ``starts``, inside each parameter's bounds narrowed by ``bounds(effect, scope)`` (e.g. what
+    keeps the model physical). Effects that are not smooth (backlash) are fitted the same way on their own
     parameter; the replay is deterministic, so the differences are of the model, not of noise."""
     from scipy.optimize import least_squares
 
@@ -210,8 +212,21 @@ def fit_effects(
     x0 = np.array(
         [starts[i].get(p.name, p.null) for i, (e, s) in enumerate(effects) for p in e.params]
     )
-    lo = np.array([p.bounds[0] for _, _, p in layout])
-    hi = np.array([p.bounds[1] for _, _, p in layout])
+    narrow = [bounds(e, s) if bounds is not None else {} for e, s in effects]
+    lo = np.array(
+        [
+            max(p.bounds[0], narrow[i].get(p.name, p.bounds)[0])
+            for i, (e, _) in enumerate(effects)
+            for p in e.params
+        ]
+    )
+    hi = np.array(
+        [
+            min(p.bounds[1], narrow[i].get(p.name, p.bounds)[1])
+            for i, (e, _) in enumerate(effects)
+            for p in e.params
+        ]
+    )
     scale = np.array([p.scale for _, _, p in layout])
     x0 = np.clip(x0, lo, hi)
 
