@@ -621,7 +621,8 @@ def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[M
     dynamics and gains, the other effects kept) and a note."""
     from rss6 import identify
 
-    names = list(REIDENTIFY_DEFAULT) if which is True else list(which)
+    chosen: Sequence[str] = REIDENTIFY_DEFAULT if isinstance(which, bool) else which
+    names = list(chosen)
     dp, pid, kw = loop_effects(model)
     res = identify.cloe(
         data,
