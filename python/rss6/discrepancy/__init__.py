@@ -22,6 +22,7 @@ and the workflow itself:
 from __future__ import annotations
 
 from rss6.discrepancy import stats
+from rss6.discrepancy.benchmark import benchmark_case
 from rss6.discrepancy.detect import (
     AXES,
     Detection,
@@ -69,6 +70,7 @@ __all__ = [
     "Unexplained",
     "Window",
     "ambiguities",
+    "benchmark_case",
     "detect",
     "diagnose",
     "from_detection",

@@ -308,13 +308,28 @@ class Replay:
     poses: F64
     ticks: F64 | None
 
+    def _index(self, run: Run) -> NDArray[np.int64] | None:
+        """Frame k of the model for frame k of the run when both cameras capture on the same
+        schedule and only their latencies differ (stamps apart by one constant, ≤ 1 frame more
+        or less): the model's frame k shows the pose at the same capture time. None otherwise."""
+        n, f = len(run.t), len(self.frame_t)
+        m = min(n, f)
+        if m < 2 or abs(n - f) > 1:
+            return None
+        d = self.frame_t[:m] - run.t[:m]
+        if np.ptp(d) > 5e-4:
+            return None
+        return np.minimum(np.arange(n), f - 1)
+
     def at(self, run: Run) -> F64:
-        """The channels (N, C) at the run's frame times: the model's frames themselves where their
-        times agree with the run's (within 0.5 ms), else a cubic spline through them (a smooth,
-        noise-free replay: the spline's error is O((ωΔt)⁴))."""
+        """The channels (N, C) at the run's frames: the model's frame captured at the same time
+        (frame by frame when the two cameras share their capture schedule and differ only in
+        latency — their stamps then differ by a constant), else a cubic spline through the
+        model's frames at the run's stamps."""
         out = np.empty_like(run.channels)
-        if self.frame_t.shape == run.t.shape and np.all(np.abs(self.frame_t - run.t) < 5e-4):
-            out[:, :6] = self.poses
+        idx = self._index(run)
+        if idx is not None:
+            out[:, :6] = self.poses[idx]
         else:
             from scipy.interpolate import CubicSpline
 
@@ -330,10 +345,14 @@ class Replay:
         nearest each of the run's times (N, C): the loop's noise, not smoothed by interpolation."""
         if self.frame_t.shape != clean.frame_t.shape:
             raise ShapeError("noisy and clean replays have different frames")
-        k = np.clip(np.searchsorted(self.frame_t, run.t), 1, len(self.frame_t) - 1)
-        k = np.where(
-            np.abs(self.frame_t[k - 1] - run.t) <= np.abs(self.frame_t[k] - run.t), k - 1, k
-        )
+        idx = self._index(run)
+        if idx is not None:
+            k = idx
+        else:
+            k = np.clip(np.searchsorted(self.frame_t, run.t), 1, len(self.frame_t) - 1)
+            k = np.where(
+                np.abs(self.frame_t[k - 1] - run.t) <= np.abs(self.frame_t[k] - run.t), k - 1, k
+            )
         out = np.empty_like(run.channels)
         out[:, :6] = (self.poses - clean.poses)[k]
         if run.width > 6:

@@ -1,0 +1,83 @@
+"""Hidden-effect benchmark of the discrepancy workflow (issue 14): every case of
+:func:`rss6.discrepancy.benchmark.cases` on a process pool, records to a CSV as they finish, and the
+summary (per hidden effect × magnitude: named right, ambiguous, unexplained; no-effect false
+positives). For the same study on Dask: ``rss6 study discrepancy``.
+
+    python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
+        [--seeds 0] [--out out/discrepancy_benchmark.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from rss6.discrepancy.benchmark import benchmark_case, cases
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
+    ap.add_argument("--null", type=int, default=100)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0])
+    ap.add_argument("--magnitudes", type=float, nargs="+", default=[1.0, 2.0, 5.0])
+    ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
+    args = ap.parse_args()
+    specs = cases(magnitudes=args.magnitudes, seeds=args.seeds, n_null=args.null, robot=args.robot)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    done = set()
+    if out.exists():
+        with out.open() as f:
+            done = {r["spec_id"] for r in csv.DictReader(f)}
+    todo = [s for s in specs if s["spec_id"] not in done]
+    print(f"{len(specs)} cases, {len(done)} already in {out}, {len(todo)} to run", flush=True)
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(args.workers) as pool:
+        futs = [pool.submit(benchmark_case, s) for s in todo]
+        for k, fut in enumerate(as_completed(futs), 1):
+            try:
+                rec = fut.result()
+            except Exception as e:  # a case that fails is reported, the rest go on
+                print(f"case failed: {type(e).__name__}: {e}", flush=True)
+                continue
+            new = not out.exists()
+            with out.open("a", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=list(rec))
+                if new:
+                    w.writeheader()
+                w.writerow(rec)
+            print(
+                f"[{k}/{len(todo)} {time.perf_counter() - t0:6.0f}s] {rec['hidden']} "
+                f"×{rec['magnitude']} (reached {float(rec['reached']):.2f}) -> {rec['verdict']}",
+                flush=True,
+            )
+    summarise(out)
+    return 0
+
+
+def summarise(path: Path) -> None:
+    """Prints the per-case table: named right / ambiguous / unexplained / wrong."""
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    groups: dict[tuple[str, str], list[dict[str, str]]] = {}
+    for r in rows:
+        groups.setdefault((r["hidden"], r["magnitude"]), []).append(r)
+    print(
+        f"\n{'hidden':48s} {'×σ':>4s} {'n':>4s} {'right':>6s} {'ambig':>6s} {'unexpl':>7s} {'wrong name':>10s}"
+    )
+    for (h, m), rs in sorted(groups.items()):
+        right = sum(r["correct"] == "True" for r in rs)
+        amb = sum(r["ambiguous"] == "True" for r in rs)
+        unex = sum(r["unexplained"] == "True" for r in rs)
+        wrong = sum(r["correct"] != "True" and r["named"] != "none" for r in rs)
+        print(f"{h:48s} {float(m):4g} {len(rs):4d} {right:6d} {amb:6d} {unex:7d} {wrong:10d}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,303 @@
+"""Hidden-effect cases for the discrepancy workflow (issue 14's benchmark; issue 16 runs them at
+scale): an effect lives only in the robot's truth — the rapier plant or the model twin — at a
+magnitude whose output effect is a chosen multiple of the camera noise (Table 4.1), and
+:func:`rss6.discrepancy.diagnose` is asked to find it with the truth model without it.
+
+:func:`benchmark_case` takes a small picklable spec and returns a flat record; nothing in it
+depends on the caller's machine.
+
+Spec keys: ``spec_id``; ``effect``: None (no effect), a library effect "name@scope" (scope
+optional: its first), a list of them (a pair), or an out-of-library discrepancy "vibration"
+(a 7 Hz sinusoid added to the camera's z) or "camera_drift" (a linear drift added to the camera's
+x); ``magnitude``: output effect as a multiple of the camera noise RMS (default 2) or ``params``:
+the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``replicates``
+(default 16).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+import rss6
+from rss6 import identify
+from rss6.discrepancy.diagnose import diagnose
+from rss6.discrepancy.effects import Change, EffectDef, get
+from rss6.discrepancy.model import Model, Run, replay, run_of
+from rss6.errors import InvalidInputError
+
+__all__ = ["CAMERA_SIGMA", "OUT_OF_LIBRARY", "REFERENCE", "benchmark_case", "cases", "magnitude"]
+
+F64 = NDArray[np.float64]
+
+CAMERA_SIGMA = np.array([9.6e-6] * 3 + [float(np.deg2rad(0.0261))] * 3)
+"""Table 4.1's camera noise per pose axis (m, rad): the unit of an effect's output size."""
+
+REFERENCE: dict[str, dict[str, float]] = {
+    "joint_friction": {"coulomb": 1.0, "viscous": 5.0},
+    "backlash": {"width": 2e-3},
+    "camera_latency": {"latency": 5e-3},
+    "payload": {"mass": 5.0, "x": 0.02, "y": 0.0, "z": 0.0},
+    "base_tilt": {"roll": 0.05, "pitch": 0.02},
+    "pid_gains": {"l_p": 0.1, "l_i": 0.0, "l_d": 0.0},
+    "joint_offset_drift": {"rate": 1e-3},
+}
+"""The direction each effect's magnitude is scaled along (the payload's centre of mass is kept)."""
+
+OUT_OF_LIBRARY = ("vibration", "camera_drift")
+
+_T_F, _EPS = 5e-3, 1.0
+
+
+def _split(name: str) -> tuple[EffectDef, str]:
+    n, _, scope = name.partition("@")
+    e = get(n)
+    return e, scope or e.scopes[0]
+
+
+def _scaled(e: EffectDef, k: float) -> dict[str, float]:
+    ref = REFERENCE[e.name]
+    out = {}
+    for p in e.params:
+        v = ref.get(p.name, p.null)
+        if e.name == "payload" and p.name in "xyz":
+            out[p.name] = v
+        else:
+            out[p.name] = float(np.clip(p.null + k * (v - p.null), *p.bounds))
+    return out
+
+
+def _output(model: Model, run: Run, change: Change, clean: F64) -> float:
+    """Largest per-axis RMS of the pose change, in camera-noise units."""
+    d = (replay(model, run, change) - clean)[:, :6]
+    return float(np.max(np.sqrt(np.mean(d * d, axis=0)) / CAMERA_SIGMA))
+
+
+def magnitude(model: Model, run: Run, name: str, multiple: float) -> tuple[dict[str, float], float]:
+    """Parameters of effect ``name`` ("name@scope") along :data:`REFERENCE` whose noise-free
+    output effect on ``run`` is ``multiple`` × the camera noise (secant steps on the scale),
+    and the multiple reached (less if the effect's bounds stop it)."""
+    e, scope = _split(name)
+    clean = replay(model, run)
+    k, out = 1.0, _output(model, run, e.apply(_scaled(e, 1.0), scope), clean)
+    for _ in range(4):
+        if out <= 0:
+            break
+        k_new = k * multiple / out
+        params = _scaled(e, k_new)
+        out_new = _output(model, run, e.apply(params, scope), clean)
+        k, out = k_new, out_new
+        if abs(out / multiple - 1) < 0.05 or _scaled(e, k_new) == _scaled(e, 2 * k_new):
+            break
+    return _scaled(e, k), out
+
+
+def _camera_additive(kind: str, t: F64, multiple: float) -> F64:
+    """Out-of-library discrepancies added to the camera poses (N, 6)."""
+    out = np.zeros((len(t), 6))
+    if kind == "vibration":
+        # RMS of a sinusoid = amplitude/√2.
+        out[:, 2] = multiple * CAMERA_SIGMA[2] * np.sqrt(2) * np.sin(2 * np.pi * 7.0 * t)
+    elif kind == "camera_drift":
+        # RMS of a ramp from 0 to a over the run = a/√3.
+        out[:, 0] = multiple * CAMERA_SIGMA[0] * np.sqrt(3) * t / max(float(t[-1]), 1e-9)
+    else:
+        raise InvalidInputError(f"unknown out-of-library discrepancy {kind!r}")
+    return out
+
+
+def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """One hidden-effect case (module docs): collects a fitting and a validation run on the robot
+    with the hidden effect, runs :func:`~rss6.discrepancy.diagnose` with the truth model without
+    it, and returns a flat record: spec_id, robot, seed, hidden, magnitude (the multiple asked)
+    and reached, named ("+"-joined, "none"), verdict, correct (the hidden library effects named
+    and nothing else; for no effect: nothing named), ambiguous, unexplained, gap_before_<axis>,
+    gap_named_<axis>, noise_<axis> (axes x y z a b g), seconds."""
+    t0 = time.perf_counter()
+    seed = int(spec.get("seed", 0))
+    robot_kind = str(spec.get("robot", "twin"))
+    multiple = float(spec.get("magnitude", 2.0))
+    raw = spec.get("effect")
+    names: list[str] = [] if raw is None else [raw] if isinstance(raw, str) else list(raw)
+    library = [n for n in names if n not in OUT_OF_LIBRARY]
+    extra = [n for n in names if n in OUT_OF_LIBRARY]
+    kp = rss6.KinematicParams.nominal()
+    dp, pid = identify.table_5_2_truth()
+    exc = identify.random_excitation(kp, seed=1000 + seed)
+
+    def make(
+        hidden: Mapping[str, Mapping[str, float]] | None,
+        s: int,
+        quiet: bool = False,
+        gains: tuple[float, ...] = tuple(pid),
+    ) -> Any:
+        cls = rss6.Plant if robot_kind == "plant" else rss6.ModelSim
+        kw: dict[str, Any] = {"drive_derivative_filter": _T_F}
+        if cls is rss6.ModelSim:
+            kw["friction_smoothing"] = _EPS
+        if quiet:
+            kw.update(pixel_noise=0.0, potentiometer_noise=0.0)
+        if cls is None:
+            raise InvalidInputError("this build has no rapier plant")
+        g = (float(gains[0]), float(gains[1]), float(gains[2]))
+        return cls(
+            kp,
+            dp,
+            pid=g,
+            seed=s,
+            effects={k: dict(v) for k, v in hidden.items()} if hidden else None,
+            **kw,
+        )
+
+    probe = make(None, seed, quiet=True)
+    tr = probe.truth()
+    model = Model(
+        kp,
+        dp,
+        pid,
+        tr["sensor_in_base"],
+        tr["target_in_effector"],
+        derivative_filter=_T_F,
+        friction_smoothing=_EPS,
+    )
+
+    def collect(robot: Any) -> identify.IdentificationData:
+        return identify.collect(
+            robot,
+            exc,
+            kp_model=kp,
+            sensor_in_base=tr["sensor_in_base"],
+            target_in_effector=tr["target_in_effector"],
+        )
+
+    hidden: dict[str, dict[str, float]] = {}
+    hidden_pid: tuple[float, ...] = tuple(pid)
+    reached: list[float] = []
+    applied_names: list[str] = []
+    if library:
+        run0 = run_of(collect(probe))
+        for n in library:
+            e, scope = _split(n)
+            params = spec.get("params") or None
+            if params is None:
+                params, got = magnitude(model, run0, n, multiple)
+            else:
+                got = _output(model, run0, e.apply(params, scope), replay(model, run0))
+            reached.append(got)
+            applied_names.append(f"{e.name} ({scope})")
+            c = e.apply(params, scope)
+            for k, v in c.twin.items():
+                hidden[k] = {**hidden.get(k, {}), **v}
+            if any(c.coulomb) or any(c.viscous):
+                j = None if scope == "all joints" else float(scope.removeprefix("joint "))
+                fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
+                hidden["joint_friction"] = fr if j is None else {**fr, "joint": j}
+            if any(c.gains):
+                hidden_pid = tuple(g * (1 + d) for g, d in zip(pid, c.gains, strict=True))
+
+    def robot(s: int) -> Any:
+        return make(hidden, s, gains=hidden_pid)
+
+    fit, val = collect(robot(2 * seed + 1)), collect(robot(2 * seed + 2))
+    for kind in extra:
+        fit = _with_camera(fit, _camera_additive(kind, fit.t, multiple))
+        val = _with_camera(val, _camera_additive(kind, val.t, multiple))
+        reached.append(multiple)
+    rep = diagnose(
+        fit, model, validation=val, replicates=int(spec.get("replicates", 16)), seed=7919 + seed
+    )
+    named = [f"{e.name} ({e.scope})" for e in rep.named]
+    named_effects = sorted({e.name for e in rep.named})
+    hidden_effects = sorted({_split(n)[0].name for n in library})
+    record: dict[str, Any] = {
+        "spec_id": str(spec.get("spec_id", "")),
+        "robot": robot_kind,
+        "seed": seed,
+        "kind": "none"
+        if not names
+        else "out_of_library"
+        if extra and not library
+        else "pair"
+        if len(names) > 1
+        else "library",
+        "hidden": "+".join(applied_names + extra) or "none",
+        "magnitude": multiple if names else 0.0,
+        "reached": float(min(reached)) if reached else 0.0,
+        "named": "+".join(named) or "none",
+        "verdict": rep.verdict,
+        "correct": named_effects == hidden_effects,
+        "ambiguous": bool(rep.ambiguous),
+        "unexplained": rep.unexplained is not None,
+        "seconds": time.perf_counter() - t0,
+    }
+    for i, a in enumerate("xyzabg"):
+        record[f"gap_before_{a}"] = float(rep.gap_before[i])
+        record[f"gap_named_{a}"] = float(rep.gap_named[i])
+        record[f"noise_{a}"] = float(rep.noise_floor[i])
+    return record
+
+
+def _with_camera(d: identify.IdentificationData, add: F64) -> identify.IdentificationData:
+    from dataclasses import replace
+
+    return replace(d, measured=d.measured + add)
+
+
+def cases(
+    effects: Sequence[str] | None = None,
+    magnitudes: Sequence[float] = (1.0, 2.0, 5.0),
+    seeds: Sequence[int] = (0,),
+    n_null: int = 100,
+    robot: str = "twin",
+) -> list[dict[str, Any]]:
+    """The benchmark's specs: every effect (default: one scope of each library effect plus a
+    second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
+    out-of-library discrepancies at each magnitude, and two pairs."""
+    effs = (
+        list(effects)
+        if effects is not None
+        else [
+            "joint_friction@joint 2",
+            "joint_friction@all joints",
+            "backlash",
+            "camera_latency",
+            "payload",
+            "base_tilt",
+            "pid_gains",
+            "joint_offset_drift@joint 3",
+            "joint_offset_drift@all joints",
+        ]
+    )
+    out: list[dict[str, Any]] = []
+    for e in [*effs, *OUT_OF_LIBRARY]:
+        for m in magnitudes:
+            for s in seeds:
+                out.append(
+                    {
+                        "spec_id": f"{robot}:{e}:{m:g}:{s}",
+                        "effect": e,
+                        "magnitude": m,
+                        "seed": s,
+                        "robot": robot,
+                    }
+                )
+    for pair in (["camera_latency", "base_tilt"], ["payload", "joint_offset_drift@joint 3"]):
+        for s in seeds:
+            out.append(
+                {
+                    "spec_id": f"{robot}:{'+'.join(pair)}:5:{s}",
+                    "effect": pair,
+                    "magnitude": 5.0,
+                    "seed": s,
+                    "robot": robot,
+                }
+            )
+    for s in range(n_null):
+        out.append(
+            {"spec_id": f"{robot}:none:{s}", "effect": None, "seed": 10_000 + s, "robot": robot}
+        )
+    return out
