@@ -11,6 +11,8 @@
 ``rss6 identify --simulate``  dynamic identification of a simulated robot (thesis §5.6): exciting
                          trajectory, the loop of Fig. 5.1 on the rapier plant, CLOE, Tables 5.2–5.4
                          beside the thesis's, Figs. 5.7–5.9 and MCAP logs in ``--out``.
+``rss6 diagnose``        the discrepancy workflow: on logged runs and a model directory, or with
+                         ``--simulate EFFECT`` hidden in a simulated robot (rss6.discrepancy.cli).
 """
 
 from __future__ import annotations
@@ -492,6 +494,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     i.add_argument("--quiet", action="store_true", help="no progress bars or report on stdout")
     i.set_defaults(func=cmd_identify)
+
+    from rss6.discrepancy import cli as diagnose_cli
+
+    g = sub.add_parser(
+        "diagnose",
+        help="find where the model and the robot disagree and name the missing effect (issue 14)",
+        description=diagnose_cli.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    diagnose_cli.add_arguments(g)
+    g.set_defaults(func=diagnose_cli.run)
 
     s = sub.add_parser(
         "can-sim",

@@ -13,7 +13,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-
 import rss6
 from rss6 import discrepancy, identify
 from rss6.discrepancy import effects
@@ -209,3 +208,63 @@ def test_a_hidden_effect_is_named_and_the_gap_shrinks(
     assert np.all(rep.gap_named / rep.noise_floor < 1.15), rep.table()
     assert rep.unexplained is None
     assert rep.model.applied()[-1].name == name
+
+
+# command line --------------------------------------------------------------------------------------
+
+
+def test_effect_specs_parse_with_scope_and_parameters() -> None:
+    from rss6.discrepancy.cli import parse_effect
+
+    assert parse_effect("joint_friction@joint2:coulomb=1.5,viscous=2") == (
+        "joint_friction@joint 2",
+        {"coulomb": 1.5, "viscous": 2.0},
+    )
+    assert parse_effect("camera_latency") == ("camera_latency", {})
+    with pytest.raises(rss6.InvalidInputError, match="not a number"):
+        parse_effect("camera_latency:latency=fast")
+
+
+def test_diagnose_command_on_logged_runs_and_a_model_directory(
+    truth: Any, excitation: identify.Excitation, tmp_path: Path, capsys: Any
+) -> None:
+    """`rss6 diagnose RUN.mcap --model DIR --validation RUN2.mcap`: a camera latency hidden in the
+    logged runs is named, the report directory and the augmented model are written (exit 5: a
+    discrepancy was found)."""
+    from rss6.cli import main
+
+    hidden = {"camera_latency": {"latency": 0.01}}
+    fit, val = _robot(truth, 21, hidden), _robot(truth, 22, hidden)
+    _collect(fit, excitation, mcap=tmp_path / "fit.mcap")
+    _collect(val, excitation, mcap=tmp_path / "val.mcap")
+    _model(truth, fit).save(tmp_path / "model")
+    args = [
+        "diagnose",
+        str(tmp_path / "fit.mcap"),
+        "--model",
+        str(tmp_path / "model"),
+        "--validation",
+        str(tmp_path / "val.mcap"),
+        "--out",
+        str(tmp_path / "report"),
+    ]
+    assert main(args) == 5
+    out = capsys.readouterr().out
+    assert "named: camera_latency (sensor)" in out
+    assert (tmp_path / "report" / "report.md").is_file()
+    back = Model.load(tmp_path / "report" / "model")
+    assert [a.name for a in back.applied()] == ["camera_latency"]
+    assert abs(back.applied()[0].params["latency"] - 0.01) < 0.004
+    # A run too short for the tests is refused with a typed error, not a crash.
+    short = identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5)
+    _collect(_robot(truth, 23, None), short, mcap=tmp_path / "short.mcap")
+    assert main(["diagnose", str(tmp_path / "short.mcap"), "--model", str(tmp_path / "model")]) == 1
+    assert "at least 90" in capsys.readouterr().err
+
+
+def test_diagnose_simulate_none_on_the_twin_says_nothing_is_missing(tmp_path: Path) -> None:
+    from rss6.cli import main
+
+    args = ["diagnose", "--simulate", "none", "--plant", "model", "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "r"), "--seed", "3"]) == 0
+    assert "no missing effect" in (tmp_path / "r" / "report.md").read_text(encoding="utf-8")

@@ -17,7 +17,8 @@ the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``rep
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -30,7 +31,16 @@ from rss6.discrepancy.effects import Change, EffectDef, get
 from rss6.discrepancy.model import Model, Run, replay, run_of
 from rss6.errors import InvalidInputError
 
-__all__ = ["CAMERA_SIGMA", "OUT_OF_LIBRARY", "REFERENCE", "benchmark_case", "cases", "magnitude"]
+__all__ = [
+    "CAMERA_SIGMA",
+    "OUT_OF_LIBRARY",
+    "REFERENCE",
+    "HiddenCase",
+    "benchmark_case",
+    "cases",
+    "hidden_case",
+    "magnitude",
+]
 
 F64 = NDArray[np.float64]
 
@@ -110,14 +120,25 @@ def _camera_additive(kind: str, t: F64, multiple: float) -> F64:
     return out
 
 
-def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
-    """One hidden-effect case (module docs): collects a fitting and a validation run on the robot
-    with the hidden effect, runs :func:`~rss6.discrepancy.diagnose` with the truth model without
-    it, and returns a flat record: spec_id, robot, seed, hidden, magnitude (the multiple asked)
-    and reached, named ("+"-joined, "none"), verdict, correct (the hidden library effects named
-    and nothing else; for no effect: nothing named), ambiguous, unexplained, gap_before_<axis>,
-    gap_named_<axis>, noise_<axis> (axes x y z a b g), seconds."""
-    t0 = time.perf_counter()
+@dataclass(frozen=True)
+class HiddenCase:
+    """A case ready for the workflow: the fitting and validation runs on the robot with the hidden
+    effects, the truth model without them, what was hidden ("name (scope)" and out-of-library
+    kinds), its parameters, and the output multiple each effect reached."""
+
+    fit: identify.IdentificationData
+    validation: identify.IdentificationData
+    model: Model
+    hidden: list[str]
+    params: dict[str, dict[str, float]]
+    reached: list[float]
+    library: list[str]
+
+
+def hidden_case(
+    spec: Mapping[str, Any], progress: Callable[[str], Any] | None = None
+) -> HiddenCase:
+    """The runs of one case (module docs for ``spec``)."""
     seed = int(spec.get("seed", 0))
     robot_kind = str(spec.get("robot", "twin"))
     multiple = float(spec.get("magnitude", 2.0))
@@ -202,14 +223,40 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     def robot(s: int) -> Any:
         return make(hidden, s, gains=hidden_pid)
 
+    if progress is not None:
+        progress("collecting the fitting and validation runs")
     fit, val = collect(robot(2 * seed + 1)), collect(robot(2 * seed + 2))
     for kind in extra:
         fit = _with_camera(fit, _camera_additive(kind, fit.t, multiple))
         val = _with_camera(val, _camera_additive(kind, val.t, multiple))
         reached.append(multiple)
+    return HiddenCase(fit, val, model, applied_names + extra, hidden, reached, library)
+
+
+def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """One hidden-effect case (module docs): collects a fitting and a validation run on the robot
+    with the hidden effect, runs :func:`~rss6.discrepancy.diagnose` with the truth model without
+    it, and returns a flat record: spec_id, robot, seed, hidden, magnitude (the multiple asked)
+    and reached, named ("+"-joined, "none"), verdict, correct (the hidden library effects named
+    and nothing else; for no effect: nothing named), ambiguous, unexplained, gap_before_<axis>,
+    gap_named_<axis>, noise_<axis> (axes x y z a b g), seconds."""
+    t0 = time.perf_counter()
+    seed = int(spec.get("seed", 0))
+    multiple = float(spec.get("magnitude", 2.0))
+    case = hidden_case(spec)
     rep = diagnose(
-        fit, model, validation=val, replicates=int(spec.get("replicates", 16)), seed=7919 + seed
+        case.fit,
+        case.model,
+        validation=case.validation,
+        replicates=int(spec.get("replicates", 16)),
+        seed=7919 + seed,
     )
+    names = case.hidden
+    library = case.library
+    extra = [n for n in names if n in OUT_OF_LIBRARY]
+    applied_names = [n for n in names if n not in OUT_OF_LIBRARY]
+    reached = case.reached
+    robot_kind = str(spec.get("robot", "twin"))
     named = [f"{e.name} ({e.scope})" for e in rep.named]
     named_effects = sorted({e.name for e in rep.named})
     hidden_effects = sorted({_split(n)[0].name for n in library})

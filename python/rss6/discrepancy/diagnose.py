@@ -57,6 +57,8 @@ from rss6.errors import InvalidInputError
 __all__ = ["diagnose"]
 
 F64 = NDArray[np.float64]
+MIN_FRAMES = 90
+"""Fewest camera frames a fitting or held-out part may have."""
 Progress = Callable[[str, int, int], Any]
 
 
@@ -169,8 +171,6 @@ def diagnose(
     run = run_of(measured, kinematics=model.kinematics)
     n = len(run.t)
     if validation is None:
-        if n < 60:
-            raise InvalidInputError(f"a run of {n} frames is too short to hold half of it out")
         fit_part = _Part(run, slice(0, n // 2))
         held = _Part(run, slice(n // 2, n))
     else:
@@ -181,6 +181,13 @@ def diagnose(
             )
         fit_part = _Part(run, slice(0, n))
         held = _Part(vrun, slice(0, len(vrun.t)))
+    for what, part in (("fitting", fit_part), ("held-out", held)):
+        frames = len(part.t)
+        if frames < MIN_FRAMES:
+            raise InvalidInputError(
+                f"the {what} part has {frames} camera frames; the noise model and the tests need "
+                f"at least {MIN_FRAMES} (≈ {MIN_FRAMES / 30:.0f} s at 30 Hz): use longer runs"
+            )
     sim = _Sim(workers)
     try:
         return _diagnose(
