@@ -398,6 +398,16 @@ def _diagnose(
         if p_held > alpha or (not best.converged and best.cost >= float(rw @ rw)):
             excluded.add((s.effect.name, s.scope))
             break
+        # A real effect has the same parameters on both runs; a library effect that only mimics
+        # something outside the library fits differently on another excitation.
+        p_cons, cons_text = _consistency(base_model, held, hcal, prev, s, best)
+        if p_cons < alpha:
+            excluded.add((s.effect.name, s.scope))
+            notes_fit.append(
+                f"{s.effect.name} ({s.scope}) not named: it fits the held-out run differently "
+                f"({cons_text}; p = {p_cons:.2g}) — it mimics something outside the library"
+            )
+            continue
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
             NamedEffect(a.name, a.scope, dict(a.params), ne.ci, ne.p_value, ne.gap_after)
@@ -473,6 +483,51 @@ def _diagnose(
         held_out=HeldOut(held.t, held_before[:, :6], held_named[:, :6], held_after[:, :6]),
         signatures=sig,
     )
+
+
+def _consistency(
+    base_model: Model,
+    held: _Part,
+    hcal: Calibration,
+    prev: Sequence[AppliedEffect],
+    s: Screen,
+    best: Fit,
+) -> tuple[float, str]:
+    """Refits the effects on the held-out run from the fitting run's values and tests that the new
+    effect's parameters agree (Wald, covariances of both fits scaled by their misfit): (p, text
+    of the two estimates)."""
+    from scipy.stats import chi2
+
+    effs = [(_def(a.name), a.scope) for a in prev] + [(s.effect, s.scope)]
+
+    def simulate_h(c: Change) -> F64:
+        return replay(base_model, held.run, c)[held.rows]
+
+    try:
+        hfit = fit_effects(
+            effs,
+            best.values,
+            held.measured,
+            simulate_h,
+            hcal.whitener,
+            bounds=partial(_physical, base_model),
+        )
+    except (InvalidInputError, rss6.IdentificationError):
+        return 1.0, "held-out refit failed"
+    q = len(s.effect.params)
+
+    def cov(f: Fit) -> F64:
+        dof = max(1, len(f.residual_w) - f.jacobian.shape[1])
+        c = np.linalg.pinv(f.jacobian.T @ f.jacobian) * max(1.0, f.cost / dof)
+        return np.asarray(c[-q:, -q:], dtype=np.float64)
+
+    names = [p.name for p in s.effect.params]
+    a = np.array([best.values[-1][n] for n in names])
+    b = np.array([hfit.values[-1][n] for n in names])
+    d = a - b
+    w = float(d @ np.linalg.pinv(cov(best) + cov(hfit)) @ d)
+    text = ", ".join(f"{n} {x:.4g} vs {y:.4g}" for n, x, y in zip(names, a, b, strict=True))
+    return float(chi2.sf(w, q)), text
 
 
 def _physical(model: Model, e: EffectDef, scope: str) -> dict[str, tuple[float, float]]:
