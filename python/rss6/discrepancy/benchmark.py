@@ -16,6 +16,7 @@ the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``rep
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -124,7 +125,8 @@ def _camera_additive(kind: str, t: F64, multiple: float) -> F64:
 class HiddenCase:
     """A case ready for the workflow: the fitting and validation runs on the robot with the hidden
     effects, the truth model without them, what was hidden ("name (scope)" and out-of-library
-    kinds), its parameters, and the output multiple each effect reached."""
+    kinds), the hidden library effects' parameters by effect name, and the output multiple each effect
+    reached."""
 
     fit: identify.IdentificationData
     validation: identify.IdentificationData
@@ -196,6 +198,7 @@ def hidden_case(
         )
 
     hidden: dict[str, dict[str, float]] = {}
+    truths: dict[str, dict[str, float]] = {}
     hidden_pid: tuple[float, ...] = tuple(pid)
     reached: list[float] = []
     applied_names: list[str] = []
@@ -210,6 +213,8 @@ def hidden_case(
                 got = _output(model, run0, e.apply(params, scope), replay(model, run0))
             reached.append(got)
             applied_names.append(f"{e.name} ({scope})")
+            params = e.check(params, scope)
+            truths[e.name] = dict(params)
             c = e.apply(params, scope)
             for k, v in c.twin.items():
                 hidden[k] = {**hidden.get(k, {}), **v}
@@ -233,7 +238,7 @@ def hidden_case(
         fit = _with_camera(fit, _camera_additive(kind, fit.t, multiple))
         val = _with_camera(val, _camera_additive(kind, val.t, multiple))
         reached.append(multiple)
-    return HiddenCase(fit, val, model, applied_names + extra, hidden, reached, library)
+    return HiddenCase(fit, val, model, applied_names + extra, truths, reached, library)
 
 
 def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
@@ -285,6 +290,18 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "seconds": time.perf_counter() - t0,
         "notes": " | ".join(rep.notes),
     }
+    # The first hidden library effect against what was named for it: right effect and scope first,
+    # estimates and 95 % intervals (JSON) for coverage and relative errors.
+    record["first_right"] = (
+        bool(rep.named)
+        and bool(library)
+        and (f"{rep.named[0].name} ({rep.named[0].scope})" in applied_names)
+    )
+    truth = case.params.get(_split(library[0])[0].name, {}) if library else {}
+    mine = next((e for e in rep.named if library and e.name == _split(library[0])[0].name), None)
+    record["truth"] = json.dumps({k: v for k, v in truth.items() if k != "joint"})
+    record["estimate"] = json.dumps(mine.params if mine else {})
+    record["ci"] = json.dumps({k: list(v) for k, v in mine.ci.items()} if mine else {})
     for i, a in enumerate("xyzabg"):
         record[f"gap_before_{a}"] = float(rep.gap_before[i])
         record[f"gap_named_{a}"] = float(rep.gap_named[i])
