@@ -268,3 +268,30 @@ def test_diagnose_simulate_none_on_the_twin_says_nothing_is_missing(tmp_path: Pa
     args = ["diagnose", "--simulate", "none", "--plant", "model", "--quiet"]
     assert main([*args, "--out", str(tmp_path / "r"), "--seed", "3"]) == 0
     assert "no missing effect" in (tmp_path / "r" / "report.md").read_text(encoding="utf-8")
+
+
+def test_a_payload_com_offset_is_estimated_with_the_right_direction(
+    truth: Any, excitation: identify.Excitation
+) -> None:
+    """15 kg with its centre of mass 6 cm along x of ΣE (the moment separates it from a gain
+    change, which a payload at the origin mimics: next test)."""
+    rep = _diagnose(truth, excitation, {"payload": {"mass": 15.0, "x": 0.06, "y": 0.0, "z": 0.0}})
+    assert [e.name for e in rep.named] == ["payload"], rep.table()
+    p, ci = rep.named[0].params, rep.named[0].ci
+    assert abs(p["mass"] - 15.0) < 1.5
+    assert p["x"] > 0 and ci["x"][0] > 0, (p, ci)
+    assert abs(p["x"]) > 3 * max(abs(p["y"]), 1e-3) or ci["y"][0] < 0 < ci["y"][1]
+
+
+def test_confounded_candidates_are_reported_as_ambiguous_not_named(
+    truth: Any, excitation: identify.Excitation
+) -> None:
+    """A 20 kg payload at the platform's origin and a change of the drive gains leave nearly the
+    same signature on this excitation (mimicry ρ = 0.90): the workflow must say so rather than pick
+    one, and say what would separate them."""
+    rep = _diagnose(truth, excitation, {"payload": {"mass": 20.0, "x": 0.0, "y": 0.0, "z": 0.0}})
+    assert rep.ambiguous, rep.table()
+    assert {"payload (payload)", "pid_gains (drive)"} <= set(rep.ambiguous[0].candidates)
+    assert not rep.named
+    assert "excite" in rep.ambiguous[0].separate
+    assert rep.verdict.startswith("ambiguous")
