@@ -17,22 +17,38 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from collections.abc import Sequence
 from functools import partial
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 import rss6
 from rss6.discrepancy import stats
+from rss6.discrepancy._steps import (
+    MIN_FRAMES,
+    Progress,
+    _calibrate,
+    _conflicts,
+    _consistency,
+    _def,
+    _Part,
+    _physical,
+    _pose_noise,
+    _rms,
+    _row,
+    _screen_all,
+    _separation,
+    _Sim,
+    _start,
+    _tell,
+)
 from rss6.discrepancy.detect import Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.effects import candidates as library
-from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, run_of, simulate
-from rss6.discrepancy.noise import NoiseModel
+from rss6.discrepancy.model import AppliedEffect, Model, replay, run_of
+from rss6.discrepancy.reidentify import _reidentify
 from rss6.discrepancy.report import (
     Ambiguity,
     CandidateRow,
@@ -42,98 +58,17 @@ from rss6.discrepancy.report import (
     unexplained,
 )
 from rss6.discrepancy.search import (
-    Calibration,
     Fit,
     Screen,
-    calibrate,
     fit_effects,
     heldout_test,
-    hotelling,
     mimicry,
-    screen,
-    signature,
 )
 from rss6.errors import InvalidInputError
 
-__all__ = ["diagnose"]
+__all__ = ["MIN_FRAMES", "diagnose"]
 
 F64 = NDArray[np.float64]
-MIN_FRAMES = 90
-"""Fewest camera frames a fitting or held-out part may have."""
-Progress = Callable[[str, int, int], Any]
-
-
-@dataclass
-class _Part:
-    """A stretch of a run the workflow uses for fitting or for held-out claims: the run, the rows
-    (frames) of it, the clean replay of the current model and the calibration of its noise."""
-
-    run: Run
-    rows: slice
-    calibration: Calibration | None = None
-
-    @property
-    def measured(self) -> F64:
-        return self.run.channels[self.rows]
-
-    @property
-    def t(self) -> F64:
-        return self.run.t[self.rows]
-
-
-T = TypeVar("T")
-
-
-def _call(f: Callable[[], T]) -> T:
-    return f()
-
-
-class _Sim:
-    """Replays with a pool of threads (the twin releases the GIL while it runs)."""
-
-    def __init__(self, workers: int) -> None:
-        self.pool = ThreadPoolExecutor(max(1, workers))
-
-    def many(self, jobs: Sequence[Callable[[], T]]) -> list[T]:
-        return list(self.pool.map(_call, jobs))
-
-    def close(self) -> None:
-        self.pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _pose_noise(n: NoiseModel) -> NoiseModel:
-    return NoiseModel(n.sigma[:6].copy(), n.ar[:6], n.dof[:6].copy(), n.source)
-
-
-def _rms(r: F64) -> F64:
-    return np.asarray(np.sqrt(np.mean(r * r, axis=0)), dtype=np.float64)
-
-
-def _start(s: Screen) -> dict[str, float]:
-    """The fit's starting values from the one-step estimate of the score test."""
-    e = s.effect
-    if e.screen == "span":
-        # Grid point whose output change best matches the residual (first column = width 0).
-        return {e.params[0].name: e.grid[int(np.argmax(np.abs(s.step)))] if len(s.step) else 0.0}
-    if e.name == "payload":
-        m = float(s.step[0])
-        if m <= e.param("mass").scale:
-            m = e.param("mass").scale
-        return {
-            "mass": m,
-            **{ax: float(np.clip(s.step[k + 1] / m, -0.19, 0.19)) for k, ax in enumerate("xyz")},
-        }
-    out = {}
-    for p, v in zip(e.params, s.step, strict=True):
-        lo, hi = p.bounds
-        out[p.name] = float(np.clip(p.null + v, lo, hi))
-    return out
-
-
-def _conflicts(e: EffectDef, scope: str, named: Sequence[AppliedEffect]) -> bool:
-    """True if the twin cannot hold ``e`` on ``scope`` beside ``named`` (one instance per twin
-    effect), or it is already named on that scope."""
-    return any(a.name == e.name and (a.scope == scope or e.name != "joint_friction") for a in named)
 
 
 def diagnose(
@@ -207,37 +142,6 @@ def diagnose(
         )
     finally:
         sim.close()
-
-
-def _tell(progress: Progress | None, stage: str, done: int, total: int) -> None:
-    if progress is not None:
-        progress(stage, done, total)
-
-
-def _noise(model: Model, run: Run, clean: Replay, seed: int) -> F64:
-    return simulate(model, run, seed=seed).noise(clean, run)
-
-
-def _calibrate(parts: Sequence[_Part], model: Model, k: int, sim: _Sim, seed: int) -> list[F64]:
-    """Clean replays of ``model`` on each distinct run of ``parts`` and the calibration of each
-    part from ``k`` noisy replays (their noise taken at the model's own frames); returns the clean
-    replays (whole runs, at the runs' frame times) by part."""
-    runs: dict[int, Run] = {}
-    for p in parts:
-        runs.setdefault(id(p.run), p.run)
-    keys = list(runs)
-    clean = sim.many([partial(simulate, model, runs[key]) for key in keys])
-    clean_by = dict(zip(keys, clean, strict=True))
-    noise: dict[int, list[F64]] = {}
-    for key in keys:
-        r, c = runs[key], clean_by[key]
-        noise[key] = sim.many([partial(_noise, model, r, c, seed + s) for s in range(k)])
-    out = []
-    for p in parts:
-        key = id(p.run)
-        p.calibration = calibrate([x[p.rows] for x in noise[key]])
-        out.append(clean_by[key].at(p.run))
-    return out
 
 
 def _diagnose(
@@ -486,217 +390,3 @@ def _diagnose(
         held_out=HeldOut(held.t, held_before[:, :6], held_named[:, :6], held_after[:, :6]),
         signatures=sig,
     )
-
-
-def _consistency(
-    base_model: Model,
-    held: _Part,
-    hcal: Calibration,
-    prev: Sequence[AppliedEffect],
-    s: Screen,
-    best: Fit,
-    res_at_fit: F64,
-) -> tuple[float, str]:
-    """Refits the effects on the held-out run from the fitting run's values and tests that the
-    fitting run's parameters are where the held-out run's own fit would put them: the score
-    g = Jᵀr of the held-out residual at the fitting run's parameters (J the held-out fit's whitened
-    Jacobian), Hotelling's T² against the held-out replicates' Jᵀe with their covariance doubled
-    (the fitting run's estimate carries an error of about the same size as the held-out noise's
-    projection). (p, text of the two estimates)."""
-    effs = [(_def(a.name), a.scope) for a in prev] + [(s.effect, s.scope)]
-
-    def simulate_h(c: Change) -> F64:
-        return replay(base_model, held.run, c)[held.rows]
-
-    try:
-        hfit = fit_effects(
-            effs,
-            best.values,
-            held.measured,
-            simulate_h,
-            hcal.whitener,
-            bounds=partial(_physical, base_model),
-        )
-    except (InvalidInputError, rss6.IdentificationError):
-        return 1.0, "held-out refit failed"
-    j = hfit.jacobian
-    g = j.T @ res_at_fit
-    t2, p = hotelling(g / np.sqrt(2.0), hcal.replicates @ j)
-    names = [p.name for p in s.effect.params]
-    text = (
-        ", ".join(f"{n} {best.values[-1][n]:.4g} vs {hfit.values[-1][n]:.4g}" for n in names)
-        + f"; T² {t2:.3g} on {j.shape[1]} parameters"
-    )
-    return p, text
-
-
-def _physical(model: Model, e: EffectDef, scope: str) -> dict[str, tuple[float, float]]:
-    """Bounds that keep the model physical: added friction may not take the model's own below 0
-    (on the joint of the scope, or on every joint)."""
-    if e.name != "joint_friction":
-        return {}
-    fc = np.asarray(model.dynamics.coulomb, dtype=np.float64)
-    fv = np.asarray(model.dynamics.viscous, dtype=np.float64)
-    j = None if scope == "all joints" else int(scope.removeprefix("joint "))
-    c_min = float(fc.min() if j is None else fc[j])
-    v_min = float(fv.min() if j is None else fv[j])
-    return {"coulomb": (-c_min, np.inf), "viscous": (-v_min, np.inf)}
-
-
-def _def(name: str) -> EffectDef:
-    from rss6.discrepancy.effects import get
-
-    return get(name)
-
-
-def _row(s: Screen, p_adj: float, est: dict[str, float] | None, ci: Any, amb: bool) -> CandidateRow:
-    return CandidateRow(
-        s.effect.name,
-        s.scope,
-        0.5 * s.t2,
-        p_adj,
-        est or {c: float(v) for c, v in zip(s.coords, s.step, strict=False)},
-        ci or {},
-        np.full(6, np.nan),
-        amb,
-    )
-
-
-def _separation(group: Sequence[str], cols: dict[str, F64], part: _Part) -> str:
-    """Where the first two signatures of an ambiguous group differ most (whitened): the part of the
-    first's leading direction the second cannot mimic, at its largest, as a channel and a time of
-    the fitting run — the excitation should weigh that motion more."""
-    from rss6.discrepancy.model import CHANNELS
-
-    a, b = cols[group[0]], cols[group[1]]
-    ua = np.linalg.svd(a, full_matrices=False)[0][:, 0]
-    qb, _ = np.linalg.qr(b)
-    diff = ua - qb @ (qb.T @ ua)
-    where = int(np.argmax(np.abs(diff)))
-    assert part.calibration is not None
-    lags = [len(phi) for phi in part.calibration.noise.ar]
-    n = len(part.t)
-    for ch, p in enumerate(lags):
-        if where < n - p:
-            t = float(part.t[min(where + p, n - 1)])
-            return (
-                f"excite where their signatures differ most: channel {CHANNELS[ch]} near "
-                f"t = {t:.2f} s (a longer or faster motion there, or another excitation)"
-            )
-        where -= n - p
-    return "excite where their signatures differ most"
-
-
-def _screen_all(
-    cands: Sequence[tuple[EffectDef, str]],
-    model: Model,
-    fit: _Part,
-    clean: F64,
-    rw: F64,
-    cal: Calibration,
-    sim: _Sim,
-    progress: Progress | None,
-    round_: int,
-) -> list[Screen]:
-    stage = f"screening round {round_ + 1}"
-    _tell(progress, stage, 0, len(cands))
-    out: list[Screen] = []
-    for j, (e, s) in enumerate(cands):
-
-        def simulate(c: Change) -> F64:
-            return replay(model, fit.run, c)[fit.rows]
-
-        raw, coords = _signature_parallel(e, s, simulate, clean[fit.rows], sim)
-        out.append(screen(e, s, raw, coords, rw, cal))
-        _tell(progress, stage, j + 1, len(cands))
-    return out
-
-
-def _signature_parallel(
-    e: EffectDef, s: str, simulate: Callable[[Change], F64], clean: F64, sim: _Sim
-) -> tuple[F64, tuple[str, ...]]:
-    """:func:`signature` with its replays run on the pool: the changes are collected first."""
-    changes: list[Change] = []
-
-    def record(c: Change) -> F64:
-        changes.append(c)
-        return clean
-
-    signature(e, s, record, clean)
-    results = sim.many([partial(simulate, c) for c in changes])
-    it = iter(results)
-    return signature(e, s, lambda c: next(it), clean)
-
-
-REIDENTIFY_DEFAULT: tuple[str, ...] = (
-    *(f"fc{i}" for i in range(1, 7)),
-    *(f"fv{i}" for i in range(1, 7)),
-    "lp",
-    "li",
-    "ld",
-)
-"""What ``reidentify=True`` re-identifies: the friction and the drive gains (the quantities CLOE
-sees best in this loop; docs/identification.md)."""
-
-
-def loop_effects(model: Model) -> tuple[Any, tuple[float, float, float], dict[str, Any]]:
-    """The model's effects as the identification loop takes them: (dynamics with the named
-    friction, drive gains with the named mismatch, keyword arguments of
-    :func:`rss6.identify.cloe` / :func:`rss6.identify.simulate`: camera latency, gravity of a
-    tilted base, payload as a load, offset drift). Raises :class:`rss6.InvalidInputError` for an
-    effect the identification loop cannot express (backlash)."""
-    from scipy.spatial.transform import Rotation
-
-    from rss6.discrepancy.model import dynamics_with
-
-    c = model.change()
-    dp = dynamics_with(model.dynamics, c)
-    g0 = [float(g) for g in model.pid]
-    pid = (g0[0] * (1 + c.gains[0]), g0[1] * (1 + c.gains[1]), g0[2] * (1 + c.gains[2]))
-    kw: dict[str, Any] = {"camera_latency": model.camera_latency}
-    for name, params in c.twin.items():
-        if name == "camera_latency":
-            kw["camera_latency"] += params["latency"]
-        elif name == "base_tilt":
-            r = Rotation.from_euler("XY", [params["roll"], params["pitch"]]).as_matrix()
-            kw["gravity"] = r.T @ np.array([0.0, 0.0, -9.81])
-        elif name == "payload":
-            com = [params["x"], params["y"], params["z"]]
-            kw["load"] = (params["mass"], com, np.eye(3) * params.get("inertia", 0.0))
-        elif name == "joint_offset_drift":
-            rate = np.zeros(6)
-            if "joint" in params:
-                rate[int(params["joint"])] = params["rate"]
-            else:
-                rate[:] = params["rate"]
-            kw["offset_drift"] = rate
-        else:
-            raise InvalidInputError(
-                f"the identification loop cannot express {name!r}: re-identify without it"
-            )
-    return dp, pid, kw
-
-
-def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[Model, str]:
-    """CLOE of ``which`` (True: :data:`REIDENTIFY_DEFAULT`) on the fitting run with the named
-    effects; the re-identified model (its named friction and gain mismatch folded into the
-    dynamics and gains, the other effects kept) and a note."""
-    from rss6 import identify
-
-    chosen: Sequence[str] = REIDENTIFY_DEFAULT if isinstance(which, bool) else which
-    names = list(chosen)
-    dp, pid, kw = loop_effects(model)
-    res = identify.cloe(
-        data,
-        model.kinematics,
-        dp,
-        pid,
-        parameters=names,
-        derivative_filter=model.derivative_filter,
-        friction_smoothing=model.friction_smoothing,
-        torque_limit=model.torque_limit,
-        **kw,
-    )
-    kept = [a for a in model.applied() if a.name not in ("joint_friction", "pid_gains")]
-    out = model.with_effects(kept).with_dynamics(res.dynamics, res.pid)
-    return out, f"re-identified {len(names)} quantities in {res.iterations} CLOE iterations"
