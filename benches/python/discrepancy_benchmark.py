@@ -23,12 +23,19 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
     ap.add_argument("--null", type=int, default=100)
+    ap.add_argument("--friction", default="table", choices=("table", "none"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--magnitudes", type=float, nargs="+", default=[1.0, 2.0, 5.0])
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
-    specs = cases(magnitudes=args.magnitudes, seeds=args.seeds, n_null=args.null, robot=args.robot)
+    specs = cases(
+        magnitudes=args.magnitudes,
+        seeds=args.seeds,
+        n_null=args.null,
+        robot=args.robot,
+        friction=args.friction,
+    )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     done = set()
