@@ -16,7 +16,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from rss6.discrepancy.benchmark import benchmark_case, cases
+from rss6.discrepancy.benchmark import benchmark_case, cases, summary
 
 
 def main() -> int:
@@ -69,21 +69,9 @@ def main() -> int:
 
 
 def summarise(path: Path) -> None:
-    """Prints the per-case table: named right / ambiguous / unexplained / wrong."""
+    """Prints :func:`rss6.discrepancy.benchmark.summary` of the CSV."""
     with path.open() as f:
-        rows = list(csv.DictReader(f))
-    groups: dict[tuple[str, str], list[dict[str, str]]] = {}
-    for r in rows:
-        groups.setdefault((r["hidden"], r["magnitude"]), []).append(r)
-    print(
-        f"\n{'hidden':48s} {'×σ':>4s} {'n':>4s} {'right':>6s} {'ambig':>6s} {'unexpl':>7s} {'wrong name':>10s}"
-    )
-    for (h, m), rs in sorted(groups.items()):
-        right = sum(r["correct"] == "True" for r in rs)
-        amb = sum(r["ambiguous"] == "True" for r in rs)
-        unex = sum(r["unexplained"] == "True" for r in rs)
-        wrong = sum(r["correct"] != "True" and r["named"] != "none" for r in rs)
-        print(f"{h:48s} {float(m):4g} {len(rs):4d} {right:6d} {amb:6d} {unex:7d} {wrong:10d}")
+        print(summary(list(csv.DictReader(f))))
 
 
 if __name__ == "__main__":
