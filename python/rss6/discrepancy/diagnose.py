@@ -149,6 +149,18 @@ def diagnose(
         sim.close()
 
 
+def _gravity_load(model: Model, ref: F64) -> F64:
+    """The gravity load along the reference (N,): RMS over the joints of the static actuator torques
+    (the model's inverse dynamics at rest), about its mean — in χ coordinates gravity is constant
+    along a trajectory, in joint space it is not."""
+    zero = np.zeros(6)
+    tau = np.array(
+        [rss6.inverse_dynamics(model.kinematics, model.dynamics, p, zero, zero) for p in ref]
+    )
+    load = np.sqrt(np.mean(tau * tau, axis=1))
+    return np.asarray(load - load.mean(), dtype=np.float64)
+
+
 def _diagnose(
     fit: _Part,
     held: _Part,
@@ -170,7 +182,7 @@ def _diagnose(
     cal, hcal = fit.calibration, held.calibration
 
     ref = np.array([fit.run.reference.sample(float(t))[0] for t in fit.t])
-    sig = reference_signatures(fit.t, ref)
+    sig = reference_signatures(fit.t, ref, gravity_load=_gravity_load(model, ref))
     r0 = fit.measured - clean_fit[fit.rows]
     detection: Detection = detect(fit.t, r0[:, :6], sig, _pose_noise(cal.noise), alpha)
 
