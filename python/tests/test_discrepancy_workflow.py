@@ -295,3 +295,48 @@ def test_confounded_candidates_are_reported_as_ambiguous_not_named(
     assert not rep.named
     assert "excite" in rep.ambiguous[0].separate
     assert rep.verdict.startswith("ambiguous")
+
+
+def test_the_identification_loop_takes_the_named_effects_as_the_replay_does(
+    truth: Any, excitation: identify.Excitation
+) -> None:
+    """Re-identification runs CLOE with the named effects mapped onto the identification loop
+    (latency, tilt as gravity, payload as a load, offset drift, friction and gains folded in): that
+    loop must replay what the discrepancy replay does, or re-identification would fit another model."""
+    from rss6.discrepancy.reidentify import loop_effects
+
+    robot = _robot(truth, 5, None, pixel_noise=0.0, potentiometer_noise=0.0)
+    model = _model(
+        truth,
+        robot,
+        (
+            AppliedEffect("camera_latency", "sensor", {"latency": 0.012}),
+            AppliedEffect("base_tilt", "base", {"roll": 0.03, "pitch": -0.02}),
+            AppliedEffect("payload", "payload", {"mass": 3.0, "x": 0.04, "y": -0.02, "z": 0.01}),
+            AppliedEffect("joint_offset_drift", "joint 4", {"rate": 1e-3}),
+            AppliedEffect("joint_friction", "all joints", {"coulomb": 0.2, "viscous": 0.5}),
+            AppliedEffect("pid_gains", "drive", {"l_p": 0.1, "l_i": -0.1, "l_d": 0.2}),
+        ),
+    )
+    run = run_of(_collect(robot, excitation))
+    from rss6.discrepancy.model import simulate
+
+    rep = simulate(model, run)
+    dp, pid, kw = loop_effects(model)
+    chi = identify.simulate(
+        KP,
+        dp,
+        pid,
+        excitation,
+        times=rep.frame_t,
+        derivative_filter=T_F,
+        friction_smoothing=EPS,
+        **kw,
+    )
+    err = np.abs(chi - rep.poses).max()
+    assert err < 1e-9, err
+    assert np.abs(replay(model, run) - replay(model.with_effects(()), run))[:, :6].max() > 1e-4
+    with pytest.raises(rss6.InvalidInputError, match="backlash"):
+        loop_effects(
+            model.with_effects((AppliedEffect("backlash", "all joints", {"width": 1e-3}),))
+        )
