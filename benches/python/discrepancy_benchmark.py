@@ -54,6 +54,10 @@ def main() -> int:
                 print(f"case failed: {type(e).__name__}: {e}", flush=True)
                 continue
             new = not out.exists()
+            if not new:
+                with out.open() as f:
+                    fields = next(csv.reader(f))
+                rec = {k: rec.get(k, "") for k in fields}
             with out.open("a", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=list(rec))
                 if new:
@@ -61,7 +65,7 @@ def main() -> int:
                 w.writerow(rec)
             print(
                 f"[{k}/{len(todo)} {time.perf_counter() - t0:6.0f}s] {rec['hidden']} "
-                f"×{rec['magnitude']} (reached {float(rec['reached']):.2f}) -> {rec['verdict']}",
+                f"×{rec['magnitude']} (reached {float(rec.get('reached') or 0):.2f}) -> {rec['verdict']}",
                 flush=True,
             )
     summarise(out)

@@ -44,8 +44,10 @@ def rust_rate(ticks: int, rounds: int = 1) -> float:
     """Best ticks/s of ``rounds`` rounds of the Rust loop (timed inside the example)."""
     root = Path(__file__).resolve().parents[2]
     run = subprocess.run(
-        ["cargo", "run", "--release", "-q", "-p", "rss6-benches", "--example", "plant_loop", "--"]
-        + [str(ticks), str(rounds)],
+        [
+            *("cargo", "run", "--release", "-q", "-p", "rss6-benches", "--example", "plant_loop"),
+            *("--", str(ticks), str(rounds)),
+        ],
         cwd=root,
         capture_output=True,
         text=True,

@@ -261,6 +261,24 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     seed = int(spec.get("seed", 0))
     multiple = float(spec.get("magnitude", 2.0))
     case = hidden_case(spec)
+    faults = [
+        f"{w} run at t = {d.fault[0]:.2f} s: {d.fault[1]}"
+        for w, d in (("fitting", case.fit), ("validation", case.validation))
+        if d.fault is not None
+    ]
+    if faults:
+        # The robot left the loop (the visual PID faulted): no case to diagnose; recorded, not
+        # counted in the figures.
+        return {
+            "spec_id": str(spec.get("spec_id", "")),
+            "robot": str(spec.get("robot", "twin")),
+            "seed": seed,
+            "kind": "faulted",
+            "hidden": "+".join(case.hidden) or "none",
+            "magnitude": multiple,
+            "verdict": "run faulted: " + "; ".join(faults),
+            "seconds": time.perf_counter() - t0,
+        }
     rep = diagnose(
         case.fit,
         case.model,
@@ -402,7 +420,10 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
     95 % interval coverage and relative error of the named parameters, out-of-library handling,
     held-out gap at 5× against the noise floor."""
     lines: list[str] = []
-    rows = list(records)
+    every = list(records)
+    rows = [r for r in every if r.get("kind") != "faulted"]
+    if len(rows) < len(every):
+        lines.append(f"runs where the robot faulted (not counted): {len(every) - len(rows)}")
     null = [r for r in rows if r["hidden"] == "none"]
     if null:
         fa = sum(r["verdict"] != "no missing effect" for r in null)
