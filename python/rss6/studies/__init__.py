@@ -1,0 +1,249 @@
+"""Studies at scale on Dask (issue 16): Monte Carlo calibration, identification variation, the
+discrepancy benchmark. Each study is a list of picklable specs mapped on a
+``dask.distributed.Client`` (:mod:`rss6.studies.engine`: CSV records as tasks finish, resume,
+retries); each returns a ``pandas.DataFrame`` of its records (one row per spec, with its
+``spec_id``) and writes ``out``. ``summary_*`` turn the records into the study's tables.
+
+How to run on a cluster: docs/studies.md.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rss6.studies.engine import probe_task, read_records, run_study
+from rss6.studies.tasks import calibration_task, discrepancy_task, identification_task
+
+__all__ = [
+    "calibration_study",
+    "discrepancy_benchmark",
+    "identification_variation",
+    "probe_task",
+    "read_records",
+    "run_study",
+    "summary_calibration",
+    "summary_discrepancy",
+    "summary_identification",
+]
+
+_AXES = "xyzabg"
+
+
+def _frame(records: list[dict[str, str]]) -> Any:
+    import pandas as pd
+
+    df = pd.DataFrame.from_records(records)
+    for c in df.columns:
+        conv = pd.to_numeric(df[c], errors="coerce")
+        if conv.notna().sum() == df[c].astype(bool).sum() and c not in ("spec_id",):
+            df[c] = conv
+    return df
+
+
+def calibration_study(
+    n_robots: int,
+    *,
+    out: str | Path,
+    client: Any = None,
+    seed: int = 0,
+    workers: int = 2,
+    plant: bool = False,
+    dwell: float = 2.0,
+    candidates: int = 5000,
+    progress: Any = True,
+) -> Any:
+    """The §4.4.3 calibration study over ``n_robots`` random robots (seeds ``seed`` …), one task
+    per robot: the configuration sets are selected once here (``candidates`` per set) and travel
+    in the specs; ``plant``: the rapier plant and its stereo CMM instead of the analytic generator."""
+    import rss6
+    from rss6 import calibrate
+
+    nominal = rss6.KinematicParams.nominal()
+    lo, hi = calibrate.stroke(nominal)
+    th_r = calibrate.select_configurations(
+        nominal, "rpba", seed, candidates=candidates, stroke=(lo, hi)
+    )
+    th_i = calibrate.select_configurations(
+        nominal, "implicit", seed, candidates=candidates, stroke=(lo, hi)
+    )
+    specs = [
+        {
+            "spec_id": f"calibration:{'plant' if plant else 'generator'}:{seed + r}",
+            "seed": seed + r,
+            "plant": plant,
+            "dwell": dwell,
+            "stroke": (float(lo), float(hi)),
+            "rpba_thetas": np.asarray(th_r).tolist(),
+            "implicit_thetas": np.asarray(th_i).tolist(),
+        }
+        for r in range(n_robots)
+    ]
+    fields = ["seed", "plant"]
+    for m in ("uncalibrated", "implicit", "rpba"):
+        fields += [f"{m}_{a}" for a in _AXES]
+    for m in ("implicit", "rpba"):
+        fields += [
+            f"{m}_met",
+            f"{m}_worst_axis",
+            f"{m}_worst_ratio",
+            f"{m}_param_error_after",
+            f"{m}_residual_after",
+        ]
+    recs, _ = run_study(
+        calibration_task,
+        specs,
+        out=out,
+        fields=fields,
+        client=client,
+        workers=workers,
+        progress=progress,
+    )
+    return _frame(recs)
+
+
+def identification_variation(
+    n_trajectories: int,
+    *,
+    out: str | Path,
+    client: Any = None,
+    seed: int = 0,
+    workers: int = 2,
+    robot: str = "plant",
+    quick: bool = False,
+    parameters: Any = "base",
+    progress: Any = True,
+) -> Any:
+    """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
+    trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
+    Table 5.2 (``robot``: "plant" or "twin"); ``quick``: 2 s trajectories, 10 iterations."""
+    from rss6 import identify
+
+    specs = [
+        {
+            "spec_id": f"identification:{robot}:{'quick' if quick else 'full'}:{seed + k}",
+            "seed": seed + k,
+            "robot": robot,
+            "quick": quick,
+            "parameters": parameters,
+        }
+        for k in range(n_trajectories)
+    ]
+    fields = ["seed", "robot", "iterations"]
+    fields += [f"est_{n}" for n in identify.parameter_names()]
+    fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
+    recs, _ = run_study(
+        identification_task,
+        specs,
+        out=out,
+        fields=fields,
+        client=client,
+        workers=workers,
+        progress=progress,
+    )
+    return _frame(recs)
+
+
+def discrepancy_benchmark(
+    cases: Any,
+    *,
+    out: str | Path,
+    client: Any = None,
+    seed: int = 0,
+    workers: int = 2,
+    progress: Any = True,
+) -> Any:
+    """The discrepancy workflow's hidden-effect benchmark: ``cases`` is a list of specs
+    (:func:`rss6.discrepancy.benchmark.cases`) or a number n (that many no-effect cases and the
+    library effects at 2× noise, seeds from ``seed``)."""
+    from rss6.discrepancy import benchmark
+
+    if isinstance(cases, int):
+        specs = benchmark.cases(magnitudes=(2.0,), seeds=(seed,), n_null=max(0, cases))
+        specs = specs[: max(cases, 1)] if cases < len(specs) else specs
+    else:
+        specs = list(cases)
+    fields = [
+        "robot",
+        "friction",
+        "seed",
+        "kind",
+        "hidden",
+        "magnitude",
+        "reached",
+        "named",
+        "verdict",
+        "correct",
+        "first_right",
+        "ambiguous",
+        "unexplained",
+        "notes",
+        "truth",
+        "estimate",
+        "ci",
+    ]
+    for p in ("gap_before", "gap_named", "gap_after", "noise"):
+        fields += [f"{p}_{a}" for a in _AXES]
+    recs, _ = run_study(
+        discrepancy_task,
+        specs,
+        out=out,
+        fields=fields,
+        client=client,
+        workers=workers,
+        progress=progress,
+    )
+    return _frame(recs)
+
+
+def summary_calibration(df: Any) -> str:
+    """Met / error counts per method, RMS per axis (mean, p95), worst cases with seeds."""
+    ok = df[df["status"] == "ok"]
+    lines = [f"{len(df)} robots: {len(ok)} ok, {int((df['status'] != 'ok').sum())} errors"]
+    for m in ("implicit", "rpba"):
+        met = ok[f"{m}_met"].astype(str).eq("True").sum()
+        lines.append(f"{m}: met Table 4.5 on every axis {met}/{len(ok)}")
+        for a in _AXES:
+            v = ok[f"{m}_{a}"].astype(float)
+            lines.append(f"  {a}: mean {v.mean():.4g}  p95 {np.percentile(v, 95):.4g}")
+        worst = ok.sort_values(f"{m}_worst_ratio", ascending=False).head(3)
+        lines.append(
+            "  worst: "
+            + ", ".join(
+                f"seed {int(r['seed'])} ({r[f'{m}_worst_axis']} at {float(r[f'{m}_worst_ratio']):.2f}× Table 4.5)"
+                for _, r in worst.iterrows()
+            )
+        )
+    return "\n".join(lines)
+
+
+def summary_identification(df: Any) -> str:
+    """Table 5.5 (std/|mean| of each estimate) and Table 5.4 (RMS after per trajectory)."""
+    ok = df[df["status"] == "ok"]
+    est = [c for c in ok.columns if c.startswith("est_")]
+    lines = [f"{len(df)} trajectories: {len(ok)} identified"]
+    if len(ok) >= 2:
+        lines.append("Table 5.5 (variation = std / |mean|):")
+        for c in est:
+            v = ok[c].astype(float)
+            lines.append(f"  {c[4:]:12s} {float(v.std(ddof=1) / abs(v.mean())):.3g}")
+    lines.append("Table 5.4 (RMS after, mm / mrad):")
+    for _, r in ok.iterrows():
+        lines.append(
+            f"  seed {int(r['seed'])}: "
+            + " ".join(f"{1e3 * float(r[f'rms_after_{a}']):.4f}" for a in _AXES)
+        )
+    return "\n".join(lines)
+
+
+def summary_discrepancy(df: Any) -> str:
+    """The confusion matrix and the issue-14 figures (:func:`rss6.discrepancy.benchmark.summary`)."""
+    from rss6.discrepancy.benchmark import summary
+
+    rows = [
+        {k: ("" if v != v else v) for k, v in r.items()}
+        for r in df[df["status"] == "ok"].astype(str).to_dict("records")
+    ]
+    return summary(rows)

@@ -1,0 +1,109 @@
+"""The tasks of the three studies: one spec in, one flat record out (run on Dask workers)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+__all__ = ["calibration_task", "discrepancy_task", "identification_task"]
+
+_AXES = "xyzabg"
+
+
+def calibration_task(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """One random robot of the §4.4.3 study (seed ``seed``; the analytic generator or, with
+    ``plant``, the rapier plant): RMS relative pose errors per axis uncalibrated / implicit / RPBA,
+    parameter errors and residuals, and whether each method met Table 4.5 on every axis."""
+    from rss6 import _rss6, thesis
+
+    rows = _rss6.calibration_study(
+        np.asarray(spec["rpba_thetas"], dtype=np.float64),
+        np.asarray(spec["implicit_thetas"], dtype=np.float64),
+        robots=1,
+        seed=int(spec["seed"]),
+        dwell=float(spec.get("dwell", 2.0)),
+        stroke=tuple(spec["stroke"]),
+        plant=bool(spec.get("plant", False)),
+    )
+    r = rows[0]
+    rec: dict[str, Any] = {"seed": int(spec["seed"]), "plant": bool(spec.get("plant", False))}
+    for key, name in (
+        ("rms_uncalibrated", "uncalibrated"),
+        ("rms_implicit", "implicit"),
+        ("rms_rpba", "rpba"),
+    ):
+        v = np.asarray(r[key], dtype=np.float64)
+        for i, a in enumerate(_AXES):
+            rec[f"{name}_{a}"] = float(v[i])
+    for name, t in (("implicit", "implicit"), ("rpba", "RPBA")):
+        table = np.asarray(thesis.TABLE_4_5[t], dtype=np.float64)
+        got = np.array([rec[f"{name}_{a}"] for a in _AXES])
+        rec[f"{name}_met"] = bool(np.all(got <= table))
+        rec[f"{name}_worst_axis"] = _AXES[int(np.argmax(got / table))]
+        rec[f"{name}_worst_ratio"] = float(np.max(got / table))
+        pe = r[f"{name}_param_error"]
+        rec[f"{name}_param_error_after"] = float(pe[1])
+        rec[f"{name}_residual_after"] = float(r[f"{name}_residual"][1])
+    return rec
+
+
+def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """One identification on a random trajectory (seed ``seed``) of the robot whose truth is
+    Table 5.2 (``robot``: "plant" or "twin"): CLOE from Table 5.1 and the nominal gains, the
+    estimates by name, and the RMS of the identified model on a fresh validation trajectory."""
+    import rss6
+    from rss6 import identify, identify_sim
+
+    kp = rss6.KinematicParams.nominal()
+    quick = bool(spec.get("quick", False))
+    harmonics, f0 = (3, 0.5) if quick else (5, 0.1)
+    seed = int(spec["seed"])
+    dp_true, pid_true = identify.table_5_2_truth()
+    plant_cls: Any = getattr(rss6, "Plant", None)
+    cls: Any = plant_cls if spec.get("robot", "plant") == "plant" and plant_cls else rss6.ModelSim
+    t_f, eps = identify_sim.DRIVE_DERIVATIVE_FILTER, identify_sim.FRICTION_SMOOTHING
+    kw: dict[str, Any] = {"friction_smoothing": eps} if cls is rss6.ModelSim else {}
+    robot = cls(kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f, **kw)
+    tr = robot.truth()
+    amplitude = (0.002, 0.01) if quick else (0.001, 0.005)
+    exc = identify.random_excitation(kp, harmonics=harmonics, f0=f0, seed=seed, amplitude=amplitude)
+    data = identify.collect(
+        robot,
+        exc,
+        kp_model=kp,
+        sensor_in_base=tr["sensor_in_base"],
+        target_in_effector=tr["target_in_effector"],
+    )
+    rec: dict[str, Any] = {"seed": seed, "robot": cls.__name__}
+    if data.fault is not None:
+        rec.update(status="faulted", error=f"visual PID fault at {data.fault[0]:.2f} s")
+        return rec
+    dp0, pid0 = identify_sim.initial_model()
+    res = identify.cloe(
+        data,
+        kp,
+        dp0,
+        pid0,
+        parameters=spec.get("parameters", "base"),
+        max_iterations=int(spec.get("iterations", 10 if quick else 20)),
+        derivative_filter=t_f,
+        friction_smoothing=eps,
+    )
+    phi = np.exp(np.asarray(rss6._rss6.cloe_psi(res.dynamics, res.pid)[0]))
+    for name, v in zip(identify.parameter_names(), phi, strict=True):
+        rec[f"est_{name}"] = float(v)
+    rec["iterations"] = int(res.iterations)
+    for i, a in enumerate(_AXES):
+        rec[f"rms_before_{a}"] = float(res.rms_before[i])
+        rec[f"rms_after_{a}"] = float(res.rms_after[i])
+    return rec
+
+
+def discrepancy_task(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """One hidden-effect case of the discrepancy benchmark
+    (:func:`rss6.discrepancy.benchmark.benchmark_case`)."""
+    from rss6.discrepancy.benchmark import benchmark_case
+
+    return benchmark_case(spec)

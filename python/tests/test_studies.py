@@ -1,0 +1,157 @@
+"""Studies on Dask (issue 16): a small study of each kind on a 2-worker LocalCluster, a worker
+killed mid-study, a parent killed and the study resumed."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from rss6 import studies
+from rss6.studies import read_records, run_study
+from rss6.studies.engine import probe_task
+
+distributed = pytest.importorskip("distributed")
+
+# Dask's comms leave sockets to the garbage collector when workers are killed on purpose here.
+pytestmark = [
+    pytest.mark.filterwarnings("ignore::ResourceWarning"),
+    pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning"),
+]
+
+
+@pytest.fixture(scope="module")
+def client() -> Iterator[Any]:
+    from dask.distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    )
+    c = Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def _probe_specs(n: int, sleep: float) -> list[dict[str, Any]]:
+    return [{"spec_id": f"p{k}", "sleep": sleep, "value": k} for k in range(n)]
+
+
+def test_records_are_written_once_and_a_rerun_skips_them(client: Any, tmp_path: Path) -> None:
+    out = tmp_path / "probe.csv"
+    recs, ran = run_study(
+        probe_task, _probe_specs(6, 0.05), out=out, fields=["value"], client=client, progress=False
+    )
+    assert ran == 6 and sorted(r["spec_id"] for r in recs) == [f"p{k}" for k in range(6)]
+    assert {r["value"] for r in recs} == {str(k) for k in range(6)}
+    assert len({r["worker_pid"] for r in recs}) == 2  # both workers took tasks
+    recs2, ran2 = run_study(
+        probe_task, _probe_specs(6, 0.05), out=out, fields=["value"], client=client, progress=False
+    )
+    assert ran2 == 0 and len(recs2) == 6
+
+
+def test_a_worker_killed_mid_study_costs_only_a_retry(client: Any, tmp_path: Path) -> None:
+    pids = list(client.run(os.getpid).values())
+    out = tmp_path / "killed.csv"
+
+    def kill_one() -> None:
+        time.sleep(1.0)
+        os.kill(pids[0], signal.SIGKILL)
+
+    t = threading.Thread(target=kill_one)
+    t.start()
+    recs, ran = run_study(
+        probe_task,
+        _probe_specs(10, 0.6),
+        out=out,
+        fields=["value"],
+        client=client,
+        retries=3,
+        progress=False,
+    )
+    t.join()
+    ids = [r["spec_id"] for r in recs]
+    assert ran == 10
+    assert sorted(ids) == sorted(f"p{k}" for k in range(10)), ids  # every record exactly once
+    assert all(r["status"] == "ok" for r in recs)
+    assert pids[0] not in {int(r["worker_pid"]) for r in recs[3:]}
+    client.wait_for_workers(2, timeout=60)
+
+
+_PARENT = """
+import sys
+from rss6.studies import run_study
+from rss6.studies.engine import probe_task
+if __name__ == "__main__":
+    specs = [{"spec_id": f"p{k}", "sleep": 0.5, "value": k} for k in range(12)]
+    run_study(probe_task, specs, out=sys.argv[1], fields=["value"], workers=2, progress=False)
+"""
+
+
+def test_a_killed_parent_resumes_without_recomputing(tmp_path: Path) -> None:
+    out = tmp_path / "parent.csv"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(
+        filter(None, [str(Path(studies.__file__).parents[2]), env.get("PYTHONPATH")])
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _PARENT, str(out)], env=env, start_new_session=True
+    )
+    deadline = time.time() + 120
+    while time.time() < deadline and len(read_records(out)) < 4:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)  # the parent, its cluster and its workers
+    proc.wait()
+    before = read_records(out)
+    assert 4 <= len(before) < 12, len(before)
+    specs = [{"spec_id": f"p{k}", "sleep": 0.05, "value": k} for k in range(12)]
+    recs, ran = run_study(probe_task, specs, out=out, fields=["value"], workers=2, progress=False)
+    assert ran == 12 - len(before)  # finished specs are not run again
+    assert sorted(r["spec_id"] for r in recs) == sorted(f"p{k}" for k in range(12))
+    # The records written before the kill are kept as they were.
+    kept = {r["spec_id"]: r["worker_pid"] for r in before}
+    assert all(kept[r["spec_id"]] == r["worker_pid"] for r in recs if r["spec_id"] in kept)
+
+
+def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
+    cal = studies.calibration_study(
+        2, out=tmp_path / "cal.csv", client=client, candidates=400, progress=False
+    )
+    assert list(cal["status"]) == ["ok", "ok"]
+    assert "met Table 4.5" in studies.summary_calibration(cal)
+    ident = studies.identification_variation(
+        2,
+        out=tmp_path / "id.csv",
+        client=client,
+        robot="twin",
+        quick=True,
+        parameters=["lp", "li", "ld"],
+        progress=False,
+    )
+    assert list(ident["status"]) == ["ok", "ok"], ident["error"].tolist()
+    assert "Table 5.5" in studies.summary_identification(ident)
+    cases = [
+        {"spec_id": "none", "effect": None, "seed": 3, "replicates": 8},
+        {
+            "spec_id": "latency",
+            "effect": "camera_latency",
+            "magnitude": 5.0,
+            "seed": 0,
+            "replicates": 8,
+        },
+    ]
+    disc = studies.discrepancy_benchmark(
+        cases, out=tmp_path / "disc.csv", client=client, progress=False
+    )
+    assert list(disc["status"]) == ["ok", "ok"], disc["error"].tolist()
+    by = disc.set_index("spec_id")
+    assert by.loc["latency", "named"].startswith("camera_latency")
+    assert "confusion" in studies.summary_discrepancy(disc)
