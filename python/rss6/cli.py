@@ -11,6 +11,7 @@
 ``rss6 identify --simulate``  dynamic identification of a simulated robot (thesis §5.6): exciting
                          trajectory, the loop of Fig. 5.1 on the rapier plant, CLOE, Tables 5.2–5.4
                          beside the thesis's, Figs. 5.7–5.9 and MCAP logs in ``--out``.
+``rss6 study KIND``      a study on Dask (calibration, identification, discrepancy; rss6.studies).
 ``rss6 diagnose``        the discrepancy workflow: on logged runs and a model directory, or with
                          ``--simulate EFFECT`` hidden in a simulated robot (rss6.discrepancy.cli).
 """
@@ -505,6 +506,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     diagnose_cli.add_arguments(g)
     g.set_defaults(func=diagnose_cli.run)
+
+    from rss6.studies import cli as study_cli
+
+    st = sub.add_parser(
+        "study",
+        help="studies at scale on Dask: calibration, identification variation, discrepancy benchmark",
+        description=study_cli.__doc__,
+    )
+    study_cli.add_arguments(st)
+    st.set_defaults(func=study_cli.run)
 
     s = sub.add_parser(
         "can-sim",
