@@ -109,10 +109,13 @@ impl TypeIICheck {
 /// Type-II check from a leg geometry: det J_a2 and the singular values of J_ad.
 ///
 /// Errors: [`CoreError::Singular`]`(TypeI)` when J_ad is undefined (a diagonal entry of J_a1 vanished),
-/// [`CoreError::Singular`]`(Matrix)` when the singular-value decomposition does not converge.
+/// [`CoreError::Singular`]`(Matrix)` when the singular-value decomposition does not converge,
+/// [`CoreError::NonFinite`] when J_ad overflowed (extreme geometry): nalgebra's SVD panics on a
+/// NaN singular value, so it never sees one.
 pub fn type_ii_check(geo: &LegGeometry) -> Result<TypeIICheck> {
     let det_j_a2 = geo.j_a2().determinant();
     let j_ad = geo.j_ad()?;
+    check_finite(j_ad.as_slice())?;
     let sv = j_ad
         .try_svd(false, false, f64::EPSILON, 200)
         .ok_or(CoreError::Singular(SingularKind::Matrix))?
