@@ -43,6 +43,22 @@ def _frame(records: list[dict[str, str]]) -> Any:
     return df
 
 
+def _study(
+    task: Any,
+    specs: list[dict[str, Any]],
+    fields: list[str],
+    out: Any,
+    client: Any,
+    workers: int,
+    progress: Any,
+) -> Any:
+    """Runs a study (:func:`run_study`) and returns every record of ``out`` as a DataFrame."""
+    recs, _ = run_study(
+        task, specs, out=out, fields=fields, client=client, workers=workers, progress=progress
+    )
+    return _frame(recs)
+
+
 def calibration_study(
     n_robots: int,
     *,
@@ -92,16 +108,7 @@ def calibration_study(
             f"{m}_param_error_after",
             f"{m}_residual_after",
         ]
-    recs, _ = run_study(
-        calibration_task,
-        specs,
-        out=out,
-        fields=fields,
-        client=client,
-        workers=workers,
-        progress=progress,
-    )
-    return _frame(recs)
+    return _study(calibration_task, specs, fields, out, client, workers, progress)
 
 
 def identification_variation(
@@ -134,16 +141,7 @@ def identification_variation(
     fields = ["seed", "robot", "iterations"]
     fields += [f"est_{n}" for n in identify.parameter_names()]
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
-    recs, _ = run_study(
-        identification_task,
-        specs,
-        out=out,
-        fields=fields,
-        client=client,
-        workers=workers,
-        progress=progress,
-    )
-    return _frame(recs)
+    return _study(identification_task, specs, fields, out, client, workers, progress)
 
 
 def discrepancy_benchmark(
@@ -156,13 +154,12 @@ def discrepancy_benchmark(
     progress: Any = True,
 ) -> Any:
     """The discrepancy workflow's hidden-effect benchmark: ``cases`` is a list of specs
-    (:func:`rss6.discrepancy.benchmark.cases`) or a number n (that many no-effect cases and the
-    library effects at 2× noise, seeds from ``seed``)."""
+    (:func:`rss6.discrepancy.benchmark.cases`) or a number n: the library and out-of-library
+    effects at 2× noise, two pairs, and n no-effect cases (seed ``seed``)."""
     from rss6.discrepancy import benchmark
 
     if isinstance(cases, int):
         specs = benchmark.cases(magnitudes=(2.0,), seeds=(seed,), n_null=max(0, cases))
-        specs = specs[: max(cases, 1)] if cases < len(specs) else specs
     else:
         specs = list(cases)
     fields = [
@@ -186,16 +183,7 @@ def discrepancy_benchmark(
     ]
     for p in ("gap_before", "gap_named", "gap_after", "noise"):
         fields += [f"{p}_{a}" for a in _AXES]
-    recs, _ = run_study(
-        discrepancy_task,
-        specs,
-        out=out,
-        fields=fields,
-        client=client,
-        workers=workers,
-        progress=progress,
-    )
-    return _frame(recs)
+    return _study(discrepancy_task, specs, fields, out, client, workers, progress)
 
 
 def summary_calibration(df: Any) -> str:
