@@ -218,6 +218,17 @@ proptest! {
     }
 
     #[test]
+    fn implicit_friction_step(kp in kinematics(), dp in dynamics(), p in pose(), pd in rate(),
+                              tau in rate(), dt in prop_oneof![1e-4..1e-2f64, wild()],
+                              env in environment()) {
+        if let Ok(f) = implicit_friction(&kp, &dp, &p, &pd, &tau, &env, dt) {
+            // A returned step is finite and never more sweeps than its bound.
+            prop_assert!(f.sweeps <= 400);
+            prop_assert!(!f.exact || f.torque.iter().all(|x| x.is_finite()));
+        }
+    }
+
+    #[test]
     fn regressors(kp in kinematics(), p in pose(), pd in rate(), pdd in rate(), g in gravity_vec()) {
         let _ = regressor(&kp, &p, &pd, &pdd);
         let _ = regressor_with_gravity(&kp, &p, &pd, &pdd, &g);

@@ -123,10 +123,12 @@ fn sim_config(
     pixel_noise: Option<f64>,
     drive_derivative_filter: f64,
     friction_smoothing: f64,
+    implicit_friction: bool,
 ) -> PyResult<SimConfig> {
     let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
     cfg.drive_derivative_filter = drive_derivative_filter;
     cfg.friction_smoothing = friction_smoothing;
+    cfg.implicit_friction = implicit_friction;
     cfg.seed = seed;
     cfg.dt = dt;
     cfg.torque_limit = torque_limit;
@@ -244,9 +246,11 @@ macro_rules! sim_class {
             /// 0.2233) and `pixel_noise` (px) tune the sensors. `drive_derivative_filter`: time constant
             /// T_f (s) of the drive's derivative filter (0: eq. 5.5 as printed);
             /// `friction_smoothing`: ε (rad/s) of the twin's Coulomb friction f_c tanh(θ̇/ε) (0:
-            /// sign; the rapier plant ignores it). Starts at home.
+            /// sign; the rapier plant ignores it). `implicit_friction`: the friction law plant and
+            /// twin share, stick–slip stepped implicitly per tick (rss6_core::implicit_friction; the
+            /// plant follows the twin only with ≈ 48 `solver_iterations`). Starts at home.
             #[new]
-            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None, drive_derivative_filter=0.0, friction_smoothing=0.0))]
+            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None, drive_derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false))]
             #[allow(clippy::too_many_arguments)]
             fn py_new(
                 py: Python<'_>,
@@ -265,8 +269,9 @@ macro_rules! sim_class {
                 pixel_noise: Option<f64>,
                 drive_derivative_filter: f64,
                 friction_smoothing: f64,
+                implicit_friction: bool,
             ) -> PyResult<Self> {
-                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise, drive_derivative_filter, friction_smoothing)?;
+                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise, drive_derivative_filter, friction_smoothing, implicit_friction)?;
                 let robot = py.detach(move || <$ty>::new(cfg)).map_err(sim_error)?;
                 Ok($name { robot: Mutex::new(robot) })
             }

@@ -86,9 +86,16 @@ pub struct SimConfig {
     /// Time constant T_f (s) of the drive's derivative filter
     /// ([`rss6_ctrl::JointPid::with_derivative_filter`]); 0 = the thesis's unfiltered law (default).
     pub drive_derivative_filter: f64,
-    /// Velocity scale ε (rad/s) of the model twin's Coulomb friction f_c tanh(θ̇/ε); 0 = the
-    /// thesis's f_c sign(θ̇) (default). The rapier plant ignores it (its Coulomb friction sticks).
+    /// Velocity scale ε (rad/s) of the model twin's Coulomb friction f_c tanh(θ̇/ε) inside its RK4
+    /// stages; 0 = the thesis's f_c sign(θ̇) (default). The rapier plant ignores it.
     pub friction_smoothing: f64,
+    /// The shared friction law in plant and twin: Coulomb + viscous friction stepped implicitly
+    /// per tick ([`rss6_core::implicit_friction`], stick–slip, held over the tick with the drive
+    /// torque) on each simulator's own state. Off (default): the plant's Coulomb friction is a rapier
+    /// velocity motor bounded by f_c with an explicit viscous torque, the twin's is
+    /// `friction_smoothing`'s. Exclusive with `friction_smoothing` > 0. The plant meets the twin
+    /// with it only when its solver converges (≈ 48 iterations, see `docs/sim.md`).
+    pub implicit_friction: bool,
     /// Seed of every random stream (sensor noise).
     pub seed: u64,
     /// The nominal parameters that define the joint-command convention (η_nom, Δθ_nom).
@@ -120,6 +127,7 @@ impl SimConfig {
             torque_limit: DEFAULT_TORQUE_LIMIT,
             drive_derivative_filter: 0.0,
             friction_smoothing: 0.0,
+            implicit_friction: false,
             seed: 0,
             nominal: KinematicParams::nominal(),
             pot_noise: POT_NOISE_BITS,
@@ -181,6 +189,11 @@ impl SimConfig {
                     "{name} must be finite and >= 0, got {v}"
                 )));
             }
+        }
+        if self.implicit_friction && self.friction_smoothing > 0.0 {
+            return Err(SimError::InvalidConfig(
+                "implicit friction and friction smoothing exclude each other".into(),
+            ));
         }
         Ok(())
     }

@@ -12,8 +12,8 @@ use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    forward_dynamics_with_env, ik, jacobian_theta, rk4_step_by, rk4_step_with_env, DynamicParams,
-    Environment, KinematicParams, ModelState, Vec6, LEGS,
+    forward_dynamics_with_env, ik, implicit_friction, jacobian_theta, rk4_step_by,
+    rk4_step_with_env, DynamicParams, Environment, KinematicParams, ModelState, Vec6, LEGS,
 };
 
 /// Analytic-model physics.
@@ -23,6 +23,8 @@ pub struct ModelPhysics {
     dp: DynamicParams,
     /// ε of the smoothed Coulomb friction (rad/s); 0 = sign.
     smoothing: f64,
+    /// Stick–slip friction stepped implicitly per tick ([`rss6_core::implicit_friction`]).
+    implicit: bool,
     /// Gravity and the payload (a load fixed to the platform).
     env: Environment,
     dt: f64,
@@ -41,6 +43,7 @@ impl ModelPhysics {
             kp: cfg.kinematics,
             dp,
             smoothing: cfg.friction_smoothing,
+            implicit: cfg.implicit_friction,
             env: setup.environment(),
             dt: cfg.dt,
             state: ModelState {
@@ -68,7 +71,17 @@ impl Physics for ModelPhysics {
     }
 
     fn advance(&mut self, tau: &Vec6) -> Result<()> {
-        self.state = if self.smoothing > 0.0 {
+        self.state = if self.implicit {
+            // Stick–slip friction stepped implicitly and held over the tick (the plant's law
+            // with `implicit_friction`), then the friction-free model with τ − τ_f.
+            let s = &self.state;
+            let (kp, env) = (&self.kp, &self.env);
+            let f = implicit_friction(kp, &self.dp, &s.pose, &s.pose_dot, tau, env, self.dt)?;
+            let mut dp_nf = self.dp;
+            dp_nf.coulomb = [0.0; LEGS];
+            dp_nf.viscous = [0.0; LEGS];
+            rk4_step_with_env(kp, &dp_nf, s, &(tau - f.torque), self.dt, env)?
+        } else if self.smoothing > 0.0 {
             // f_c tanh(θ̇/ε) at every stage: the Coulomb part as a known joint torque on the
             // friction-free model (the same arithmetic as rss6-ident's CLOE loop).
             let mut dp_nc = self.dp;

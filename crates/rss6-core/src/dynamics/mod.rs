@@ -56,13 +56,16 @@
 //!
 //! Joint friction τ_f,i = f_c,i sign(θ̇_i) + f_v,i θ̇_i (eq. 3.48, 6.4) with sign(0) = 0, and
 //! τ̃_f = J_θᵀ τ_f. A smooth alternative, [`joint_friction_smooth`], replaces sign by tanh(θ̇/ε); the model
-//! functions use the thesis's sign.
+//! functions use the thesis's sign. The simulators step friction implicitly per tick with
+//! [`implicit_friction`] (stick–slip, no smoothing; see its module).
 
+mod friction_step;
 mod integration;
 mod load;
 mod matrices;
 mod newton_euler;
 
+pub use self::friction_step::{implicit_friction, FrictionStep};
 pub use self::integration::{
     rk4_step, rk4_step_by, rk4_step_with_env, rk4_step_with_gravity, ModelState,
 };
