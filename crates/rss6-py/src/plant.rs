@@ -124,11 +124,13 @@ fn sim_config(
     drive_derivative_filter: f64,
     friction_smoothing: f64,
     implicit_friction: bool,
+    velocity_projection: bool,
 ) -> PyResult<SimConfig> {
     let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
     cfg.drive_derivative_filter = drive_derivative_filter;
     cfg.friction_smoothing = friction_smoothing;
     cfg.implicit_friction = implicit_friction;
+    cfg.solver.velocity_projection = velocity_projection;
     cfg.seed = seed;
     cfg.dt = dt;
     cfg.torque_limit = torque_limit;
@@ -248,9 +250,11 @@ macro_rules! sim_class {
             /// `friction_smoothing`: ε (rad/s) of the twin's Coulomb friction f_c tanh(θ̇/ε) (0:
             /// sign; the rapier plant ignores it). `implicit_friction`: the friction law plant and
             /// twin share, stick–slip stepped implicitly per tick (rss6_core::implicit_friction; the
-            /// plant follows the twin only with ≈ 48 `solver_iterations`). Starts at home.
+            /// plant follows the twin with `velocity_projection`, or with ≈ 48 `solver_iterations`).
+            /// `velocity_projection`: the plant's mass-weighted velocity projection and symplectic
+            /// position step (rss6_sim::SolverConfig::velocity_projection). Starts at home.
             #[new]
-            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None, drive_derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false))]
+            #[pyo3(signature = (kp, dp, *, pid=(400.0, 2000.0, 4.0), effects=None, seed=0, dt=1e-3, sensor_in_base=None, target_in_effector=None, torque_limit=30.0, camera_latency=0.0, solver_iterations=None, potentiometer_noise=None, pixel_noise=None, drive_derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, velocity_projection=false))]
             #[allow(clippy::too_many_arguments)]
             fn py_new(
                 py: Python<'_>,
@@ -270,8 +274,9 @@ macro_rules! sim_class {
                 drive_derivative_filter: f64,
                 friction_smoothing: f64,
                 implicit_friction: bool,
+                velocity_projection: bool,
             ) -> PyResult<Self> {
-                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise, drive_derivative_filter, friction_smoothing, implicit_friction)?;
+                let cfg = sim_config(kp, dp, pid, effects, seed, dt, sensor_in_base, target_in_effector, torque_limit, camera_latency, solver_iterations, potentiometer_noise, pixel_noise, drive_derivative_filter, friction_smoothing, implicit_friction, velocity_projection)?;
                 let robot = py.detach(move || <$ty>::new(cfg)).map_err(sim_error)?;
                 Ok($name { robot: Mutex::new(robot) })
             }

@@ -67,6 +67,14 @@ struct Leg {
     half_link: f64,
 }
 
+/// Where the mechanism is: platform pose, crank angles, link poses.
+#[derive(Debug, Clone, Copy)]
+struct Configuration {
+    platform: Pose,
+    phi: [f64; LEGS],
+    links: [Pose; LEGS],
+}
+
 /// The rapier world of the plant.
 pub struct RapierPhysics {
     kp: KinematicParams,
@@ -80,6 +88,7 @@ pub struct RapierPhysics {
     t_joint: TJoint,
     multibody: bool,
     projection: bool,
+    velocity_projection: bool,
     /// Loop gap left by the rapier step before the projection (m).
     solver_gap: f64,
     /// Projection metric: inverse inertia of each wrench about its axis (1/(kg·m²)), inverse
@@ -122,6 +131,9 @@ impl RapierPhysics {
             t_joint: cfg.solver.t_joint,
             multibody: cfg.solver.multibody_legs,
             projection: cfg.solver.projection && !cfg.solver.multibody_legs,
+            velocity_projection: cfg.solver.velocity_projection
+                && cfg.solver.t_joint == TJoint::Spherical
+                && !cfg.solver.multibody_legs,
             solver_gap: 0.0,
             inv_wrench_inertia: [0.0; LEGS],
             inv_platform_mass: 0.0,
@@ -429,6 +441,200 @@ impl RapierPhysics {
         Ok(implicit_friction(&self.kp, &dp, &pose, &pose_dot, tau, &self.env, dt)?.torque)
     }
 
+    /// Replaces every body's velocity by the mass-weighted (M-orthogonal) projection of rapier's
+    /// end-of-step velocities onto the mechanism's 6 degrees of freedom at the configuration `at`
+    /// before the step (the platform twist; each link keeps its spin about its own axis; spherical
+    /// T joints only). By Gauss's principle the solver's unconverged or stabilising impulses, which
+    /// lie in the constraint directions, drop out. Geometry, masses and inertias are rapier's own
+    /// (no model code). With [`Self::integrate_positions`] the step becomes one symplectic-Euler
+    /// step of the mechanism with rapier's forces (see `SolverConfig::velocity_projection`).
+    fn project_velocities(&mut self, at: &Configuration) {
+        if self.legs.len() != LEGS {
+            return;
+        }
+        let bodies = &self.world.bodies;
+        let pb = &bodies[self.platform];
+        let e = at.platform.translation;
+        let q = at.platform.rotation;
+        let com = |rb: &RigidBody, pose: &Pose| {
+            pose.transform_point(rb.mass_properties().local_mprops.local_com)
+        };
+        // Per body: COM, the velocity map of each unit twist (linear at COM, angular), mass,
+        // world inertia, rapier's velocity.
+        struct Body {
+            lin: [DVec3; 6],
+            ang: [DVec3; 6],
+            mass: f64,
+            inertia: DMat3,
+            u_lin: DVec3,
+            u_ang: DVec3,
+            /// Link axis (unit) whose spin is kept, or zero.
+            axis: DVec3,
+        }
+        let unit = |j: usize| -> (DVec3, DVec3) {
+            let mut ve = DVec3::ZERO;
+            let mut w = DVec3::ZERO;
+            if j < 3 {
+                ve[j] = 1.0;
+            } else {
+                w[j - 3] = 1.0;
+            }
+            (ve, w)
+        };
+        let world_inertia = |rb: &RigidBody, rot: DQuat| {
+            let r = DMat3::from_quat(rot);
+            r * rb
+                .mass_properties()
+                .local_mprops
+                .reconstruct_inertia_matrix()
+                * r.transpose()
+        };
+        let mut list: Vec<Body> = Vec::with_capacity(1 + 2 * LEGS);
+        let c_p = com(pb, &at.platform);
+        let mut plat = Body {
+            lin: [DVec3::ZERO; 6],
+            ang: [DVec3::ZERO; 6],
+            mass: pb.mass(),
+            inertia: world_inertia(pb, q),
+            u_lin: pb.linvel(),
+            u_ang: pb.angvel(),
+            axis: DVec3::ZERO,
+        };
+        for j in 0..6 {
+            let (ve, w) = unit(j);
+            plat.lin[j] = ve + w.cross(c_p - e);
+            plat.ang[j] = w;
+        }
+        list.push(plat);
+        for (i, leg) in self.legs.iter().enumerate() {
+            let b = dv(&self.kp.base_joints[i]);
+            let wb = &bodies[leg.wrench];
+            let lb = &bodies[leg.link];
+            let wrench_pose = Pose::from_parts(
+                dv(&self.kp.base_joints[i])
+                    + 0.5
+                        * self.kp.wrench_lengths[i]
+                        * DVec3::new(at.phi[i].cos(), at.phi[i].sin(), 0.0),
+                DQuat::from_rotation_z(at.phi[i]),
+            );
+            let t = wrench_pose.transform_point(leg.t_in_wrench);
+            let a = e + q * leg.a_in_platform;
+            let d = a - t;
+            let n = DVec3::Z.cross(t - b);
+            let denom = n.dot(d);
+            if denom.abs() < 1e-12 * d.length_squared() || d.length_squared() <= 0.0 {
+                return; // a singular leg: leave rapier's velocities
+            }
+            let c_w = com(wb, &wrench_pose);
+            let c_l = com(lb, &at.links[i]);
+            let mut wr = Body {
+                lin: [DVec3::ZERO; 6],
+                ang: [DVec3::ZERO; 6],
+                mass: wb.mass(),
+                inertia: world_inertia(wb, wrench_pose.rotation),
+                u_lin: wb.linvel(),
+                u_ang: wb.angvel(),
+                axis: DVec3::ZERO,
+            };
+            let mut li = Body {
+                lin: [DVec3::ZERO; 6],
+                ang: [DVec3::ZERO; 6],
+                mass: lb.mass(),
+                inertia: world_inertia(lb, at.links[i].rotation),
+                u_lin: lb.linvel(),
+                u_ang: lb.angvel(),
+                axis: d.normalize(),
+            };
+            for j in 0..6 {
+                let (ve, w) = unit(j);
+                let v_a = ve + w.cross(a - e);
+                let rate = v_a.dot(d) / denom;
+                wr.ang[j] = DVec3::Z * rate;
+                wr.lin[j] = (DVec3::Z * rate).cross(c_w - b);
+                let v_t = n * rate;
+                let w_l = d.cross(v_a - v_t) / d.length_squared();
+                li.ang[j] = w_l;
+                li.lin[j] = v_t + w_l.cross(c_l - t);
+            }
+            list.push(wr);
+            list.push(li);
+        }
+        let mut g = nalgebra::Matrix6::<f64>::zeros();
+        let mut h = nalgebra::Vector6::<f64>::zeros();
+        let perp = |x: DVec3, axis: DVec3| x - axis * axis.dot(x);
+        for bd in &list {
+            let u_ang = perp(bd.u_ang, bd.axis);
+            for j in 0..6 {
+                let ij = bd.inertia * perp(bd.ang[j], bd.axis);
+                h[j] += bd.mass * bd.lin[j].dot(bd.u_lin) + ij.dot(u_ang);
+                for k in 0..6 {
+                    g[(j, k)] +=
+                        bd.mass * bd.lin[j].dot(bd.lin[k]) + ij.dot(perp(bd.ang[k], bd.axis));
+                }
+            }
+        }
+        let Some(v) = g.cholesky().map(|c| c.solve(&h)) else {
+            return;
+        };
+        if !v.iter().all(|x| x.is_finite()) {
+            return;
+        }
+        let handles: Vec<RigidBodyHandle> = std::iter::once(self.platform)
+            .chain(self.legs.iter().flat_map(|l| [l.wrench, l.link]))
+            .collect();
+        for (bd, hnd) in list.iter().zip(handles) {
+            let mut lin = DVec3::ZERO;
+            let mut ang = bd.axis * bd.axis.dot(bd.u_ang);
+            for j in 0..6 {
+                lin += bd.lin[j] * v[j];
+                ang += bd.ang[j] * v[j];
+            }
+            let rb = &mut self.world.bodies[hnd];
+            rb.set_linvel(lin, false);
+            rb.set_angvel(ang, false);
+        }
+    }
+
+    /// Platform pose, crank angles φ (rad, about +z at B_i) and link poses.
+    fn configuration(&self) -> Configuration {
+        let mut c = Configuration {
+            platform: *self.world.bodies[self.platform].position(),
+            phi: [0.0; LEGS],
+            links: [Pose::IDENTITY; LEGS],
+        };
+        for (i, leg) in self.legs.iter().enumerate() {
+            let x = self.world.bodies[leg.wrench].rotation() * DVec3::X;
+            c.phi[i] = x.y.atan2(x.x);
+            c.links[i] = *self.world.bodies[leg.link].position();
+        }
+        c
+    }
+
+    /// Positions from the configuration before the step and the projected velocities (symplectic
+    /// Euler on the mechanism: the engine integrated its unconverged velocities), then the loops
+    /// closed again.
+    fn integrate_positions(&mut self, before: &Configuration) {
+        if self.legs.len() != LEGS {
+            return;
+        }
+        let dt = self.world.integration_parameters.dt;
+        let (pose0, phi0) = (&before.platform, &before.phi);
+        let pb = &self.world.bodies[self.platform];
+        // Velocity of the body origin E (rapier's linvel is the COM's).
+        let e = pb.translation();
+        let w = pb.angvel();
+        let v_e = pb.linvel() + w.cross(e - pb.center_of_mass());
+        let p = pose0.translation + v_e * dt;
+        let q = (DQuat::from_scaled_axis(w * dt) * pose0.rotation).normalize();
+        self.world.bodies[self.platform].set_position(Pose::from_parts(p, q), false);
+        for (i, leg) in self.legs.iter().enumerate() {
+            let wb = &mut self.world.bodies[leg.wrench];
+            let phi = phi0[i] + wb.angvel().z * dt;
+            wb.set_rotation(DQuat::from_rotation_z(phi), false);
+        }
+        self.project();
+    }
+
     fn platform_body(&self) -> &RigidBody {
         &self.world.bodies[self.platform]
     }
@@ -452,10 +658,15 @@ impl Physics for RapierPhysics {
             body.reset_torques(false);
             body.add_torque(DVec3::new(0.0, 0.0, joint_tau[i]), true);
         }
+        let before = self.configuration();
         self.world.step();
         self.solver_gap = self.loop_closure_error();
         if self.projection {
             self.project();
+            if self.velocity_projection {
+                self.project_velocities(&before);
+                self.integrate_positions(&before);
+            }
         }
         Ok(())
     }
