@@ -12,8 +12,9 @@ optional: its first), a list of them (a pair), or an out-of-library discrepancy 
 x); ``magnitude``: output effect as a multiple of the camera noise RMS (default 2) or ``params``:
 the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``replicates``
 (default 16); ``friction``: "table" (Table 5.2's, default) or "none" (robot and model without joint
-friction — on the rapier plant the only way, today, for the plant to equal the model: the plant's
-sticking-motor Coulomb friction and the model's smoothed one differ by 35–160 µm open loop).
+friction); ``friction_law``: "tanh" (default: robot twin and model with f_c tanh(θ̇/ε), ε = 1 rad/s;
+the plant keeps its sticking motor, 35–160 µm from the model open loop) or "implicit" (robot and
+model with the shared stick–slip law, the plant at 48 solver iterations: ≈ 1.5 µm from the model).
 """
 
 from __future__ import annotations
@@ -65,6 +66,10 @@ REFERENCE: dict[str, dict[str, float]] = {
 OUT_OF_LIBRARY = ("vibration", "camera_drift")
 
 _T_F, _EPS = 5e-3, 1.0
+#: The plant's settings with the implicit law (docs/sim.md, "One friction law"): 48 solver iterations
+#: follow the twin to ≈ 1.5 µm under Table 5.2's friction (the velocity projection to ≈ 4 µm at a
+#: ninth of the cost, but with a 0.05 mrad frictionless floor).
+_PLANT_IMPLICIT: dict[str, Any] = {"solver_iterations": 48}
 
 
 def _split(name: str) -> tuple[EffectDef, str]:
@@ -153,6 +158,10 @@ def hidden_case(
     extra = [n for n in names if n in OUT_OF_LIBRARY]
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
+    law = str(spec.get("friction_law", "tanh"))
+    if law not in ("tanh", "implicit"):
+        raise InvalidInputError(f"friction_law must be 'tanh' or 'implicit', got {law!r}")
+    implicit = law == "implicit"
     if spec.get("friction", "table") == "none":
         # Robot and model without joint friction: the rapier plant then equals the model twin to
         # 0.3 µm open loop (with Table 5.2's friction the two implementations differ by 35–160 µm).
@@ -169,7 +178,11 @@ def hidden_case(
     ) -> Any:
         cls = rss6.Plant if robot_kind == "plant" else rss6.ModelSim
         kw: dict[str, Any] = {"drive_derivative_filter": _T_F}
-        if cls is rss6.ModelSim:
+        if implicit:
+            kw["implicit_friction"] = True
+            if cls is rss6.Plant:
+                kw.update(_PLANT_IMPLICIT)
+        elif cls is rss6.ModelSim:
             kw["friction_smoothing"] = _EPS
         if quiet:
             kw.update(pixel_noise=0.0, potentiometer_noise=0.0)
@@ -194,7 +207,8 @@ def hidden_case(
         tr["sensor_in_base"],
         tr["target_in_effector"],
         derivative_filter=_T_F,
-        friction_smoothing=_EPS,
+        friction_smoothing=0.0 if implicit else _EPS,
+        implicit_friction=implicit,
     )
 
     def collect(robot: Any, e: identify.Excitation = exc) -> identify.IdentificationData:
@@ -299,6 +313,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "spec_id": str(spec.get("spec_id", "")),
         "robot": robot_kind,
         "friction": str(spec.get("friction", "table")),
+        "friction_law": str(spec.get("friction_law", "tanh")),
         "seed": seed,
         "kind": "none"
         if not names
@@ -351,10 +366,14 @@ def cases(
     n_null: int = 100,
     robot: str = "twin",
     friction: str = "table",
+    friction_law: str = "tanh",
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
-    out-of-library discrepancies at each magnitude, and two pairs."""
+    out-of-library discrepancies at each magnitude, and two pairs. Spec ids start with the robot
+    kind (+ "-implicit" with the implicit friction law)."""
+    tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
+    common = {"robot": robot, "friction": friction, "friction_law": friction_law}
     effs = (
         list(effects)
         if effects is not None
@@ -376,34 +395,31 @@ def cases(
             for s in seeds:
                 out.append(
                     {
-                        "spec_id": f"{robot}:{e}:{m:g}:{s}",
+                        "spec_id": f"{tag}:{e}:{m:g}:{s}",
                         "effect": e,
                         "magnitude": m,
                         "seed": s,
-                        "robot": robot,
-                        "friction": friction,
+                        **common,
                     }
                 )
     for pair in (["camera_latency", "base_tilt"], ["payload", "joint_offset_drift@joint 3"]):
         for s in seeds:
             out.append(
                 {
-                    "spec_id": f"{robot}:{'+'.join(pair)}:5:{s}",
+                    "spec_id": f"{tag}:{'+'.join(pair)}:5:{s}",
                     "effect": pair,
                     "magnitude": 5.0,
                     "seed": s,
-                    "robot": robot,
-                    "friction": friction,
+                    **common,
                 }
             )
     for s in range(n_null):
         out.append(
             {
-                "spec_id": f"{robot}:none:{s}",
+                "spec_id": f"{tag}:none:{s}",
                 "effect": None,
                 "seed": 10_000 + s,
-                "robot": robot,
-                "friction": friction,
+                **common,
             }
         )
     return out

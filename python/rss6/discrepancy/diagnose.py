@@ -254,9 +254,9 @@ def _diagnose(
             starts = [dict(a.params) for a in prev] + [_start(s)]
 
             def simulate(c: Change) -> F64:
-                return replay(base_model.with_effects(list(base_model.applied())), fit.run, c)[
-                    fit.rows
-                ]
+                return fit.baseline(
+                    replay(base_model.with_effects(list(base_model.applied())), fit.run, c)
+                )[fit.rows]
 
             try:
                 fits.append(
@@ -288,7 +288,7 @@ def _diagnose(
             )
         ]
         cand_model = base_model.with_effects(new_effects)
-        new_held = replay(cand_model, held.run)
+        new_held = held.baseline(replay(cand_model, held.run))
         delta = hcal.whitener.vec((new_held - current_held)[held.rows])
         hres = hcal.whitener.vec(held.measured - current_held[held.rows])
         _, p_held = heldout_test(delta, hres, hcal.replicates)
@@ -348,7 +348,7 @@ def _diagnose(
         )
         named_effects = new_effects
         current_held = new_held
-        current_fit = replay(cand_model, fit.run)
+        current_fit = fit.baseline(replay(cand_model, fit.run))
         _tell(progress, f"named {s.effect.name} ({s.scope})", round_ + 1, max_effects)
 
     # Backward check on the held-out run: an effect named early may only have mimicked part of one
@@ -356,7 +356,7 @@ def _diagnose(
     n0 = len(base_model.applied())
     for a in list(named_effects[n0:]) if len(named_effects) - n0 >= 2 else []:
         others = [b for b in named_effects if b is not a]
-        without = replay(base_model.with_effects(others), held.run)
+        without = held.baseline(replay(base_model.with_effects(others), held.run))
         delta = hcal.whitener.vec((current_held - without)[held.rows])
         hres = hcal.whitener.vec(held.measured - without[held.rows])
         _, p_drop = heldout_test(delta, hres, hcal.replicates)
@@ -384,7 +384,7 @@ def _diagnose(
         _tell(progress, "re-identification", 0, 1)
         try:
             after_model, note = _reidentify(final_model, data, reidentify)
-            held_after = held.measured - replay(after_model, held.run)[held.rows]
+            held_after = held.measured - held.baseline(replay(after_model, held.run))[held.rows]
             notes.append(note)
         except (InvalidInputError, rss6.IdentificationError) as e:
             notes.append(f"not re-identified: {e}")

@@ -70,8 +70,9 @@ class Model:
     (:class:`rss6.KinematicParams`), ``dynamics`` (:class:`rss6.DynamicParams`), the drive ``pid``
     gains (l_p, l_i, l_d), ᴼχ_C ``sensor_in_base`` and ᴱχ_t ``target_in_effector`` (6,), the
     ``effects`` it includes (:class:`AppliedEffect` or (name, scope, params) tuples), and the
-    loop's options: drive derivative filter T_f (s), Coulomb friction smoothing ε (rad/s), torque
-    limit (N·m), camera latency (s)."""
+    loop's options: drive derivative filter T_f (s), Coulomb friction smoothing ε (rad/s) or the
+    shared implicit stick–slip law (``implicit_friction``, ``rss6_core::implicit_friction``; the
+    plant's with ``implicit_friction=True``), torque limit (N·m), camera latency (s)."""
 
     kinematics: Any
     dynamics: Any
@@ -81,6 +82,7 @@ class Model:
     effects: Sequence[Any] = ()
     derivative_filter: float = 0.0
     friction_smoothing: float = 0.0
+    implicit_friction: bool = False
     torque_limit: float = 30.0
     camera_latency: float = 0.0
 
@@ -122,6 +124,7 @@ class Model:
             f"target_in_effector = [{', '.join(repr(float(v)) for v in self.target_in_effector)}]",
             f"derivative_filter = {float(self.derivative_filter)!r}",
             f"friction_smoothing = {float(self.friction_smoothing)!r}",
+            f"implicit_friction = {'true' if self.implicit_friction else 'false'}",
             f"torque_limit = {float(self.torque_limit)!r}",
             f"camera_latency = {float(self.camera_latency)!r}",
         ]
@@ -161,6 +164,7 @@ class Model:
                 effects=effects,
                 derivative_filter=float(doc.get("derivative_filter", 0.0)),
                 friction_smoothing=float(doc.get("friction_smoothing", 0.0)),
+                implicit_friction=bool(doc.get("implicit_friction", False)),
                 torque_limit=float(doc.get("torque_limit", 30.0)),
                 camera_latency=float(doc.get("camera_latency", 0.0)),
             )
@@ -400,6 +404,7 @@ def simulate(
         camera_latency=model.camera_latency,
         drive_derivative_filter=model.derivative_filter,
         friction_smoothing=model.friction_smoothing,
+        implicit_friction=model.implicit_friction,
         **quiet,
     )
     periods = max(1, round(run.duration / run.reference.duration))

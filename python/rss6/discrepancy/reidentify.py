@@ -69,6 +69,11 @@ def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[M
     dynamics and gains, the other effects kept) and a note."""
     from rss6 import identify
 
+    if model.implicit_friction:
+        raise InvalidInputError(
+            "re-identification runs CLOE, whose loop has no implicit stick–slip friction yet "
+            "(sign or tanh only): diagnose without reidentify, or with friction_smoothing"
+        )
     chosen: Sequence[str] = REIDENTIFY_DEFAULT if isinstance(which, bool) else which
     names = list(chosen)
     dp, pid, kw = loop_effects(model)
