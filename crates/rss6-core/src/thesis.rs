@@ -94,6 +94,102 @@ pub const TABLE_5_2_COULOMB: [f64; 6] = [0.104, 0.111, 0.0336, 0.147, 0.104, 0.0
 /// Table 5.2: identified viscous friction f_v,1 … f_v,6 of the revolute joints (initial value 0).
 pub const TABLE_5_2_VISCOUS: [f64; 6] = [0.148, 0.187, 0.0993, 0.854, 0.0803, 0.0349];
 
+// ---- Table 5.2: identified masses and inertias; Tables 5.3–5.5: identification results ----
+
+/// Table 5.2: identified platform [m, I_x, I_y, I_z] (kg, kg·m²) as printed. Its moments violate the
+/// triangle inequality (I_x + I_y < I_z): `rss6_ident::table_5_2_truth` lowers I_z for a physical body.
+pub const TABLE_5_2_PLATFORM: [f64; 4] = [23.5, 16.1e-2, 14.4e-2, 33.7e-2];
+/// Table 5.2: identified wrench i [m, I_z] (kg, kg·m²); I_x, I_y are not identified.
+pub const TABLE_5_2_WRENCHES: [[f64; 2]; 6] = [
+    [67.1e-2, 69.4e-5],
+    [68.7e-2, 10.0e-5],
+    [68.0e-2, 22.6e-5],
+    [67.7e-2, 76.0e-5],
+    [68.3e-2, 44.1e-5],
+    [68.4e-2, 69.6e-5],
+];
+/// Table 5.2: identified link i [m, I_x, I_y] (kg, kg·m²); I_z is not identified.
+pub const TABLE_5_2_LINKS: [[f64; 3]; 6] = [
+    [1.33, 63.0e-5, 68.4e-5],
+    [1.32, 60.7e-5, 71.8e-5],
+    [1.25, 22.4e-5, 35.5e-5],
+    [1.24, 12.9e-5, 39.2e-5],
+    [1.33, 30.7e-5, 49.7e-5],
+    [1.34, 47.0e-5, 50.9e-5],
+];
+/// Table 5.3: RMS pose error on the identification trajectory before identification
+/// [x, y, z, α, β, γ] (m, rad).
+pub const TABLE_5_3_BEFORE: [f64; 6] = [1.26e-3, 1.16e-3, 1.55e-3, 2.52e-3, 3.58e-3, 2.80e-3];
+/// Table 5.3: the same after identification (m, rad).
+pub const TABLE_5_3_AFTER: [f64; 6] = [0.408e-3, 0.235e-3, 0.494e-3, 0.956e-3, 0.797e-3, 0.725e-3];
+/// Table 5.4: RMS pose error of the identified model on ten validation trajectories, one row per
+/// trajectory [x, y, z, α, β, γ] (m, rad).
+pub const TABLE_5_4: [[f64; 6]; 10] = [
+    [0.517e-3, 0.384e-3, 0.709e-3, 1.091e-3, 0.963e-3, 0.966e-3],
+    [0.273e-3, 0.410e-3, 0.522e-3, 1.157e-3, 1.071e-3, 0.932e-3],
+    [0.381e-3, 0.403e-3, 0.600e-3, 1.242e-3, 0.830e-3, 1.143e-3],
+    [0.341e-3, 0.511e-3, 0.617e-3, 1.136e-3, 0.814e-3, 1.161e-3],
+    [0.322e-3, 0.394e-3, 0.464e-3, 1.219e-3, 0.877e-3, 0.835e-3],
+    [0.310e-3, 0.301e-3, 0.441e-3, 1.195e-3, 1.111e-3, 1.040e-3],
+    [0.360e-3, 0.402e-3, 0.455e-3, 1.263e-3, 1.176e-3, 1.024e-3],
+    [0.418e-3, 0.483e-3, 0.460e-3, 1.251e-3, 1.211e-3, 1.015e-3],
+    [0.342e-3, 0.510e-3, 0.557e-3, 1.411e-3, 1.156e-3, 0.711e-3],
+    [0.318e-3, 0.379e-3, 0.473e-3, 1.219e-3, 1.023e-3, 0.905e-3],
+];
+/// Table 5.5: variation of each identified value over re-identifications, in percent as printed,
+/// by name ("platform.m", …, "wrench1.Iz", "link1.Iy", "fc1", "fv1", "lp", "li", "ld").
+pub const TABLE_5_5_PERCENT: [(&str, f64); 49] = [
+    ("platform.m", 0.48),
+    ("platform.Ix", 5.0),
+    ("platform.Iy", 24.9),
+    ("platform.Iz", 8.6),
+    ("wrench1.m", 0.56),
+    ("wrench1.Iz", 6.6),
+    ("wrench2.m", 1.5),
+    ("wrench2.Iz", 1.4),
+    ("wrench3.m", 3.4),
+    ("wrench3.Iz", 5.0),
+    ("wrench4.m", 3.7),
+    ("wrench4.Iz", 3.8),
+    ("wrench5.m", 6.6),
+    ("wrench5.Iz", 6.6),
+    ("wrench6.m", 0.79),
+    ("wrench6.Iz", 1.7),
+    ("link1.m", 4.1),
+    ("link1.Ix", 0.04),
+    ("link1.Iy", 0.11),
+    ("link2.m", 5.2),
+    ("link2.Ix", 0.05),
+    ("link2.Iy", 0.12),
+    ("link3.m", 20.9),
+    ("link3.Ix", 0.09),
+    ("link3.Iy", 0.17),
+    ("link4.m", 19.1),
+    ("link4.Ix", 0.16),
+    ("link4.Iy", 0.06),
+    ("link5.m", 10.1),
+    ("link5.Ix", 0.15),
+    ("link5.Iy", 0.01),
+    ("link6.m", 12.9),
+    ("link6.Ix", 0.17),
+    ("link6.Iy", 0.02),
+    ("fc1", 15.9),
+    ("fv1", 11.7),
+    ("fc2", 21.4),
+    ("fv2", 13.9),
+    ("fc3", 9.0),
+    ("fv3", 16.4),
+    ("fc4", 17.8),
+    ("fv4", 15.2),
+    ("fc5", 15.1),
+    ("fv5", 21.8),
+    ("fc6", 23.4),
+    ("fv6", 13.0),
+    ("lp", 2.82),
+    ("li", 0.44),
+    ("ld", 3.7),
+];
+
 // ---- §5.6.2: the outer visual-servoing PID (eq. 5.4) ----
 
 /// §5.6.2: proportional gain k_p of the outer visual PID (eq. 5.4), every axis (dimensionless).

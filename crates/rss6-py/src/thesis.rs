@@ -70,6 +70,28 @@ pub(crate) fn thesis_tables(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("table_5_2", d)?;
 
     let d = PyDict::new(py);
+    d.set_item("platform", t::TABLE_5_2_PLATFORM.to_vec())?;
+    let rows: Vec<Vec<f64>> = t::TABLE_5_2_WRENCHES.iter().map(|r| r.to_vec()).collect();
+    d.set_item("wrenches", rows)?;
+    let rows: Vec<Vec<f64>> = t::TABLE_5_2_LINKS.iter().map(|r| r.to_vec()).collect();
+    d.set_item("links", rows)?;
+    out.set_item("table_5_2_bodies", d)?;
+
+    let d = PyDict::new(py);
+    d.set_item("before", t::TABLE_5_3_BEFORE.to_vec())?;
+    d.set_item("after", t::TABLE_5_3_AFTER.to_vec())?;
+    out.set_item("table_5_3", d)?;
+
+    let rows: Vec<Vec<f64>> = t::TABLE_5_4.iter().map(|r| r.to_vec()).collect();
+    out.set_item("table_5_4", rows)?;
+
+    let d = PyDict::new(py);
+    for (name, v) in t::TABLE_5_5_PERCENT {
+        d.set_item(name, v)?;
+    }
+    out.set_item("table_5_5_percent", d)?;
+
+    let d = PyDict::new(py);
     d.set_item("kp", t::VISUAL_PID_KP)?;
     d.set_item("ki", t::VISUAL_PID_KI)?;
     d.set_item("kd", t::VISUAL_PID_KD)?;

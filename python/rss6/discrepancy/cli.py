@@ -59,6 +59,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--magnitude", type=float, default=2.0, help="output × camera noise (default 2)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--plant", choices=("rapier", "model"), default="rapier")
+    p.add_argument(
+        "--friction-law",
+        choices=("tanh", "implicit"),
+        default="tanh",
+        help="robot and model friction: smoothed (tanh, default) or the shared stick–slip law",
+    )
     p.add_argument("--alpha", type=float, default=0.01)
     p.add_argument("--reidentify", action="store_true", help="re-identify friction and gains")
     p.add_argument("--out", default="out-diagnose", help="report directory (default out-diagnose/)")
@@ -97,7 +103,11 @@ def run(args: argparse.Namespace) -> int:
             spec = {"effect": name, "magnitude": args.magnitude}
             if params:
                 spec["params"] = params
-        spec.update(seed=args.seed, robot="plant" if args.plant == "rapier" else "twin")
+        spec.update(
+            seed=args.seed,
+            robot="plant" if args.plant == "rapier" else "twin",
+            friction_law=args.friction_law,
+        )
         if spec["robot"] == "plant":
             import rss6
 

@@ -2,34 +2,11 @@
 
 use super::config::LoopParams;
 use rss6_core::thesis::{
-    TABLE_5_2_COULOMB, TABLE_5_2_PID_IDENTIFIED, TABLE_5_2_PID_INITIAL, TABLE_5_2_VISCOUS,
+    TABLE_5_2_COULOMB, TABLE_5_2_LINKS as LINKS, TABLE_5_2_PID_IDENTIFIED, TABLE_5_2_PID_INITIAL,
+    TABLE_5_2_PLATFORM as PLATFORM, TABLE_5_2_VISCOUS, TABLE_5_2_WRENCHES as WRENCHES,
 };
 use rss6_core::{Body, DynamicParams, LEGS};
 use rss6_ctrl::PidGains;
-
-/// Table 5.2's identified values of the platform, wrenches and links (SI units as printed there;
-/// the initial values are Table 5.1 = `DynamicParams::nominal()`): [m, I_x, I_y, I_z].
-const PLATFORM: [f64; 4] = [23.5, 16.1e-2, 14.4e-2, 33.7e-2];
-/// Wrench i: [m, I_z] (I_x, I_y are not identified; they stay at Table 5.1's).
-const WRENCHES: [[f64; 2]; LEGS] = [
-    [67.1e-2, 69.4e-5],
-    [68.7e-2, 10.0e-5],
-    [68.0e-2, 22.6e-5],
-    [67.7e-2, 76.0e-5],
-    [68.3e-2, 44.1e-5],
-    [68.4e-2, 69.6e-5],
-];
-/// Link i: [m, I_x, I_y] (I_z stays at Table 5.1's).
-const LINKS: [[f64; 3]; LEGS] = [
-    [1.33, 63.0e-5, 68.4e-5],
-    [1.32, 60.7e-5, 71.8e-5],
-    [1.25, 22.4e-5, 35.5e-5],
-    [1.24, 12.9e-5, 39.2e-5],
-    [1.33, 30.7e-5, 49.7e-5],
-    [1.34, 47.0e-5, 50.9e-5],
-];
-// (Table 5.2's identified masses and inertias are not in `rss6_core::thesis`; its friction and
-// PID gains are.)
 
 /// The factor from the thesis's drive units to SI: its initial l_p = 10 corresponds to rss6's
 /// 400 N·m/rad ([`PidGains::tuned`]), so one drive torque unit is taken as 40 N·m.
