@@ -1,6 +1,7 @@
 //! Speed of the rapier plant: one 1 kHz tick (PID + rapier step + post-step projection + sensors)
 //! with 4 (the default), 8 and 16 solver iterations, 16 without the projection (the old accurate
-//! setting), and of the model twin.
+//! setting), 4 with the shared implicit friction law and the velocity projection (Table 5.2-sized
+//! friction), 48 with the implicit law and no velocity projection, and of the model twin.
 //! Real-time factor = 1 ms / time per tick.
 //!
 //! `cargo bench -p rss6-benches --bench plant -- --warm-up-time 1 --measurement-time 2`
@@ -31,6 +32,34 @@ fn bench_plant(c: &mut Criterion) {
             format!("plant_tick_{it}_iterations")
         } else {
             format!("plant_tick_{it}_iterations_no_projection")
+        };
+        c.bench_function(&name, |b| {
+            b.iter(|| {
+                if k == cmds.len() {
+                    plant.reset(&rss6_core::home_pose()).expect("reset");
+                    k = 0;
+                }
+                plant.step_joint_command(black_box(&cmds[k])).expect("step");
+                k += 1;
+            })
+        });
+    }
+    // The shared friction law (docs/sim.md): the two settings that follow the twin.
+    for (it, vproj) in [(4usize, true), (48, false)] {
+        let mut cfg = SimConfig::nominal();
+        for i in 0..rss6_core::LEGS {
+            cfg.dynamics.coulomb[i] = rss6_core::thesis::TABLE_5_2_COULOMB[i] * 40.0;
+            cfg.dynamics.viscous[i] = rss6_core::thesis::TABLE_5_2_VISCOUS[i] * 40.0;
+        }
+        cfg.implicit_friction = true;
+        cfg.solver.iterations = it;
+        cfg.solver.velocity_projection = vproj;
+        let mut plant = Plant::new(cfg).expect("plant");
+        let mut k = 0;
+        let name = if vproj {
+            format!("plant_tick_{it}_iterations_implicit_friction_velocity_projection")
+        } else {
+            format!("plant_tick_{it}_iterations_implicit_friction")
         };
         c.bench_function(&name, |b| {
             b.iter(|| {
