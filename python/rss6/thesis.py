@@ -75,7 +75,8 @@ TABLE_5_2_BODIES: dict[str, list[Any]] = dict(_T["table_5_2_bodies"])
 TABLE_5_3: dict[str, list[float]] = dict(_T["table_5_3"])
 #: Table 5.4, RMS of the pose errors of the identified model on ten validation trajectories, rows
 #: [x, y, z, α, β, γ] (m, rad).
-TABLE_5_4: list[list[float]] = [list(r) for r in _T["table_5_4"]]
+_ROWS_5_4: Any = _T["table_5_4"]
+TABLE_5_4: list[list[float]] = [[float(v) for v in r] for r in _ROWS_5_4]
 #: Table 5.5, variation measure of the identified values over re-identifications (fraction), by
 #: name ("platform.m", "platform.Ix", …, "wrench1.m", "wrench1.Iz", "link1.m", "link1.Ix",
 #: "link1.Iy", "fc1", "fv1", "lp", "li", "ld").
