@@ -129,6 +129,20 @@ class IdentificationData:
             fault=None,
         )
 
+    def frame_commands(self) -> F64:
+        """(F, 6): the joint command (drive convention, rad) the robot's visual PID issued at each
+        consumed frame (from ``theta_cmd`` at the frame's tick): the input of :func:`cloe` with
+        ``commands="recorded"``. Raises :class:`rss6.InvalidInputError` without per-tick commands."""
+        if self.theta_cmd is None or self.tick_t is None:
+            raise InvalidInputError(
+                "these data carry no per-tick commands (theta_cmd): collect() records them"
+            )
+        tick_t = np.asarray(self.tick_t)
+        k = np.clip(np.searchsorted(tick_t, self.t - 0.5 * self.dt), 0, tick_t.size - 1)
+        if tick_t.size == 0 or np.any(np.abs(tick_t[k] - self.t) > 0.5 * self.dt):
+            raise InvalidInputError("a frame time has no tick with a command")
+        return np.asarray(self.theta_cmd)[k]
+
     @classmethod
     def from_arrays(
         cls,
@@ -233,13 +247,18 @@ def collect(
 class LoopModel:
     """What the simulated loop assumes besides A: the kinematics ``kp``, the drive's ``torque_limit``
     (N·m), the camera latency (s), the drive's ``derivative_filter`` T_f (s) and the model's
-    Coulomb ``friction_smoothing`` ε (rad/s; 0 = sign)."""
+    Coulomb ``friction_smoothing`` ε (rad/s; 0 = sign), or ``implicit_friction``: Coulomb + viscous
+    friction stepped implicitly per tick (stick–slip; the law of the twin and of the plant built
+    with ``implicit_friction=True``). ``commands``: "simulated" (the outer loop closed on the
+    model's frames, eq. 5.4) or "recorded" (the robot's own commands held, see :func:`cloe`)."""
 
     kp: _rss6.KinematicParams
     torque_limit: float = 30.0
     camera_latency: float = 0.0
     derivative_filter: float = 0.0
     friction_smoothing: float = 0.0
+    implicit_friction: bool = False
+    commands: str = "simulated"
 
 
 def simulate(
@@ -254,13 +273,17 @@ def simulate(
     dt: float = 1e-3,
     derivative_filter: float = 0.0,
     friction_smoothing: float = 0.0,
+    implicit_friction: bool = False,
+    commands: ArrayLike | None = None,
     gravity: ArrayLike | None = None,
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
 ) -> F64:
     """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
     Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
-    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed). Effects the model can express:
+    Coulomb ``friction_smoothing`` ε rad/s; 0: as printed; or ``implicit_friction``, see
+    :class:`LoopModel`). ``commands`` (F, 6): the robot's joint commands at its frames
+    (:meth:`IdentificationData.frame_commands`), held instead of the model's visual PID output. Effects the model can express:
     ``gravity`` (3,) m/s² in the base frame (a tilted base), ``load`` = (mass kg, centre of mass (3,)
     m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform, ``offset_drift`` (6,) rad/s of the
     potentiometer offsets. Returns the model's camera frames at ``times``
@@ -282,6 +305,8 @@ def simulate(
         dt=dt,
         derivative_filter=derivative_filter,
         friction_smoothing=friction_smoothing,
+        implicit_friction=implicit_friction,
+        commands=None if commands is None else np.asarray(commands, dtype=np.float64),
         **_effect_kwargs(gravity, load, offset_drift),
     )
     ts = np.asarray(ts)
@@ -367,6 +392,8 @@ def cloe(
     camera_latency: float = 0.0,
     derivative_filter: float = 0.0,
     friction_smoothing: float = 0.0,
+    implicit_friction: bool = False,
+    commands: str = "simulated",
     noise: tuple[float, float] | None = None,
     per_tick_jacobians: bool = False,
     tol_cost: float = 1e-6,
@@ -380,7 +407,12 @@ def cloe(
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
     simulated loop (model kinematics ``kp``, ``torque_limit`` N·m, ``camera_latency`` s, the drive's
     ``derivative_filter`` T_f s and the model's Coulomb ``friction_smoothing`` ε rad/s — 0: as printed,
-    non-smooth) and its exact sensitivities.
+    non-smooth — or ``implicit_friction``, stick–slip stepped implicitly as the twin and the plant
+    step it, see :class:`LoopModel`) and its exact sensitivities. ``commands="recorded"`` holds the
+    robot's own joint commands (:meth:`IdentificationData.frame_commands`) instead of simulating the
+    outer visual PID: the output error of the drive + dynamics loop. With stick–slip friction the
+    camera noise fed back through the visual PID moves the robot by more than the noise, and the
+    thesis's loop cannot fit that motion (docs/identification.md).
 
     ``parameters``: ``"base"`` estimates every quantity the data identify (QR with column pivoting
     at the guess, relative threshold 10⁻³), a list of names (:func:`parameter_names`) only those
@@ -418,6 +450,9 @@ def cloe(
             raise InvalidInputError(
                 f"unknown parameter(s) {', '.join(unknown)}; see rss6.identify.parameter_names()"
             )
+    if commands not in ("simulated", "recorded"):
+        raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
+    held = data.frame_commands() if commands == "recorded" else None
     pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
     r = _rss6.cloe_identify(
         data.t,
@@ -436,6 +471,8 @@ def cloe(
         dt=data.dt,
         derivative_filter=derivative_filter,
         friction_smoothing=friction_smoothing,
+        implicit_friction=implicit_friction,
+        commands=held,
         noise=noise,
         per_tick_jacobians=per_tick_jacobians,
         tol_cost=tol_cost,
@@ -465,6 +502,8 @@ def cloe(
             camera_latency=camera_latency,
             derivative_filter=derivative_filter,
             friction_smoothing=friction_smoothing,
+            implicit_friction=implicit_friction,
+            commands=commands,
         ),
     )
 
@@ -555,6 +594,8 @@ def validate(
                 dt=d.dt,
                 derivative_filter=m.derivative_filter,
                 friction_smoothing=m.friction_smoothing,
+                implicit_friction=m.implicit_friction,
+                commands=d.frame_commands() if m.commands == "recorded" else None,
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

@@ -311,7 +311,6 @@ def test_report_saves_markdown_and_figures(
     assert rep.verdict in md and "![xcorr](xcorr.png)" in md
 
 
-
 # the real closed loop ------------------------------------------------------------------------------
 
 

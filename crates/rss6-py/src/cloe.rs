@@ -203,13 +203,14 @@ fn loop_config(
     camera_latency: f64,
     dt: f64,
     derivative_filter: f64,
-    friction_smoothing: f64,
+    (friction_smoothing, implicit_friction): (f64, bool),
     effects: Effects<'_>,
 ) -> PyResult<LoopConfig> {
     let mut cfg = LoopConfig::new(kp.inner, vec6(start, "start")?, duration);
     cfg.torque_limit = torque_limit;
     cfg.derivative_filter = derivative_filter;
     cfg.friction_smoothing = friction_smoothing;
+    cfg.implicit_friction = implicit_friction;
     cfg.camera_latency = camera_latency;
     cfg.dt = dt;
     let (gravity, load, offset_drift) = effects;
@@ -253,13 +254,16 @@ fn apply_effects(
 /// Simulates the identification loop on the model (`kp`, `dp`, drive gains `pid` = (l_p, l_i,
 /// l_d)) from rest at `start` for `duration` s following the Fourier trajectory (`f0`,
 /// `coefficients`). `derivative_filter` T_f (s) of the drive's derivative and `friction_smoothing` ε
-/// (rad/s) of the model's Coulomb friction (0: as printed). Effects the model can express (the
+/// (rad/s) of the model's Coulomb friction (0: as printed); `implicit_friction`: Coulomb + viscous
+/// friction stepped implicitly per tick instead (stick–slip, the twin's and plant's shared law).
+/// `commands` (F, 6): the robot's joint commands (drive convention) issued at each consumed frame,
+/// held instead of the simulated visual PID's (None: the loop of eq. 5.4 closed on χ_s). Effects the model can express (the
 /// discrepancy workflow's candidates): `gravity` (3,) in the base frame (a tilted base), `load` =
 /// (mass kg, centre of mass (3,) m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform,
 /// `offset_drift` (6,) rad/s of the potentiometer offsets. Returns (frame times (F,), χ_s (F, 6),
 /// joint-ticks with the torque clamped).
 #[pyfunction]
-#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, gravity=None, load=None, offset_drift=None))]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_identification<'py>(
     py: Python<'py>,
@@ -275,12 +279,14 @@ pub(crate) fn simulate_identification<'py>(
     dt: f64,
     derivative_filter: f64,
     friction_smoothing: f64,
+    implicit_friction: bool,
+    commands: Option<&Bound<'py, PyAny>>,
     gravity: Option<&Bound<'py, PyAny>>,
     load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     offset_drift: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
-    let cfg = loop_config(
+    let mut cfg = loop_config(
         kp,
         start,
         duration,
@@ -288,9 +294,12 @@ pub(crate) fn simulate_identification<'py>(
         camera_latency,
         dt,
         derivative_filter,
-        friction_smoothing,
+        (friction_smoothing, implicit_friction),
         (gravity, load, offset_drift),
     )?;
+    if let Some(c) = commands {
+        cfg.recorded_commands = Some(rows6(c, "commands")?);
+    }
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),
@@ -315,7 +324,7 @@ pub(crate) fn simulate_identification<'py>(
 /// `simulate_identification` (re-identification with named effects). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -335,6 +344,8 @@ pub(crate) fn cloe_identify<'py>(
     dt: f64,
     derivative_filter: f64,
     friction_smoothing: f64,
+    implicit_friction: bool,
+    commands: Option<&Bound<'py, PyAny>>,
     noise: Option<(f64, f64)>,
     per_tick_jacobians: bool,
     tol_cost: f64,
@@ -356,7 +367,7 @@ pub(crate) fn cloe_identify<'py>(
         )));
     }
     let exc: Excitation = excitation(f0, coefficients)?;
-    let cfg = loop_config(
+    let mut cfg = loop_config(
         kp,
         start,
         duration,
@@ -364,9 +375,12 @@ pub(crate) fn cloe_identify<'py>(
         camera_latency,
         dt,
         derivative_filter,
-        friction_smoothing,
+        (friction_smoothing, implicit_friction),
         (gravity, load, offset_drift),
     )?;
+    if let Some(c) = commands {
+        cfg.recorded_commands = Some(rows6(c, "commands")?);
+    }
     let guess = LoopParams {
         dynamics: dp_guess.inner,
         pid: pid_gains(pid_guess),

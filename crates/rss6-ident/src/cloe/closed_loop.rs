@@ -38,7 +38,7 @@
 //! discrete loop treats them: the derivative of sign is 0, of a saturated torque 0.
 
 use crate::error::{IdentError, Result};
-use nalgebra::{DMatrix, Dyn, OMatrix, U6};
+use nalgebra::DMatrix;
 use rss6_core::{
     forward_dynamics_with_env, ik, jacobian_theta, mass_matrix_with_env, regressor_with_gravity,
     DynamicParams, Mat6, Vec6, LEGS, N_DYN,
@@ -47,9 +47,7 @@ use rss6_ctrl::{PidGains, Trajectory};
 use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
-
-/// A 6 × p block of sensitivities (rows: a 6-vector's components, columns: active parameters).
-type Sens = OMatrix<f64, U6, Dyn>;
+use super::friction::{self, sign0, sim_err, Sens, StepSens, COULOMB};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -81,6 +79,8 @@ struct Lean<'a> {
     dp: DynamicParams,
     /// `dp` without Coulomb friction (for the frozen-sign state Jacobians).
     dp_nc: DynamicParams,
+    /// `dp` without any friction (the implicit law's friction-free step).
+    dp_nf: DynamicParams,
     pid: PidGains,
     pot_ticks: u64,
     // Model state.
@@ -146,17 +146,16 @@ struct Stage {
 
 const EPS_CLOCK: f64 = 1e-9;
 
-/// Index of f_c,1 in Ξ (after the 13 bodies' [m, I_x, I_y, I_z]).
-const COULOMB: usize = 4 * (1 + 2 * LEGS);
-
 impl<'a> Lean<'a> {
     fn new(cfg: &'a LoopConfig, a: &LoopParams, columns: Option<Vec<usize>>) -> Result<Self> {
         let theta = ik(&cfg.kp, &cfg.start)?;
         cfg.check_friction_stiffness(&a.dynamics)?;
         let mut dp_nc = a.dynamics;
         dp_nc.coulomb = [0.0; LEGS];
+        let mut dp_nf = dp_nc;
+        dp_nf.viscous = [0.0; LEGS];
         let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
-        let theta_meas = pot_angle(cfg, &theta, 0.0);
+        let theta_meas = cfg.pot_angle(&theta, 0.0);
         let pot_scale = Vec6::from_fn(|i, _| cfg.drive.eta[i] / cfg.kp.eta[i]);
         // The visual PID starts from the drive-convention angle of the first reading.
         let bias = theta_meas;
@@ -164,6 +163,7 @@ impl<'a> Lean<'a> {
             cfg,
             dp: a.dynamics,
             dp_nc,
+            dp_nf,
             pid: a.pid,
             pot_ticks,
             pose: cfg.start,
@@ -221,13 +221,26 @@ impl<'a> Lean<'a> {
                 .map(|s| s.columns.clone())
                 .unwrap_or_default(),
             saturated: 0,
+            inexact_friction: 0,
+            stuck_joint_ticks: 0,
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
         for tick in 0..ticks {
             let t = self.time(tick);
             if let Some((chi, s_chi)) = frame.take() {
-                self.visual_pid(t, reference, &chi, s_chi.as_ref())?;
+                match cfg.recorded_commands.as_deref() {
+                    // The robot's own commands (their sensitivity stays 0).
+                    Some(rec) => {
+                        self.command = *rec.get(out.t.len()).ok_or_else(|| {
+                            IdentError::InvalidInput(format!(
+                                "the recorded commands end at frame {} (t = {t:.4} s)",
+                                rec.len()
+                            ))
+                        })?;
+                    }
+                    None => self.visual_pid(t, reference, &chi, s_chi.as_ref())?,
+                }
                 out.t.push(t);
                 out.chi.push(chi);
                 if let Some(s) = s_chi {
@@ -240,11 +253,19 @@ impl<'a> Lean<'a> {
                 .iter()
                 .filter(|t| t.abs() >= cfg.torque_limit)
                 .count();
-            self.rk4(&tau_sens, t)?;
+            let held = if cfg.implicit_friction {
+                let st = self.friction(&tau_sens, t)?;
+                out.inexact_friction += usize::from(!st.exact);
+                out.stuck_joint_ticks += st.stuck;
+                (st.net, st.s_net)
+            } else {
+                tau_sens
+            };
+            self.rk4(&held, t)?;
             let tick_new = tick + 1;
             if tick_new % self.pot_ticks == 0 {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
-                self.theta_meas = pot_angle(cfg, &theta, t + cfg.dt);
+                self.theta_meas = cfg.pot_angle(&theta, t + cfg.dt);
                 if let Some(s) = self.sens.as_mut() {
                     let j =
                         jacobian_theta(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
@@ -404,7 +425,23 @@ impl<'a> Lean<'a> {
         (tau, s_tau)
     }
 
-    /// One stage of the forward dynamics, with derivatives if sensitivities are on.
+    /// The implicit friction of this tick under the drive torques (see [`super::friction`]).
+    fn friction(&self, tau: &(Vec6, Option<Sens>), t: f64) -> Result<friction::Step> {
+        let sens = match (&self.sens, &tau.1) {
+            (Some(s), Some(s_tau)) => Some(StepSens {
+                columns: &s.columns,
+                p: &s.p,
+                v: &s.v,
+                tau: s_tau,
+            }),
+            _ => None,
+        };
+        let (p, v) = (&self.pose, &self.pose_dot);
+        friction::step(self.cfg, &self.dp, &self.dp_nf, p, v, &tau.0, sens, t)
+    }
+
+    /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
+    /// implicit law `tau` is τ_a − τ_f and the model is friction-free.
     fn stage(
         &self,
         p: &Vec6,
@@ -425,7 +462,10 @@ impl<'a> Lean<'a> {
                 tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh()
             }))
         };
-        let a = if eps > 0.0 {
+        let implicit = cfg.implicit_friction;
+        let a = if implicit {
+            forward_dynamics_with_env(&cfg.kp, &self.dp_nf, p, v, tau, &env)
+        } else if eps > 0.0 {
             forward_dynamics_with_env(&cfg.kp, &self.dp_nc, p, v, &smooth_tau(p, v)?, &env)
         } else {
             forward_dynamics_with_env(&cfg.kp, &self.dp, p, v, tau, &env)
@@ -438,13 +478,14 @@ impl<'a> Lean<'a> {
         let theta_dot = j_theta * v;
         let tau_eff = Vec6::from_fn(|i, _| tau[i] - self.dp.coulomb[i] * sign0(theta_dot[i]));
         let f = |pp: &Vec6, vv: &Vec6| {
-            let tau_pv = if eps > 0.0 {
-                smooth_tau(pp, vv)?
+            let (dp, tau_pv) = if implicit {
+                (&self.dp_nf, *tau)
+            } else if eps > 0.0 {
+                (&self.dp_nc, smooth_tau(pp, vv)?)
             } else {
-                tau_eff
+                (&self.dp_nc, tau_eff)
             };
-            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, pp, vv, &tau_pv, &env)
-                .map_err(|e| sim_err(t, e))
+            forward_dynamics_with_env(&cfg.kp, dp, pp, vv, &tau_pv, &env).map_err(|e| sim_err(t, e))
         };
         let (fp, fv) = match frozen {
             Some(j) => j,
@@ -477,7 +518,9 @@ impl<'a> Lean<'a> {
         let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
         let mut fxi = Sens::zeros(s.columns.len());
         for (c, &col) in s.columns.iter().enumerate() {
-            if eps > 0.0 && (COULOMB..COULOMB + LEGS).contains(&col) {
+            if implicit && col >= COULOMB {
+                // Friction acts through τ_f (its sensitivity is in the held torque's).
+            } else if eps > 0.0 && (COULOMB..COULOMB + LEGS).contains(&col) {
                 // ∂χ̈/∂f_c,i = −M̃⁻¹J_θᵀ e_i tanh(θ̇_i/ε).
                 let i = col - COULOMB;
                 fxi.set_column(c, &(-(ft.column(i) * (theta_dot[i] / eps).tanh())));
@@ -544,32 +587,5 @@ impl<'a> Lean<'a> {
             s.v = new_v;
         }
         Ok(())
-    }
-}
-
-/// The drive-convention angle of the noise-free potentiometer reading of θ (eq. 4.2 twice).
-fn pot_angle(cfg: &LoopConfig, theta: &Vec6, t: f64) -> Vec6 {
-    let (m, d) = (&cfg.kp, &cfg.drive);
-    Vec6::from_fn(|i, _| {
-        // A drifting potentiometer offset (`offset_drift`, rad/s): Δθ_i + rate_i·t.
-        let kappa = (theta[i] - (m.dtheta[i] + cfg.offset_drift[i] * t)) / m.eta[i] + 0.0;
-        d.eta[i] * kappa + d.dtheta[i]
-    })
-}
-
-fn sign0(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
-
-fn sim_err(time: f64, e: rss6_core::CoreError) -> IdentError {
-    IdentError::Simulation {
-        time,
-        message: e.to_string(),
     }
 }

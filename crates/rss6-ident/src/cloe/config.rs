@@ -37,6 +37,11 @@ pub struct LoopConfig {
     /// Velocity scale ε (rad/s) of the model's Coulomb friction f_c tanh(θ̇/ε); 0 = f_c sign(θ̇)
     /// (eq. 3.48 as printed).
     pub friction_smoothing: f64,
+    /// Coulomb + viscous friction stepped implicitly per tick ([`rss6_core::implicit_friction`]:
+    /// stick–slip, held over the tick; the law of the twin and the plant with
+    /// `SimConfig::implicit_friction`). Exclusive with `friction_smoothing` > 0; stable for any
+    /// friction, so the stiffness check does not apply.
+    pub implicit_friction: bool,
     /// Potentiometer sampling period (s), 2e-3.
     pub pot_period: f64,
     /// Camera frame period (s), 0.033.
@@ -56,6 +61,12 @@ pub struct LoopConfig {
     pub duration: f64,
     /// Where the sensitivities evaluate the state Jacobians F_χ, F_χ̇.
     pub state_jacobians: StateJacobians,
+    /// The robot's own joint commands U_θ (drive convention, rad), one per camera frame the visual
+    /// PID consumed, in order: the simulated loop holds these instead of closing the outer loop on
+    /// its own frames (`None`: the thesis's loop, eq. 5.4 on χ_s). With stick–slip friction the
+    /// camera noise fed back through the visual PID moves the robot by more than the noise itself
+    /// (docs/identification.md); with the recorded commands that motion is in the input.
+    pub recorded_commands: Option<Vec<Vec6>>,
 }
 
 /// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
@@ -83,6 +94,7 @@ impl LoopConfig {
             torque_limit: 30.0,
             derivative_filter: 0.0,
             friction_smoothing: 0.0,
+            implicit_friction: false,
             pot_period: 2e-3,
             camera_period: 0.033,
             camera_latency: 0.0,
@@ -92,6 +104,7 @@ impl LoopConfig {
             start,
             duration,
             state_jacobians: StateJacobians::Exact,
+            recorded_commands: None,
         }
     }
 
@@ -122,6 +135,19 @@ impl LoopConfig {
                 )));
             }
         }
+        if self.implicit_friction && self.friction_smoothing > 0.0 {
+            return Err(IdentError::InvalidInput(
+                "implicit_friction and friction_smoothing > 0 are two friction laws: choose one"
+                    .into(),
+            ));
+        }
+        if let Some(rec) = &self.recorded_commands {
+            if let Some(k) = rec.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+                return Err(IdentError::InvalidInput(format!(
+                    "recorded command {k} is not finite"
+                )));
+            }
+        }
         if !self.offset_drift.iter().all(|v| v.is_finite()) {
             return Err(IdentError::InvalidInput(
                 "offset drift rates must be finite".into(),
@@ -144,6 +170,9 @@ impl LoopConfig {
     /// leaves LM stuck). The check is at the start pose, where the run rests.
     pub(super) fn check_friction_stiffness(&self, dp: &DynamicParams) -> Result<()> {
         let cfg = self;
+        if cfg.implicit_friction {
+            return Ok(());
+        }
         let eps = cfg.friction_smoothing;
         let m = mass_matrix_with_env(&cfg.kp, dp, &cfg.start, &cfg.environment())?;
         let j = jacobian_theta(&cfg.kp, &cfg.start)?;
@@ -177,6 +206,16 @@ impl LoopConfig {
             )));
         }
         Ok(())
+    }
+
+    /// The drive-convention angle of the noise-free potentiometer reading of θ at time `t` (s from
+    /// the start; eq. 4.2 twice, with the drifting offset Δθ_i + rate_i·t of `offset_drift`).
+    pub(super) fn pot_angle(&self, theta: &Vec6, t: f64) -> Vec6 {
+        let (m, d) = (&self.kp, &self.drive);
+        Vec6::from_fn(|i, _| {
+            let kappa = (theta[i] - (m.dtheta[i] + self.offset_drift[i] * t)) / m.eta[i] + 0.0;
+            d.eta[i] * kappa + d.dtheta[i]
+        })
     }
 
     /// Gravity and the platform load as the dynamics take them.
@@ -261,4 +300,8 @@ pub struct LoopRun {
     /// Joint-ticks at which the drive's torque was clamped at ±`torque_limit` (the loop is not
     /// differentiable where the clamp switches).
     pub saturated: usize,
+    /// Ticks whose implicit friction solve stopped at its sweep bound (not exact; 0 expected).
+    pub inexact_friction: usize,
+    /// Joint-ticks on which the implicit law held a joint stuck (0 for the other laws).
+    pub stuck_joint_ticks: usize,
 }

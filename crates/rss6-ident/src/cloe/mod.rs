@@ -6,6 +6,7 @@ mod closed_loop;
 mod config;
 mod consistent;
 mod estimator;
+mod friction;
 mod truth;
 
 pub use closed_loop::simulate;
