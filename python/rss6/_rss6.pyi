@@ -607,6 +607,7 @@ def cloe_identify(
     start: ArrayLike,
     duration: float,
     parameters: list[str] | None = None,
+    hold: list[str] | None = None,
     max_iterations: int = 20,
     torque_limit: float = 30.0,
     camera_latency: float = 0.0,

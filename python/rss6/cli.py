@@ -321,6 +321,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         progress=lambda total, desc: _progress(total, desc, quiet),
         as_printed=args.as_printed,
         variation=not args.no_variation,
+        friction_law=args.friction_law,
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
@@ -487,6 +488,14 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the loop as the thesis prints it: unfiltered drive derivative (eq. 5.5) and sign "
         "Coulomb friction in the model (default: 5 ms derivative filter, tanh friction)",
+    )
+    i.add_argument(
+        "--friction-law",
+        choices=("tanh", "implicit"),
+        default="tanh",
+        help="joint friction of plant and model: 'implicit' = stick–slip stepped implicitly in "
+        "both (plant at 48 solver iterations), a linear start from the recorded commands and "
+        "potentiometers with l_p known, CLOE on the recorded commands (default: tanh in the model)",
     )
     i.add_argument(
         "--no-variation",

@@ -22,16 +22,19 @@ from rss6.errors import (
     ShapeError,
 )
 from rss6.excitation import Excitation, excitation, random_excitation
+from rss6.identify_linear import LinearGuess, linear_guess
 
 __all__ = [
     "Excitation",
     "IdentificationData",
     "IdentificationResult",
+    "LinearGuess",
     "LoopModel",
     "Validation",
     "cloe",
     "collect",
     "excitation",
+    "linear_guess",
     "parameter_names",
     "random_excitation",
     "simulate",
@@ -385,6 +388,7 @@ def cloe(
     pid_guess: tuple[float, float, float],
     *,
     parameters: str | Sequence[str] = "base",
+    hold: Sequence[str] = (),
     consistent: bool = True,
     max_iterations: int = 20,
     progress: Callable[[int, float], Any] | None = None,
@@ -416,7 +420,9 @@ def cloe(
 
     ``parameters``: ``"base"`` estimates every quantity the data identify (QR with column pivoting
     at the guess, relative threshold 10⁻³), a list of names (:func:`parameter_names`) only those
-    (the others stay at the guess); ``consistent``: the estimator works on logs of physical quantities,
+    (the others stay at the guess); ``hold``: names kept at the guess as known — closed-loop output
+    error sees Ξ and the drive gains only up to one common factor, so with ``"base"`` one known
+    quantity (e.g. ``"lp"`` from the drive's data sheet) fixes the scale; ``consistent``: the estimator works on logs of physical quantities,
     so every iterate is a physical robot (the only parametrisation implemented: ``False`` is refused).
     ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1).
     ``prior_log_std``: σ of a Gaussian prior on every estimated log-quantity centred at the guess
@@ -465,6 +471,7 @@ def cloe(
         start=data.start,
         duration=data.duration,
         parameters=names,
+        hold=[str(h) for h in hold] or None,
         max_iterations=max_iterations,
         torque_limit=torque_limit,
         camera_latency=camera_latency,

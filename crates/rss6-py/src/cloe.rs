@@ -313,7 +313,8 @@ pub(crate) fn simulate_identification<'py>(
 /// CLOE (eq. 5.6–5.9) of the measured frames `measured` (F, 6) at times `t` (F,) collected with the
 /// identification loop following the Fourier trajectory (`f0`, `coefficients`) from rest at
 /// `start`, from the guess (`dp_guess`, `pid_guess`). `parameters`: names to estimate (see
-/// `cloe_parameter_names`), None for every identifiable one. `derivative_filter`,
+/// `cloe_parameter_names`), None for every identifiable one; `hold`: names kept at the guess as
+/// known (the identifiable set is then chosen among the others). `derivative_filter`,
 /// `friction_smoothing`: as for `simulate_identification`. `prior_log_std`: σ of the Gaussian prior
 /// on every estimated log-quantity, centred at the guess (0: none, the pure output error of eq. 5.7). No convergence raises
 /// `rss6.IdentificationError` with `iterations`, `cost_history` and the last accepted iterate
@@ -324,7 +325,7 @@ pub(crate) fn simulate_identification<'py>(
 /// `simulate_identification` (re-identification with named effects). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -338,6 +339,7 @@ pub(crate) fn cloe_identify<'py>(
     start: &Bound<'py, PyAny>,
     duration: f64,
     parameters: Option<Vec<String>>,
+    hold: Option<Vec<String>>,
     max_iterations: usize,
     torque_limit: f64,
     camera_latency: f64,
@@ -390,6 +392,7 @@ pub(crate) fn cloe_identify<'py>(
         tol_cost,
         tol_step,
         parameters,
+        hold: hold.unwrap_or_default(),
         identifiability_threshold,
         poor_std,
         per_tick_jacobians,

@@ -56,6 +56,11 @@ pub struct CloeOptions {
     /// Names (see [`Consistent::names`]) to estimate; `None`: every identifiable one. A requested
     /// name that is not identifiable is an error.
     pub parameters: Option<Vec<String>>,
+    /// Names held at the guess as known (with `parameters` = `None`, the identifiable set is chosen
+    /// among the others). Closed-loop output error sees Ξ and the drive gains only up to one
+    /// common factor (docs/identification.md, "The scale direction"): holding one known quantity,
+    /// e.g. `lp` from the drive's data sheet, fixes it.
+    pub hold: Vec<String>,
     /// Relative standard deviation above which an estimate is flagged as poorly identified.
     pub poor_std: f64,
     /// Initial LM damping (relative to diag(JᵀJ)).
@@ -87,6 +92,7 @@ impl Default for CloeOptions {
             noise: [0.0096e-3, 0.0261_f64.to_radians()],
             identifiability_threshold: 1e-3,
             parameters: None,
+            hold: Vec::new(),
             poor_std: 0.10,
             lambda0: 1e-3,
             max_log_step: 0.5,
@@ -251,7 +257,24 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         .g
         .as_ref()
         .ok_or_else(|| IdentError::InvalidInput("the loop returned no sensitivities".into()))?;
-    let base = base_columns(g0, options.identifiability_threshold);
+    let mut held = Vec::new();
+    for h in &options.hold {
+        match names.iter().position(|n| n == h) {
+            Some(k) => held.push(k),
+            None => {
+                return Err(IdentError::InvalidInput(format!(
+                    "unknown parameter {h:?} to hold; known: {}",
+                    names.join(", ")
+                )))
+            }
+        }
+    }
+    let free: Vec<usize> = (0..N_PSI).filter(|k| !held.contains(k)).collect();
+    let base: Vec<usize> =
+        base_columns(&g0.select_columns(&free), options.identifiability_threshold)
+            .into_iter()
+            .map(|k| free[k])
+            .collect();
     let active: Vec<usize> = match &options.parameters {
         None => base.clone(),
         Some(req) => {
@@ -267,6 +290,12 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                     }
                 }
             }
+            if let Some(&k) = act.iter().find(|k| held.contains(k)) {
+                return Err(IdentError::InvalidInput(format!(
+                    "{} is both requested and held",
+                    names[k]
+                )));
+            }
             // The others stay at the guess, so identifiability is decided among these alone.
             let ok = base_columns(&g0.select_columns(&act), options.identifiability_threshold);
             let bad: Vec<String> = (0..act.len())
@@ -279,7 +308,9 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
             act
         }
     };
-    let unidentifiable: Vec<String> = (0..N_PSI)
+    let unidentifiable: Vec<String> = free
+        .iter()
+        .copied()
         .filter(|k| !base.contains(k))
         .map(|k| names[k].clone())
         .collect();

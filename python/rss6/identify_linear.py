@@ -1,0 +1,209 @@
+"""A linear initial guess for CLOE from what the drives did: inverse dynamics on the recorded
+commands and potentiometers (docs/identification.md, "A linear start").
+
+CLOE's cost with stick–slip friction is piecewise smooth, and Levenberg–Marquardt started from the
+thesis's initial model (Table 5.1, no friction) stops in local minima far from the truth. This
+estimate needs no simulation: every quantity it uses was recorded.
+
+* The drive torque of joint i is eq. 5.5 on what the drive saw, τ_i = l_p e_i + l_i ∫e_i + D_i with
+  e = U_θ − θ_pot (drive convention) and the derivative filter D_k = (T_f D_{k−1} + l_d Δe)/(T_f + Δt):
+  linear in (l_p, l_i, l_d) given the recorded commands and potentiometer readings.
+* The pose χ by forward kinematics of the potentiometer angles (model convention); χ, e, ∫e and
+  D/l_d are low-passed alike with a zero-phase Butterworth filter (scipy ``filtfilt``), χ̇ and χ̈ by
+  central differences.
+* Rows Γ_i(χ, χ̇, χ̈) Ξ = τ_i (eq. 5.1; `rss6.regressor`) for joints moving faster than ``min_rate``
+  × their own peak rate: a joint at rest holds any friction torque in [−f_c, f_c], which sign(θ̇)
+  does not describe.
+* Unknowns: some of the 43 quantities CLOE estimates (:func:`rss6.identify.parameter_names`,
+  exp ψ), to which Ξ is affine; by default the joint friction and l_i, l_d — what a CAD model does
+  not give —, the masses and inertias staying at the prior. l_p is known: the equations are
+  homogeneous in (Ξ, gains), so one quantity must be (the same scale direction CLOE cannot see).
+  Bounded least squares (scipy ``lsq_linear``, every quantity ≥ 10⁻³ × its prior, so the result is
+  physically consistent) with a ridge pulling each toward the prior by relative weight ``ridge``.
+  Estimating the masses and inertias too (``names=None``) leaves them wild along the torque
+  regressor's null space (structural rank 31 of 64; measured: link masses 0.001–17× the truth), and
+  CLOE keeps what it cannot identify at its start.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy import optimize, signal
+
+from rss6 import _rss6
+from rss6.errors import IdentificationError, InvalidInputError
+
+if TYPE_CHECKING:
+    from rss6.identify import IdentificationData
+
+__all__ = ["LinearGuess", "linear_guess"]
+
+_N_Q = 43
+_LP, _LI, _LD = 40, 41, 42
+_DEFAULT_NAMES = tuple(f"f{k}{i}" for k in "cv" for i in range(1, 7)) + ("li", "ld")
+
+
+@dataclass(frozen=True)
+class LinearGuess:
+    """What :func:`linear_guess` returns: the estimate (``dynamics``, ``pid``), the number of torque
+    equations used (``rows``) and left out because the joint was near rest (``excluded``), the RMS
+    drive torque over the rows and the RMS residual of the fit (N·m)."""
+
+    dynamics: _rss6.DynamicParams
+    pid: tuple[float, float, float]
+    rows: int
+    excluded: int
+    torque_rms: float
+    residual_rms: float
+
+
+def _affine_map(
+    dp: _rss6.DynamicParams, pid: tuple[float, float, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """q0 = exp ψ of the prior, and L, c with A = L q + c (A: the 67 entries of Ξ and the gains)."""
+    psi0, _, _ = _rss6.cloe_psi(dp, pid)
+    q0 = np.exp(np.asarray(psi0))
+
+    def a_of(q: np.ndarray) -> np.ndarray:
+        _, d, p = _rss6.cloe_psi(dp, pid, list(np.log(q)))
+        return np.concatenate([np.asarray(d.to_vector()), np.asarray(p)])
+
+    a0 = a_of(q0)
+    lin = np.zeros((a0.size, _N_Q))
+    for j in range(_N_Q):
+        q = q0.copy()
+        q[j] *= 2.0
+        lin[:, j] = (a_of(q) - a0) / q0[j]
+    return q0, lin, a0 - lin @ q0
+
+
+def linear_guess(
+    data: IdentificationData,
+    kp: _rss6.KinematicParams,
+    dp_prior: _rss6.DynamicParams,
+    pid_prior: tuple[float, float, float],
+    *,
+    lp: float,
+    derivative_filter: float = 0.0,
+    drive: _rss6.KinematicParams | None = None,
+    cutoff: float = 10.0,
+    min_rate: float = 0.05,
+    ridge: float = 1e-3,
+    stride: int = 4,
+    edge: float = 0.2,
+    names: Sequence[str] | None = _DEFAULT_NAMES,
+) -> LinearGuess:
+    """The linear estimate (module docs) from ``data`` collected with per-tick commands and
+    potentiometers (:func:`rss6.identify.collect`), with the model kinematics ``kp``, the prior
+    (``dp_prior``, ``pid_prior``: the ridge's centre), the known ``lp`` and the drive's
+    ``derivative_filter`` T_f (s). ``drive``: the drive's joint convention (default nominal);
+    ``cutoff`` (Hz) of the low-pass; ``min_rate``: fraction of each joint's peak rate below which its
+    equation is left out; ``stride``: ticks between equations; ``edge`` (s) left out at both ends
+    (filter transients); ``names``: the quantities estimated (default friction, l_i, l_d; None:
+    every one but l_p), the others kept at the prior.
+
+    Raises :class:`rss6.InvalidInputError` (no per-tick data, bad options) and
+    :class:`rss6.IdentificationError` (a faulted run, too few equations, a fit worse than no model)."""
+    if data.kappa is None or data.theta_cmd is None or data.tick_t is None:
+        raise InvalidInputError(
+            "the linear guess needs per-tick potentiometers and commands: collect() records them"
+        )
+    if data.fault is not None:
+        raise IdentificationError(
+            f"the run faulted at t = {data.fault[0]:.3f} s: use data.before_fault()"
+        )
+    if not (np.isfinite(lp) and lp > 0):
+        raise InvalidInputError(f"lp must be finite and > 0, got {lp}")
+    dt = float(data.dt)
+    if not (0 < cutoff < 0.5 / dt) or not (0 <= min_rate < 1) or stride < 1 or ridge < 0:
+        raise InvalidInputError("cutoff must be in (0, Nyquist), min_rate in [0, 1), stride ≥ 1")
+    drive = _rss6.KinematicParams.nominal() if drive is None else drive
+    kappa = np.asarray(data.kappa, dtype=np.float64)
+    cmd = np.asarray(data.theta_cmd, dtype=np.float64)
+    n = kappa.shape[0]
+    if n < 4 * int(edge / dt) + 50:
+        raise IdentificationError(f"{n} ticks are too few for the linear guess")
+    e = cmd - np.array([drive.theta_from_reading(k) for k in kappa])
+    integral = np.cumsum(e, axis=0) * dt
+    d_unit = np.zeros_like(e)
+    for k in range(1, n):
+        de = e[k] - e[k - 1]
+        t_f = derivative_filter
+        d_unit[k] = (t_f * d_unit[k - 1] + de) / (t_f + dt) if t_f > 0 else de / dt
+    theta = np.array([kp.theta_from_reading(k) for k in kappa])
+    poses = np.asarray(_rss6.fk_batch(kp, theta, data.start))
+    b, a = signal.butter(4, cutoff * 2.0 * dt)
+    pose = signal.filtfilt(b, a, poses, axis=0)
+    pose_dot = np.gradient(pose, dt, axis=0)
+    pose_ddot = np.gradient(pose_dot, dt, axis=0)
+    e_f, int_f, d_f = (signal.filtfilt(b, a, x, axis=0) for x in (e, integral, d_unit))
+
+    q0, lin, c = _affine_map(dp_prior, pid_prior)
+    ticks = np.arange(int(edge / dt), n - int(edge / dt), stride)
+    rates = np.array([_rss6.jacobian_theta(kp, pose[k]) @ pose_dot[k] for k in ticks])
+    peak = np.abs(rates).max(axis=0)
+    rows: list[np.ndarray] = []
+    rhs: list[float] = []
+    terms: list[tuple[float, float, float]] = []
+    excluded = 0
+    for j, k in enumerate(ticks):
+        gamma = np.asarray(_rss6.regressor(kp, pose[k], pose_dot[k], pose_ddot[k]))
+        for i in range(6):
+            if abs(rates[j, i]) < min_rate * peak[i]:
+                excluded += 1
+                continue
+            # Γ_i (L q + c)_Ξ − l_i ∫e_i − l_d D_i = l_p e_i
+            row = gamma[i] @ lin[:64]
+            row[_LI] -= int_f[k, i]
+            row[_LD] -= d_f[k, i]
+            row[_LP] = 0.0
+            rows.append(row)
+            rhs.append(lp * e_f[k, i] - gamma[i] @ c[:64])
+            terms.append((e_f[k, i], int_f[k, i], d_f[k, i]))
+    if len(rows) < 3 * _N_Q:
+        raise IdentificationError(
+            f"only {len(rows)} torque equations with moving joints (at least {3 * _N_Q} needed)"
+        )
+    a_mat, y = np.array(rows), np.array(rhs)
+    all_names = list(_rss6.cloe_parameter_names())
+    if names is None:
+        free = [j for j in range(_N_Q) if j != _LP]
+    else:
+        unknown = [n for n in names if n not in all_names or n == "lp"]
+        if unknown or not names:
+            raise InvalidInputError(f"names must be quantities other than lp, got {unknown}")
+        free = sorted({all_names.index(n) for n in names})
+    fixed = [j for j in range(_N_Q) if j not in free]
+    y = y - a_mat[:, fixed] @ q0[fixed]
+    scaled = a_mat[:, free] * q0[free]  # unknowns u = q / q0
+    reg = np.eye(len(free)) * ridge * float(np.linalg.norm(scaled, axis=0).mean())
+    fit = optimize.lsq_linear(
+        np.vstack([scaled, reg]),
+        np.concatenate([y, reg @ np.ones(len(free))]),
+        bounds=(1e-3, np.inf),
+        method="bvls",
+    )
+    if fit.status < 1:
+        raise IdentificationError(f"the bounded least squares did not converge: {fit.message}")
+    q = q0.copy()
+    q[free] = fit.x * q0[free]
+    q[_LP] = lp
+    residual = float(np.sqrt(np.mean((scaled @ fit.x - y) ** 2)))
+    torque = float(np.sqrt(np.mean((np.array(terms) @ q[[_LP, _LI, _LD]]) ** 2)))
+    if residual >= torque:
+        raise IdentificationError(
+            f"the linear fit explains nothing (residual {residual:.3g} N·m ≥ torque {torque:.3g} N·m)"
+        )
+    _, dp, pid = _rss6.cloe_psi(dp_prior, pid_prior, list(np.log(q)))
+    return LinearGuess(
+        dynamics=dp,
+        pid=(float(pid[0]), float(pid[1]), float(pid[2])),
+        rows=len(rows),
+        excluded=excluded,
+        torque_rms=torque,
+        residual_rms=residual,
+    )
