@@ -44,7 +44,7 @@ __all__ = ["LinearGuess", "linear_guess"]
 
 _N_Q = 43
 _LP, _LI, _LD = 40, 41, 42
-_DEFAULT_NAMES = tuple(f"f{k}{i}" for k in "cv" for i in range(1, 7)) + ("li", "ld")
+_DEFAULT_NAMES = (*(f"f{k}{i}" for k in "cv" for i in range(1, 7)), "li", "ld")
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from rss6 import identify, plots
 from rss6.errors import IdentificationError
 from rss6.identify_report import IdentifyReport, loop_text, quantities
 
-__all__ = ["IdentifyReport", "run"]
+__all__ = ["IdentifyReport", "estimate_from_initial", "initial_model", "run"]
 
 #: Friction of the initial model (N·m, N·m·s/rad).
 INITIAL_FRICTION = (0.1, 0.1)
@@ -51,6 +51,53 @@ def initial_model() -> tuple[rss6.DynamicParams, tuple[float, float, float]]:
     d["coulomb"] = [INITIAL_FRICTION[0]] * 6
     d["viscous"] = [INITIAL_FRICTION[1]] * 6
     return rss6.DynamicParams.from_dict(d), INITIAL_PID
+
+
+def estimate_from_initial(
+    d: identify.IdentificationData,
+    kp: rss6.KinematicParams,
+    *,
+    friction_law: str = "tanh",
+    lp: float | None = None,
+    max_iterations: int = 20,
+    derivative_filter: float = DRIVE_DERIVATIVE_FILTER,
+    friction_smoothing: float = FRICTION_SMOOTHING,
+    parameters: str | list[str] = "base",
+    progress: Callable[[int, float], Any] | None = None,
+) -> identify.IdentificationResult:
+    """CLOE on ``d`` from :func:`initial_model`. ``friction_law="tanh"``: CLOE from the initial
+    model with tanh friction (ε = ``friction_smoothing``). ``"implicit"``: the stick–slip law, a
+    :func:`rss6.identify.linear_guess` with the drive's known ``lp`` first, then CLOE holding l_p on
+    the recorded commands; the result's ``guess`` and ``rms_before`` are the initial model's.
+    Raises what :func:`rss6.identify.cloe` raises."""
+    dp0, pid0 = initial_model()
+    t_f = derivative_filter
+    if friction_law == "tanh":
+        return identify.cloe(
+            d, kp, dp0, pid0, parameters=parameters, max_iterations=max_iterations,
+            per_tick_jacobians=True, progress=progress, derivative_filter=t_f,
+            friction_smoothing=friction_smoothing,
+        )  # fmt: skip
+    if friction_law != "implicit":
+        raise rss6.InvalidInputError(
+            f"friction_law must be 'tanh' or 'implicit', got {friction_law!r}"
+        )
+    if lp is None:
+        raise rss6.InvalidInputError("the implicit law needs the drive's l_p (lp=)")
+    g = identify.linear_guess(d, kp, dp0, pid0, lp=lp, derivative_filter=t_f)
+    res = identify.cloe(
+        d, kp, g.dynamics, g.pid, parameters=parameters, max_iterations=max_iterations,
+        per_tick_jacobians=True, progress=progress, commands="recorded",
+        hold=[] if parameters != "base" else ["lp"], derivative_filter=t_f,
+        implicit_friction=True,
+    )  # fmt: skip
+    chi0 = identify.simulate(
+        kp, dp0, pid0, d.reference, times=d.t, dt=d.dt, commands=d.frame_commands(),
+        derivative_filter=t_f, implicit_friction=True,
+    )  # fmt: skip
+    rms0 = np.sqrt(np.mean((d.measured - chi0) ** 2, axis=0))
+    # Tables 5.3/5.4 compare with the initial model, not with the linear start.
+    return dataclasses.replace(res, guess=(dp0, pid0), rms_before=rms0)
 
 
 def run(
@@ -160,34 +207,10 @@ def run(
     def estimate(
         d: identify.IdentificationData, progress: Callable[[int, float], Any] | None = None
     ) -> identify.IdentificationResult:
-        """CLOE on `d` from the initial model (through the linear start with the implicit law)."""
-        if not implicit:
-            return identify.cloe(
-                d,
-                kp,
-                dp0,
-                pid0,
-                max_iterations=iters,
-                per_tick_jacobians=True,
-                progress=progress,
-                **law,
-            )
-        g = identify.linear_guess(d, kp, dp0, pid0, lp=pid_true[0], derivative_filter=t_f)
-        res = identify.cloe(
-            d,
-            kp,
-            g.dynamics,
-            g.pid,
-            max_iterations=iters,
-            per_tick_jacobians=True,
-            progress=progress,
-            commands="recorded",
-            hold=["lp"],
-            **law,
-        )
-        rms0 = np.sqrt(np.mean((d.measured - frames(dp0, pid0, d.reference, d)) ** 2, axis=0))
-        # Tables 5.3/5.4 compare with the initial model, not with the linear start.
-        return dataclasses.replace(res, guess=(dp0, pid0), rms_before=rms0)
+        return estimate_from_initial(
+            d, kp, friction_law=friction_law, lp=pid_true[0], max_iterations=iters,
+            derivative_filter=t_f, friction_smoothing=eps, progress=progress,
+        )  # fmt: skip
 
     robot = make_robot()
     truth = robot.truth()

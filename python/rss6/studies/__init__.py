@@ -122,15 +122,20 @@ def identification_variation(
     quick: bool = False,
     parameters: Any = "base",
     progress: Any = True,
+    friction_law: str = "tanh",
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
-    Table 5.2 (``robot``: "plant" or "twin"); ``quick``: 2 s trajectories, 10 iterations."""
+    Table 5.2 (``robot``: "plant" or "twin"); ``quick``: 2 s trajectories, 10 iterations;
+    ``friction_law``: "tanh" or "implicit" (stick–slip in robot and model, linear start, l_p
+    known; :func:`rss6.identify_sim.estimate_from_initial`)."""
     from rss6 import identify
 
     specs = [
         {
-            "spec_id": f"identification:{robot}:{'quick' if quick else 'full'}:{seed + k}",
+            "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
+            f"{seed + k}",
+            "friction_law": friction_law,
             "seed": seed + k,
             "robot": robot,
             "quick": quick,
@@ -138,7 +143,7 @@ def identification_variation(
         }
         for k in range(n_trajectories)
     ]
-    fields = ["seed", "robot", "iterations"]
+    fields = ["seed", "robot", "friction_law", "iterations"]
     fields += [f"est_{n}" for n in identify.parameter_names()]
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
     return _study(identification_task, specs, fields, out, client, workers, progress)

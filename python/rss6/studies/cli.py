@@ -33,6 +33,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="identification: 2 s trajectories, 10 iterations, the drive gains only",
     )
+    p.add_argument(
+        "--friction-law",
+        choices=("tanh", "implicit"),
+        default="tanh",
+        help="identification: joint friction of robot and model (implicit: stick–slip, linear "
+        "start with l_p known, CLOE on the recorded commands)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
             robot="plant",
             quick=args.quick,
             parameters=["lp", "li", "ld"] if args.quick else "base",
+            friction_law=args.friction_law,
             **common,
         )
         print(studies.summary_identification(df))

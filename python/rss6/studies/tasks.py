@@ -51,8 +51,9 @@ def calibration_task(spec: Mapping[str, Any]) -> dict[str, Any]:
 
 def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     """One identification on a random trajectory (seed ``seed``) of the robot whose truth is
-    Table 5.2 (``robot``: "plant" or "twin"): CLOE from Table 5.1 and the nominal gains, the
-    estimates by name, and the RMS of the identified model on a fresh validation trajectory."""
+    Table 5.2 (``robot``: "plant" or "twin"): CLOE from Table 5.1 and the nominal gains
+    (:func:`rss6.identify_sim.estimate_from_initial`; ``friction_law`` "tanh" or "implicit"), the
+    estimates by name and the RMS before and after on the trajectory."""
     import rss6
     from rss6 import identify, identify_sim
 
@@ -64,7 +65,12 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     plant_cls: Any = getattr(rss6, "Plant", None)
     cls: Any = plant_cls if spec.get("robot", "plant") == "plant" and plant_cls else rss6.ModelSim
     t_f, eps = identify_sim.DRIVE_DERIVATIVE_FILTER, identify_sim.FRICTION_SMOOTHING
+    law = str(spec.get("friction_law", "tanh"))
     kw: dict[str, Any] = {"friction_smoothing": eps} if cls is rss6.ModelSim else {}
+    if law == "implicit":
+        kw = {"implicit_friction": True}
+        if cls is not rss6.ModelSim:
+            kw["solver_iterations"] = identify_sim.IMPLICIT_PLANT_ITERATIONS
     robot = cls(kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f, **kw)
     tr = robot.truth()
     amplitude = (0.002, 0.01) if quick else (0.001, 0.005)
@@ -76,18 +82,19 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         sensor_in_base=tr["sensor_in_base"],
         target_in_effector=tr["target_in_effector"],
     )
-    rec: dict[str, Any] = {"seed": seed, "robot": cls.__name__}
+    rec: dict[str, Any] = {"seed": seed, "robot": cls.__name__, "friction_law": law}
     if data.fault is not None:
         rec.update(status="faulted", error=f"visual PID fault at {data.fault[0]:.2f} s")
         return rec
-    dp0, pid0 = identify_sim.initial_model()
-    res = identify.cloe(
+    res = identify_sim.estimate_from_initial(
         data,
         kp,
-        dp0,
-        pid0,
+        friction_law=law,
+        lp=pid_true[0],
         parameters=spec.get("parameters", "base"),
-        max_iterations=int(spec.get("iterations", 10 if quick else 20)),
+        max_iterations=int(
+            spec.get("iterations", (10 if quick else 20) * (1 + (law == "implicit")))
+        ),
         derivative_filter=t_f,
         friction_smoothing=eps,
     )
