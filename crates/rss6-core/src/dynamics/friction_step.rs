@@ -43,14 +43,11 @@
 //! an O(dt) change of discretisation moves where joints stick by mrad — 0.5 mm of platform motion
 //! against the twin. The law must be the same discrete map in both simulators.)
 
-use super::load::{Environment, LoadAt};
-use super::matrices::twist_mass_matrix;
-use super::newton_euler::{solve6, twist_force};
+use super::load::Environment;
+use super::newton_euler::{solve6, twist_dynamics, TwistDynamics};
 use super::{check_finite, check_state};
 use crate::error::{CoreError, Result, SingularKind};
-use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
-use crate::pose::twist_jacobian;
 use crate::types::{Mat6, Vec6, LEGS};
 
 /// Gauss–Seidel sweeps at most.
@@ -97,34 +94,18 @@ pub fn implicit_friction(
     env: &Environment,
     dt: f64,
 ) -> Result<FrictionStep> {
-    step(kp, dp, pose, pose_dot, tau_a, env, dt)
-}
-
-fn step(
-    kp: &KinematicParams,
-    dp: &DynamicParams,
-    pose: &Vec6,
-    pose_dot: &Vec6,
-    tau_a: &Vec6,
-    env: &Environment,
-    dt: f64,
-) -> Result<FrictionStep> {
     check_state(pose_dot, tau_a)?;
-    env.check()?;
     if !(dt > 0.0 && dt.is_finite()) {
         return Err(CoreError::InvalidParameter(
             "dt must be positive and finite",
         ));
     }
-    let geom = LegGeometry::at_pose(kp, pose)?;
-    let v = twist_jacobian(pose) * pose_dot;
-    let mut m = twist_mass_matrix(&geom, dp)?;
-    let (mut bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
-    if let Some(load) = &env.load {
-        let l = LoadAt::new(load, &geom.rot);
-        l.add_mass(&mut m);
-        bias += l.force(&v, &Vec6::zeros(), &env.gravity);
-    }
+    let TwistDynamics {
+        m,
+        bias,
+        theta_dot,
+        j_ad_t,
+    } = twist_dynamics(kp, dp, pose, pose_dot, env)?;
     let chol = m
         .cholesky()
         .ok_or(CoreError::Singular(SingularKind::Matrix))?;

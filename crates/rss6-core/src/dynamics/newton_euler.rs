@@ -296,18 +296,12 @@ pub fn forward_dynamics_with_env(
     env: &Environment,
 ) -> Result<Vec6> {
     check_state(pose_dot, tau_a)?;
-    env.check()?;
-    let geom = LegGeometry::at_pose(kp, pose)?;
-    let js = twist_jacobian(pose);
-    let v = js * pose_dot;
-    let mut m = twist_mass_matrix(&geom, dp)?;
-    // Velocity and gravity forces at zero twist acceleration.
-    let (mut bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
-    if let Some(load) = &env.load {
-        let l = LoadAt::new(load, &geom.rot);
-        l.add_mass(&mut m);
-        bias += l.force(&v, &Vec6::zeros(), &env.gravity);
-    }
+    let TwistDynamics {
+        m,
+        bias,
+        theta_dot,
+        j_ad_t,
+    } = twist_dynamics(kp, dp, pose, pose_dot, env)?;
     let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
     let v_dot = m
         .cholesky()
@@ -317,4 +311,39 @@ pub fn forward_dynamics_with_env(
         twist_jacobian_inverse(pose)? * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
     check_finite(chi_ddot.as_slice())?;
     Ok(chi_ddot)
+}
+
+/// The twist-space dynamics at (χ, χ̇): M (load included), the velocity and gravity forces at zero
+/// twist acceleration, θ̇ and J_adᵀ (friction not included).
+pub(super) struct TwistDynamics {
+    pub m: Mat6,
+    pub bias: Vec6,
+    pub theta_dot: Vec6,
+    pub j_ad_t: Mat6,
+}
+
+/// [`TwistDynamics`] of the state; checks the environment.
+pub(super) fn twist_dynamics(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    env: &Environment,
+) -> Result<TwistDynamics> {
+    env.check()?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let v = twist_jacobian(pose) * pose_dot;
+    let mut m = twist_mass_matrix(&geom, dp)?;
+    let (mut bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
+    if let Some(load) = &env.load {
+        let l = LoadAt::new(load, &geom.rot);
+        l.add_mass(&mut m);
+        bias += l.force(&v, &Vec6::zeros(), &env.gravity);
+    }
+    Ok(TwistDynamics {
+        m,
+        bias,
+        theta_dot,
+        j_ad_t,
+    })
 }
