@@ -161,5 +161,6 @@ def test_implicit_friction_is_the_law_plant_and_twin_share():
     # bound at 3× and a tenth of the other.
     assert gap < 1.5e-5, gap
     assert other > 19e-6, other
+    assert plant.inexact_friction_steps() == 0 and twin.inexact_friction_steps() == 0
     with pytest.raises(rss6.errors.Rss6Error):
         rss6.ModelSim(kp, dp, implicit_friction=True, friction_smoothing=0.1)

@@ -331,6 +331,12 @@ macro_rules! sim_class {
                 Ok(RobotSim::solver_gap(&*self.lock()?))
             }
 
+            /// Ticks whose implicit friction solve stopped at its sweep bound instead of
+            /// converging exactly (0 expected; 0 without `implicit_friction`).
+            fn inexact_friction_steps(&self) -> PyResult<u64> {
+                Ok(RobotSim::inexact_friction_steps(&*self.lock()?))
+            }
+
             /// Plant time (s).
             #[getter]
             fn time(&self) -> PyResult<f64> {

@@ -280,6 +280,11 @@ pub trait RobotSim {
     fn solver_gap(&self) -> f64 {
         0.0
     }
+    /// Ticks whose implicit friction solve stopped at its sweep bound instead of converging
+    /// exactly ([`rss6_core::FrictionStep::exact`]); 0 expected, 0 without `implicit_friction`.
+    fn inexact_friction_steps(&self) -> u64 {
+        0
+    }
 }
 
 /// A rigid-body engine that the robot wrapper drives.
@@ -300,6 +305,10 @@ pub trait Physics: Send {
     /// projection (m); the same as [`Physics::loop_closure_error`] for engines without one.
     fn solver_gap(&self) -> f64 {
         self.loop_closure_error()
+    }
+    /// See [`RobotSim::inexact_friction_steps`].
+    fn inexact_friction_steps(&self) -> u64 {
+        0
     }
 }
 
@@ -447,6 +456,9 @@ impl<P: Physics> RobotSim for Robot<P> {
     }
     fn solver_gap(&self) -> f64 {
         self.physics.solver_gap()
+    }
+    fn inexact_friction_steps(&self) -> u64 {
+        self.physics.inexact_friction_steps()
     }
     fn reset(&mut self, pose: &Vec6) -> Result<()> {
         let theta = ik(&self.cfg.kinematics, pose)?;

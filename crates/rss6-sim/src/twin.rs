@@ -30,6 +30,8 @@ pub struct ModelPhysics {
     dt: f64,
     state: ModelState,
     theta: Vec6,
+    /// Implicit friction solves that hit their sweep bound.
+    inexact: u64,
 }
 
 impl ModelPhysics {
@@ -51,6 +53,7 @@ impl ModelPhysics {
                 pose_dot: Vec6::zeros(),
             },
             theta: Vec6::zeros(),
+            inexact: 0,
         }
     }
 
@@ -77,6 +80,7 @@ impl Physics for ModelPhysics {
             let s = &self.state;
             let (kp, env) = (&self.kp, &self.env);
             let f = implicit_friction(kp, &self.dp, &s.pose, &s.pose_dot, tau, env, self.dt)?;
+            self.inexact += u64::from(!f.exact);
             let mut dp_nf = self.dp;
             dp_nf.coulomb = [0.0; LEGS];
             dp_nf.viscous = [0.0; LEGS];
@@ -116,6 +120,10 @@ impl Physics for ModelPhysics {
 
     fn loop_closure_error(&self) -> f64 {
         0.0
+    }
+
+    fn inexact_friction_steps(&self) -> u64 {
+        self.inexact
     }
 }
 

@@ -82,6 +82,8 @@ pub struct RapierPhysics {
     velocity_projection: bool,
     /// Loop gap left by the rapier step before the projection (m).
     solver_gap: f64,
+    /// Implicit friction solves that hit their sweep bound.
+    inexact_friction: u64,
     /// Projection metric: inverse inertia of each wrench about its axis (1/(kg·m²)), inverse
     /// platform mass (1/kg) and platform inertia in ΣE (kg·m²), each with half of every link lumped
     /// at its ends.
@@ -126,6 +128,7 @@ impl RapierPhysics {
                 && cfg.solver.t_joint == TJoint::Spherical
                 && !cfg.solver.multibody_legs,
             solver_gap: 0.0,
+            inexact_friction: 0,
             inv_wrench_inertia: [0.0; LEGS],
             inv_platform_mass: 0.0,
             platform_inertia: DMat3::IDENTITY,
@@ -297,7 +300,7 @@ impl RapierPhysics {
 
     /// τ_f of the shared law ([`rss6_core::implicit_friction`]) on the plant's own state (χ from
     /// the platform, χ̇ from the wrench rates θ̇), its true friction and environment.
-    fn implicit_friction_torque(&self, tau: &Vec6, thd: &Vec6) -> Result<Vec6> {
+    fn implicit_friction_torque(&mut self, tau: &Vec6, thd: &Vec6) -> Result<Vec6> {
         let pose = self.pose();
         let pose_dot = jacobian_theta(&self.kp, &pose)?
             .lu()
@@ -307,7 +310,9 @@ impl RapierPhysics {
         dp.coulomb = self.coulomb;
         dp.viscous = self.viscous;
         let dt = self.world.integration_parameters.dt;
-        Ok(implicit_friction(&self.kp, &dp, &pose, &pose_dot, tau, &self.env, dt)?.torque)
+        let f = implicit_friction(&self.kp, &dp, &pose, &pose_dot, tau, &self.env, dt)?;
+        self.inexact_friction += u64::from(!f.exact);
+        Ok(f.torque)
     }
 
     fn platform_body(&self) -> &RigidBody {
@@ -368,6 +373,10 @@ impl Physics for RapierPhysics {
             v[i] = self.world.bodies[leg.wrench].angvel().z;
         }
         v
+    }
+
+    fn inexact_friction_steps(&self) -> u64 {
+        self.inexact_friction
     }
 
     fn solver_gap(&self) -> f64 {
