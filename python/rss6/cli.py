@@ -321,7 +321,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         progress=lambda total, desc: _progress(total, desc, quiet),
         as_printed=args.as_printed,
         variation=not args.no_variation,
-        friction_law=args.friction_law,
+        friction_law=args.friction_law or ("tanh" if args.as_printed else "implicit"),
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
@@ -487,15 +487,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--as-printed",
         action="store_true",
         help="the loop as the thesis prints it: unfiltered drive derivative (eq. 5.5) and sign "
-        "Coulomb friction in the model (default: 5 ms derivative filter, tanh friction)",
+        "Coulomb friction in the model, CLOE from Table 5.1 (implies --friction-law tanh; default: "
+        "5 ms derivative filter, stick–slip friction)",
     )
     i.add_argument(
         "--friction-law",
         choices=("tanh", "implicit"),
-        default="tanh",
-        help="joint friction of plant and model: 'implicit' = stick–slip stepped implicitly in "
-        "both (plant at 48 solver iterations), a linear start from the recorded commands and "
-        "potentiometers with l_p known, CLOE on the recorded commands (default: tanh in the model)",
+        default=None,
+        help="joint friction of plant and model: 'implicit' (default) = stick–slip stepped "
+        "implicitly in both (plant at 48 solver iterations), a linear start from the recorded "
+        "commands and potentiometers with l_p known, CLOE on the recorded commands; 'tanh' = the "
+        "plant's own friction and tanh(θ̇/ε) in the model, CLOE from Table 5.1 (does not converge "
+        "on the plant; the default with --as-printed)",
     )
     i.add_argument(
         "--no-variation",

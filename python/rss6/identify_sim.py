@@ -4,7 +4,9 @@
 2. The identification loop of Fig. 5.1 on the simulated "real robot" — the rapier plant when built,
    whose dynamics and drive gains are :func:`rss6.identify.table_5_2_truth` — logged to MCAP.
 3. CLOE (§5.3) from the initial model: Table 5.1, the tuned drive gains (400, 2000, 4) and small
-   positive friction (0.1 N·m, 0.1 N·m·s/rad: the log-parametrisation cannot start at the thesis's 0).
+   positive friction (0.1 N·m, 0.1 N·m·s/rad: the log-parametrisation cannot start at the thesis's 0);
+   with the default stick–slip law through :func:`rss6.identify.linear_guess` (l_p known), CLOE
+   then on the robot's recorded commands.
 4. Tables 5.2 (initial, identified, truth, relative σ, flag > 10 %, beside the thesis's values), 5.3
    (RMS before/after), 5.4 (validation on fresh random feasible trajectories, RMS of the identified
    and initial models), 5.5 (variation over re-identifications on the validation runs); Figs.
@@ -57,7 +59,7 @@ def estimate_from_initial(
     d: identify.IdentificationData,
     kp: rss6.KinematicParams,
     *,
-    friction_law: str = "tanh",
+    friction_law: str = "implicit",
     lp: float | None = None,
     max_iterations: int = 20,
     derivative_filter: float = DRIVE_DERIVATIVE_FILTER,
@@ -109,21 +111,26 @@ def run(
     progress: Callable[[int, str], Any] | None = None,
     as_printed: bool = False,
     variation: bool = True,
-    friction_law: str = "tanh",
+    friction_law: str = "implicit",
 ) -> IdentifyReport:
     """Runs the study (see the module docs) and writes its files into ``out``. ``quick``: a 2 s
     trajectory (3 harmonics of 0.5 Hz, 5 generations), 10 CLOE iterations, 2 validation trajectories;
     otherwise 10 s (5 of 0.1 Hz, 30 generations), 20 iterations, 10 trajectories. ``plant``:
     "rapier", "model" or "auto". ``progress(total, desc)`` returns a context manager with
     ``update(n)`` (e.g. a tqdm bar) or None. The drive filters its derivative
-    (:data:`DRIVE_DERIVATIVE_FILTER`) and the model smooths Coulomb friction
-    (:data:`FRICTION_SMOOTHING`), unless ``as_printed``: eq. 5.5 unfiltered, sign friction.
-    ``variation``: re-identify on every validation run for Table 5.5 (the slowest step of a full
-    run: ≈ 10 min of 11 measured). ``friction_law="implicit"``: plant (at
+    (:data:`DRIVE_DERIVATIVE_FILTER`). ``friction_law="implicit"`` (default): plant (at
     :data:`IMPLICIT_PLANT_ITERATIONS`) and model share the implicit stick–slip law; each
     identification starts from :func:`rss6.identify.linear_guess` of the initial model with l_p
     known (the drive's value), then CLOE holds l_p and the robot's recorded commands
-    (docs/identification.md, "Stick–slip")."""
+    (docs/identification.md, "Stick–slip"). ``"tanh"``: the plant's own friction, the model's
+    f_c tanh(θ̇/ε) (:data:`FRICTION_SMOOTHING`), CLOE from the initial model (does not converge on
+    the plant); with ``as_printed`` eq. 5.5 unfiltered and sign friction (``"tanh"`` only).
+    ``variation``: re-identify on every validation run for Table 5.5 (the slowest step of a full
+    run: ≈ 8.5 min of 10 measured)."""
+    if as_printed and friction_law == "implicit":
+        raise rss6.InvalidInputError(
+            "as_printed is the thesis's loop with sign friction in the model: use friction_law='tanh'"
+        )
     if friction_law not in ("tanh", "implicit"):
         raise rss6.InvalidInputError(
             f"friction_law must be 'tanh' or 'implicit', got {friction_law!r}"

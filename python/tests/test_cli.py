@@ -150,24 +150,22 @@ def test_calibrate_modes_are_exclusive(capsys):
 
 @pytest.fixture(scope="module")
 def identify_quick(tmp_path_factory):
-    """One `rss6 identify --simulate --quick` run (measured: 15–19 s on the loaded 2-core box)."""
+    """One `rss6 identify --simulate --quick` run: the default stick–slip law on the rapier plant
+    (measured: 20 s with Table 5.5's two re-identifications)."""
     out = tmp_path_factory.mktemp("identify")
-    r = run("identify", "--simulate", "--quick", "--quiet", "--out", str(out), timeout=120)
+    r = run("identify", "--simulate", "--quick", "--quiet", "--out", str(out), timeout=300)
     return r, out
 
 
 def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
     r, out = identify_quick
-    # 0: CLOE converged; 3: it did not, and the report says so with the cost history.
-    assert r.returncode in (0, 3), r.stderr
+    assert r.returncode == 0, r.stderr
     text = (out / "tables.txt").read_text(encoding="utf-8")
     for heading in ("Table 5.2", "Table 5.3", "Table 5.4", "Table 5.5"):
         assert heading in text
     for name in ("platform.Sxx", "wrench1.Iz", "link6.It", "fc1", "fv6", "lp", "li", "ld"):
         assert name in text
     assert "cost history" in text
-    if r.returncode == 3:
-        assert "DID NOT CONVERGE" in text and "did not converge" in r.stderr
     for f in ("fig5_7_excitation.png", "fig5_8_identification.png", "fig5_9_validation.png"):
         assert (out / f).stat().st_size > 10_000
     for f in ("identification.mcap", "validation_0.mcap", "validation_1.mcap"):
@@ -176,31 +174,34 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
     assert run("identify").returncode == 2  # --simulate is the only mode
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="CLOE does not converge on the rapier plant in the quick run: Φ 2.67e4 → 6.02e3 in 10 "
-    "iterations on 2 s, with the drive derivative filter (5 ms) and tanh friction in the model "
-    "(docs/identification.md). Strict: remove the marker once it converges.",
-)
-def test_identify_simulate_quick_converges_on_the_plant(identify_quick):
-    r, _ = identify_quick
-    assert r.returncode == 0, r.stderr[-2000:]
+def test_identify_simulate_quick_with_tanh_friction_does_not_converge_and_says_so(tmp_path):
+    """With --friction-law tanh (the plant's own friction, tanh in the model) CLOE from Table 5.1
+    does not converge on the rapier plant in the quick run (Φ 2.67e4 → 6.02e3 in 10 iterations;
+    docs/identification.md): exit status 3, the report says so with its cost history. If this
+    starts converging, the docs' account of the tanh path is out of date."""
+    if rss6.Plant is None:
+        pytest.skip("built without the rapier plant")
+    r = run(
+        "identify", "--simulate", "--quick", "--quiet", "--no-variation",
+        "--friction-law", "tanh", "--out", str(tmp_path), timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 3, r.stderr[-2000:]
+    text = (tmp_path / "tables.txt").read_text(encoding="utf-8")
+    assert "DID NOT CONVERGE" in text and "did not converge" in r.stderr
+    assert "cost history" in text and "tanh" in text
 
 
-def test_identify_simulate_quick_with_stick_slip_identifies_on_the_plant(tmp_path):
-    """`--friction-law implicit`: the plant and the model share the stick–slip law; a linear start
+def test_identify_simulate_quick_with_stick_slip_identifies_on_the_plant(identify_quick):
+    """The default `--friction-law implicit`: plant and model share the stick–slip law; a linear start
     from the recorded commands and potentiometers (l_p known), then CLOE on the recorded commands
     (docs/identification.md, "Stick–slip"). Measured on the rapier plant (seed 0, 12.6 s): 12
     iterations, reduced χ² 4.24, l_i +0.8 %, l_d −5.9 %, f_c within 8.8 %, validation position RMS
     0.07–0.20 of the initial model's; bounds ≈ 3×."""
     if rss6.Plant is None:
         pytest.skip("built without the rapier plant")
-    r = run(
-        "identify", "--simulate", "--quick", "--quiet", "--no-variation",
-        "--friction-law", "implicit", "--out", str(tmp_path), timeout=300,
-    )  # fmt: skip
+    r, out = identify_quick
     assert r.returncode == 0, r.stderr[-2000:]
-    text = (tmp_path / "tables.txt").read_text(encoding="utf-8")
+    text = (out / "tables.txt").read_text(encoding="utf-8")
     assert "converged in" in text and "stick–slip" in text
     rows = {
         w[0]: (float(w[2]), float(w[3]))

@@ -122,7 +122,7 @@ def identification_variation(
     quick: bool = False,
     parameters: Any = "base",
     progress: Any = True,
-    friction_law: str = "tanh",
+    friction_law: str = "implicit",
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is

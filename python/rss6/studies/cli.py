@@ -36,7 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--friction-law",
         choices=("tanh", "implicit"),
-        default="tanh",
+        default="implicit",
         help="identification: joint friction of robot and model (implicit: stick–slip, linear "
         "start with l_p known, CLOE on the recorded commands)",
     )

@@ -65,7 +65,7 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     plant_cls: Any = getattr(rss6, "Plant", None)
     cls: Any = plant_cls if spec.get("robot", "plant") == "plant" and plant_cls else rss6.ModelSim
     t_f, eps = identify_sim.DRIVE_DERIVATIVE_FILTER, identify_sim.FRICTION_SMOOTHING
-    law = str(spec.get("friction_law", "tanh"))
+    law = str(spec.get("friction_law", "implicit"))
     kw: dict[str, Any] = {"friction_smoothing": eps} if cls is rss6.ModelSim else {}
     if law == "implicit":
         kw = {"implicit_friction": True}
