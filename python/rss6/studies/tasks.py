@@ -101,6 +101,8 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     phi = np.exp(np.asarray(rss6._rss6.cloe_psi(res.dynamics, res.pid)[0]))
     for name, v in zip(identify.parameter_names(), phi, strict=True):
         rec[f"est_{name}"] = float(v)
+    for name, sd in zip(res.identified, res.relative_std, strict=True):
+        rec[f"std_{name}"] = float(sd)
     rec["iterations"] = int(res.iterations)
     for i, a in enumerate(_AXES):
         rec[f"rms_before_{a}"] = float(res.rms_before[i])
