@@ -101,16 +101,7 @@ fn lean_vs_twin(a: &LoopParams, cfg: &LoopConfig, effects: Vec<EffectSpec>) -> f
         pose_noise: Some([0.0, 0.0]),
         ..CmmConfig::table_4_1()
     };
-    let ext = Externals {
-        sensor_in_base: sc.sensor_in_base,
-        target_in_effector: sc.target_in_effector,
-    };
-    let mut twin = ModelSim::new(sc).unwrap();
-    twin.reset(&home_pose()).unwrap();
-    let mut spec = ident::IdentSpec::new(KinematicParams::nominal(), ext);
-    spec.duration = cfg.duration;
-    let mut recs: Vec<Record> = Vec::new();
-    ident::run(&mut twin, &spec, &exc, &mut recs).unwrap();
+    let recs = twin_records(sc, cfg.duration);
     let frames: Vec<Vec6> = recs.iter().filter_map(|r| r.camera).collect();
     let run = simulate_loop(cfg, a, &exc, None).unwrap();
     assert_eq!(run.chi.len(), frames.len());
@@ -135,16 +126,7 @@ fn lean_loop_equals_twin(a: &LoopParams, t_f: f64, eps: f64, implicit: bool) {
         pose_noise: Some([0.0, 0.0]),
         ..CmmConfig::table_4_1()
     };
-    let ext = Externals {
-        sensor_in_base: sc.sensor_in_base,
-        target_in_effector: sc.target_in_effector,
-    };
-    let mut twin = ModelSim::new(sc).unwrap();
-    twin.reset(&home_pose()).unwrap();
-    let mut spec = ident::IdentSpec::new(KinematicParams::nominal(), ext);
-    spec.duration = duration;
-    let mut recs: Vec<Record> = Vec::new();
-    ident::run(&mut twin, &spec, &exc, &mut recs).unwrap();
+    let recs = twin_records(sc, duration);
     let frames: Vec<(f64, Vec6)> = recs
         .iter()
         .filter_map(|r| r.camera.map(|c| (r.t, c)))
@@ -316,6 +298,11 @@ fn noisy_implicit_twin_run(a: &LoopParams, duration: f64) -> Vec<Record> {
     sc.drive_derivative_filter = T_F;
     sc.implicit_friction = true;
     sc.pot_noise = 0.0;
+    twin_records(sc, duration)
+}
+
+/// `ident::run` of the test excitation on the twin built from `sc`, from rest at home: its records.
+fn twin_records(sc: SimConfig, duration: f64) -> Vec<Record> {
     let ext = Externals {
         sensor_in_base: sc.sensor_in_base,
         target_in_effector: sc.target_in_effector,

@@ -166,12 +166,10 @@ pub(super) fn step(
 
 /// sign(x) with sign(0) = 0.
 pub(super) fn sign0(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
+    if x == 0.0 {
         0.0
+    } else {
+        x.signum()
     }
 }
 
