@@ -1,7 +1,8 @@
 //! Cost of the loop's sensitivities and of one CLOE, printed as figures.
 //!
-//! `cargo run --release -p rss6-ident --example cloe_cost [seconds]` (default 10 s: one period of a
-//! 3-harmonic at-rest excitation). Prints one simulation, one simulation with the sensitivities of
+//! `cargo run --release -p rss6-ident --example cloe_cost [seconds] [--implicit]` (default 10 s: one
+//! period of a 3-harmonic at-rest excitation). With `--implicit`: the identification drive (5 ms
+//! derivative filter, 30 N·m clamp) and Table 5.2's friction stepped implicitly (stick–slip). Prints one simulation, one simulation with the sensitivities of
 //! the 49 columns of A that CLOE's consistent parameters move (and of 12), their ratio to one
 //! simulation, then one CLOE of 11 quantities from a ±30 % start on data with Table 4.1 camera noise, in the differentiable
 //! configuration of `tests/cloe.rs` (no torque clamp, Table 5.2's Coulomb friction as printed).
@@ -15,10 +16,12 @@ use rss6_ident::{
 use std::time::Instant;
 
 fn main() {
-    let secs: f64 = std::env::args()
-        .nth(1)
-        .and_then(|s| s.parse().ok())
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let secs: f64 = args
+        .iter()
+        .find_map(|s| s.parse().ok())
         .unwrap_or(10.0);
+    let implicit = args.iter().any(|a| a == "--implicit");
     let free = [
         0.010, -0.004, 0.006, 0.003, -0.008, 0.005, 0.004, -0.002, 0.006, 0.002, -0.005, 0.004,
         0.04, -0.02, 0.03, 0.01, -0.03, 0.02, 0.02, -0.01, 0.05, 0.01, -0.03, 0.02,
@@ -29,11 +32,16 @@ fn main() {
     let free: Vec<f64> = free.iter().map(|v| v * f0 / 0.5).collect();
     let exc = Excitation::at_rest(3, f0, &home_pose(), &free).unwrap();
     let mut truth = table_5_2_truth();
-    for f in truth.dynamics.coulomb.iter_mut() {
-        *f /= DRIVE_UNIT_TO_NM;
-    }
     let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), secs);
-    cfg.torque_limit = 1e4;
+    if implicit {
+        cfg.implicit_friction = true;
+        cfg.derivative_filter = 5e-3;
+    } else {
+        for f in truth.dynamics.coulomb.iter_mut() {
+            *f /= DRIVE_UNIT_TO_NM;
+        }
+        cfg.torque_limit = 1e4;
+    }
     let time = |f: &dyn Fn()| {
         let t0 = Instant::now();
         f();
@@ -54,7 +62,8 @@ fn main() {
     let t_fast = time(&|| {
         simulate_loop(&cfg_fast, &truth, &exc, Some(&cols)).unwrap();
     });
-    println!("{secs} s run at 1 kHz ({} ticks)", (secs * 1e3) as usize);
+    let law = if implicit { "implicit stick–slip" } else { "sign" };
+    println!("{secs} s run at 1 kHz ({} ticks), {law} friction", (secs * 1e3) as usize);
     println!("  simulation:                      {t_sim:.3} s");
     println!(
         "  simulation + sensitivities (49): {t_jac:.3} s  = {:.1} × one simulation",
