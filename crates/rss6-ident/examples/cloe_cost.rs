@@ -17,10 +17,7 @@ use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let secs: f64 = args
-        .iter()
-        .find_map(|s| s.parse().ok())
-        .unwrap_or(10.0);
+    let secs: f64 = args.iter().find_map(|s| s.parse().ok()).unwrap_or(10.0);
     let implicit = args.iter().any(|a| a == "--implicit");
     let free = [
         0.010, -0.004, 0.006, 0.003, -0.008, 0.005, 0.004, -0.002, 0.006, 0.002, -0.005, 0.004,
@@ -62,8 +59,15 @@ fn main() {
     let t_fast = time(&|| {
         simulate_loop(&cfg_fast, &truth, &exc, Some(&cols)).unwrap();
     });
-    let law = if implicit { "implicit stick–slip" } else { "sign" };
-    println!("{secs} s run at 1 kHz ({} ticks), {law} friction", (secs * 1e3) as usize);
+    let law = if implicit {
+        "implicit stick–slip"
+    } else {
+        "sign"
+    };
+    println!(
+        "{secs} s run at 1 kHz ({} ticks), {law} friction",
+        (secs * 1e3) as usize
+    );
     println!("  simulation:                      {t_sim:.3} s");
     println!(
         "  simulation + sensitivities (49): {t_jac:.3} s  = {:.1} × one simulation",
