@@ -38,6 +38,14 @@ def _moved(psi_t: np.ndarray, names: list[str], spread: float, seed: int, skip: 
     return list(psi)
 
 
+def _collect(robot: Any, exc: identify.Excitation, kp: rss6.KinematicParams) -> Any:
+    tr = robot.truth()
+    return identify.collect(
+        robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
+        target_in_effector=tr["target_in_effector"],
+    )  # fmt: skip
+
+
 def multistart(n_starts: int) -> None:
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
@@ -47,11 +55,7 @@ def multistart(n_starts: int) -> None:
         kp, dp, pid=pid, seed=3, drive_derivative_filter=DRIVE_DERIVATIVE_FILTER,
         implicit_friction=True,
     )  # fmt: skip
-    tr = robot.truth()
-    d = identify.collect(
-        robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
-    )  # fmt: skip
+    d = _collect(robot, exc, kp)
     psi_t, _, _ = _rss6.cloe_psi(dp, pid)
     chis, zs, its, worst = [], [], [], dict.fromkeys(("fc1", "fc3", "li", "ld"), 0.0)
     t0 = time.perf_counter()
@@ -110,11 +114,7 @@ def spread_run(
         )
     else:
         robot = rss6.ModelSim(kp, dp, implicit_friction=True, **kw)
-    tr = robot.truth()
-    d = identify.collect(
-        robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
-    )  # fmt: skip
+    d = _collect(robot, exc, kp)
     psi_t, _, _ = _rss6.cloe_psi(dp, pid)
     if from_initial:
         gdp, gpid = initial_model()

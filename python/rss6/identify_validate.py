@@ -1,0 +1,137 @@
+"""Validation of an identified model on fresh trajectories (thesis §5.5, Tables 5.3–5.5) and the
+variation measure over re-identifications; re-exported by :mod:`rss6.identify`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from rss6 import _rss6
+from rss6.errors import InvalidInputError
+from rss6.excitation import Excitation, random_excitation
+from rss6.identify import (
+    IdentificationData,
+    IdentificationResult,
+    collect,
+    parameter_names,
+    simulate,
+)
+
+__all__ = ["Validation", "validate", "variation"]
+
+F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Validation:
+    """What :func:`validate` returns: ``rms`` (n, 6) RMS of χ_m − χ_s per axis (m, rad) with the
+    identified model on each fresh trajectory, ``rms_initial`` (n, 6) the same with the initial
+    model (the guess), ``excitations`` and ``data`` of each trajectory."""
+
+    rms: F64
+    rms_initial: F64
+    excitations: tuple[Excitation, ...]
+    data: tuple[IdentificationData, ...]
+
+    @property
+    def ratio(self) -> F64:
+        """rms / rms_initial (n, 6): the thesis's criterion is ≤ 1/3."""
+        return np.asarray(self.rms / self.rms_initial)
+
+    @property
+    def faulted(self) -> tuple[int, ...]:
+        """Indices of the trajectories whose run on the robot faulted (their RMS compares the
+        model with a robot that left the loop)."""
+        return tuple(i for i, d in enumerate(self.data) if d.fault is not None)
+
+
+def validate(
+    result: IdentificationResult,
+    robot: Any,
+    *,
+    n: int = 10,
+    seed: int = 0,
+    kp_model: _rss6.KinematicParams | None = None,
+    sensor_in_base: ArrayLike | None = None,
+    target_in_effector: ArrayLike | None = None,
+    harmonics: int = 5,
+    f0: float = 0.1,
+    amplitude: tuple[float, float] = (0.001, 0.005),
+    mcap_dir: str | Path | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+    **limits: Any,
+) -> Validation:
+    """Validation on fresh trajectories (thesis §5.5, Tables 5.3–5.5): ``n`` random feasible
+    trajectories (:func:`random_excitation`, seeds ``seed``, ``seed`` + 1, …, same limits), each
+    collected on ``robot`` (:func:`collect`), then the identified model and the initial one
+    (``result.guess``) simulated in the loop at the frame times. ``kp_model`` defaults to the model's
+    kinematics; ``sensor_in_base``/``target_in_effector`` to the robot's truth (simulated robots).
+    ``mcap_dir``: one log per trajectory (``validation_<i>.mcap``). ``progress(done, n)``."""
+    kp = result.model.kp if kp_model is None else kp_model
+    if sensor_in_base is None or target_in_effector is None:
+        if not hasattr(robot, "truth"):
+            raise InvalidInputError(
+                "sensor_in_base and target_in_effector are needed for this robot"
+            )
+        truth = robot.truth()
+        sensor_in_base = truth["sensor_in_base"] if sensor_in_base is None else sensor_in_base
+        target_in_effector = (
+            truth["target_in_effector"] if target_in_effector is None else target_in_effector
+        )
+    rms = np.zeros((n, 6))
+    rms0 = np.zeros((n, 6))
+    excs: list[Excitation] = []
+    datas: list[IdentificationData] = []
+    m = result.model
+    for i in range(n):
+        exc = random_excitation(
+            kp, harmonics=harmonics, f0=f0, seed=seed + i, amplitude=amplitude, **limits
+        )
+        mcap = None if mcap_dir is None else Path(mcap_dir) / f"validation_{i}.mcap"
+        d = collect(
+            robot,
+            exc,
+            kp_model=kp,
+            sensor_in_base=sensor_in_base,
+            target_in_effector=target_in_effector,
+            mcap=mcap,
+        )
+        for out, (dp, pid) in ((rms, (result.dynamics, result.pid)), (rms0, result.guess)):
+            chi = simulate(
+                m.kp,
+                dp,
+                pid,
+                exc,
+                times=d.t,
+                torque_limit=m.torque_limit,
+                camera_latency=m.camera_latency,
+                dt=d.dt,
+                derivative_filter=m.derivative_filter,
+                friction_smoothing=m.friction_smoothing,
+                implicit_friction=m.implicit_friction,
+                commands=d.frame_commands() if m.commands == "recorded" else None,
+            )
+            out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
+        excs.append(exc)
+        datas.append(d)
+        if progress is not None:
+            progress(i + 1, n)
+    return Validation(rms=rms, rms_initial=rms0, excitations=tuple(excs), data=tuple(datas))
+
+
+def variation(
+    estimates: Sequence[tuple[_rss6.DynamicParams, tuple[float, float, float]]],
+) -> dict[str, float]:
+    """Variation measure (thesis Table 5.5) of each quantity CLOE estimates
+    (:func:`parameter_names`) over several identifications (dynamics, pid): standard deviation over
+    |mean| (fraction). Needs at least two estimates."""
+    if len(estimates) < 2:
+        raise InvalidInputError("variation needs at least two estimates")
+    phi = np.array([np.exp(np.asarray(_rss6.cloe_psi(dp, pid)[0])) for dp, pid in estimates])
+    v = phi.std(axis=0, ddof=1) / np.abs(phi.mean(axis=0))
+    return dict(zip(parameter_names(), (float(x) for x in v)))
