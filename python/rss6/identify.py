@@ -334,8 +334,10 @@ class IdentificationResult:
     ``poorly_identified``: those above 10 %; ``unidentifiable``: quantities the data cannot see;
     ``rms_before``/``rms_after`` (6,): RMS of χ_m − χ_s per axis (m, rad) at the guess and at the
     estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
-    ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise). ``guess`` and ``model``
-    keep what :func:`validate` needs."""
+    ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
+    ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
+    stopped at its sweep bound (0 expected; otherwise χ_s is approximate there). ``guess`` and
+    ``model`` keep what :func:`validate` needs."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -351,6 +353,7 @@ class IdentificationResult:
     simulations: int
     guess: tuple[_rss6.DynamicParams, tuple[float, float, float]]
     model: LoopModel
+    inexact_friction_ticks: int = 0
 
     def std(self, name: str) -> float:
         """Relative standard deviation of the identified quantity ``name``."""
@@ -501,6 +504,7 @@ def cloe(
         cost_history=np.asarray(r["cost_history"]),
         iterations=int(r["iterations"]),
         reduced_chi2=float(r["reduced_chi2"]),
+        inexact_friction_ticks=int(r["inexact_friction_ticks"]),
         simulations=int(r["simulations"]),
         guess=(dp_guess, pid),
         model=LoopModel(

@@ -89,6 +89,7 @@ class IdentifyReport:
     reidentified: tuple[int, int] = (0, 0)
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
+    inexact_friction_ticks: int = 0
 
     def table_5_2(self) -> str:
         """Table 5.2 analog: per estimated quantity the initial, identified and true value, the
@@ -208,6 +209,11 @@ class IdentifyReport:
             if self.converged
             else f"DID NOT CONVERGE ({self.error}); tables show the last accepted iterate"
         )
+        if self.inexact_friction_ticks:
+            status += (
+                f"; WARNING: {self.inexact_friction_ticks} ticks of the model's loop used an inexact "
+                "friction solve"
+            )
         e = self.excitation
         timing = ", ".join(f"{k} {v:.1f} s" for k, v in self.elapsed.items())
         hist = " → ".join(f"{c:.4g}" for c in self.cost_history)

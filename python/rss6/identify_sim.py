@@ -419,5 +419,6 @@ def run(
         elapsed=elapsed,
         variation=var,
         reidentified=(len(good), conv),
+        inexact_friction_ticks=result.inexact_friction_ticks,
         loop=loop_text(t_f, eps, implicit),
     )

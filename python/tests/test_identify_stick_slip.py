@@ -150,6 +150,7 @@ def test_from_the_initial_model_through_the_linear_start() -> None:
     psi_e, _, _ = _rss6.cloe_psi(res.dynamics, res.pid)
     err = {n: float(np.expm1(psi_e[k] - psi_t[k])) for k, n in enumerate(names)}
     assert "lp" not in res.identified and "lp" not in res.unidentifiable
+    assert res.inexact_friction_ticks == 0
     # Measured: 15 iterations, reduced χ² 3.68, f_c within 4.6 %, l_i −0.7 %, l_d −3.6 %; bounds ≈ 3×.
     assert max(abs(err[f"fc{i}"]) for i in range(1, 7)) < 0.14, err
     assert abs(err["li"]) < 0.025 and abs(err["ld"]) < 0.11, err

@@ -460,6 +460,7 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("cost_history", out1(py, &r.cost_history))?;
     d.set_item("iterations", r.iterations)?;
     d.set_item("reduced_chi2", r.reduced_chi2)?;
+    d.set_item("inexact_friction_ticks", r.inexact_friction_ticks)?;
     d.set_item("simulations", r.simulations)?;
     d.set_item("psi", out1(py, &r.psi))?;
     Ok(d)

@@ -47,7 +47,7 @@ use rss6_ctrl::{PidGains, Trajectory};
 use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
-use super::friction::{self, sign0, sim_err, Sens, StepSens, COULOMB};
+use super::friction::{self, central_jacobians, sign0, sim_err, Sens, StepSens, COULOMB};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -489,23 +489,8 @@ impl<'a> Lean<'a> {
         };
         let (fp, fv) = match frozen {
             Some(j) => j,
-            None => {
-                let mut fp = Mat6::zeros();
-                let mut fv = Mat6::zeros();
-                const HP: f64 = 1e-6;
-                let hv = if eps > 0.0 { 1e-6 } else { 1e-2 };
-                for k in 0..6 {
-                    let (mut pp, mut pm) = (*p, *p);
-                    pp[k] += HP;
-                    pm[k] -= HP;
-                    fp.set_column(k, &((f(&pp, v)? - f(&pm, v)?) / (pp[k] - pm[k])));
-                    let (mut vp, mut vm) = (*v, *v);
-                    vp[k] += hv;
-                    vm[k] -= hv;
-                    fv.set_column(k, &((f(p, &vp)? - f(p, &vm)?) / (vp[k] - vm[k])));
-                }
-                (fp, fv)
-            }
+            // Smoothed friction is not quadratic in χ̇: a small step there too.
+            None => central_jacobians(f, p, v, if eps > 0.0 { 1e-6 } else { 1e-2 })?,
         };
         // With a load on the platform: τ = Γ Ξ + τ_load(χ, χ̇, χ̈), so ∂χ̈/∂Ξ = −M̃_tot⁻¹ J_θᵀ Γ with
         // the load's inertia in M̃_tot.

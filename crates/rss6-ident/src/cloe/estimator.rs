@@ -131,6 +131,10 @@ pub struct CloeResult {
     pub reduced_chi2: f64,
     /// Simulations without sensitivities (rejected trial steps included).
     pub simulations: usize,
+    /// Ticks of the loop at the estimate whose implicit friction solve stopped at its sweep bound
+    /// (`LoopConfig::implicit_friction`): χ_s there is the last Gauss–Seidel iterate, not the exact
+    /// law. 0 expected (and always 0 for the other laws); anything else is reported, not hidden.
+    pub inexact_friction_ticks: usize,
 }
 
 struct Eval {
@@ -139,6 +143,8 @@ struct Eval {
     rms: Vec6,
     /// ∂(weighted χ_s)/∂ψ (all 43 columns).
     g: Option<DMatrix<f64>>,
+    /// `LoopRun::inexact_friction` of this simulation.
+    inexact: usize,
 }
 
 /// Closed-loop output-error identification of A from `data` collected with `cfg`'s loop following
@@ -236,6 +242,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
             residual,
             rms,
             g,
+            inexact: run.inexact_friction,
         })
     };
 
@@ -482,6 +489,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         iterations: iterations.min(options.max_iterations),
         reduced_chi2: sigma2,
         simulations: sims,
+        inexact_friction_ticks: cur.inexact,
     })
 }
 
