@@ -5,7 +5,7 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
 
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
-        [--out out/discrepancy_benchmark.csv]
+        [--commands recorded|simulated] [--out out/discrepancy_benchmark.csv]
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ def main() -> int:
     ap.add_argument("--null", type=int, default=100)
     ap.add_argument("--friction", default="table", choices=("table", "none"))
     ap.add_argument("--friction-law", default="tanh", choices=("tanh", "implicit"))
+    ap.add_argument("--commands", default="recorded", choices=("recorded", "simulated"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--magnitudes", type=float, nargs="+", default=[1.0, 2.0, 5.0])
@@ -38,6 +39,7 @@ def main() -> int:
         robot=args.robot,
         friction=args.friction,
         friction_law=args.friction_law,
+        commands=args.commands,
     )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -575,6 +575,7 @@ def identification_run(
     segment: float = 1.0,
     progress: Callable[[float, float], Any] | None = None,
     mcap: _Path | None = None,
+    commands: ArrayLike | None = None,
 ) -> dict[str, Any]: ...
 def simulate_identification(
     kp: KinematicParams,

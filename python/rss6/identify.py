@@ -198,6 +198,7 @@ def collect(
     mcap: str | Path | None = None,
     progress: Callable[[float, float], Any] | None = None,
     segment: float = 1.0,
+    commands: ArrayLike | None = None,
 ) -> IdentificationData:
     """Runs the identification loop of Fig. 5.1 on ``robot`` (:class:`rss6.Plant`,
     :class:`rss6.ModelSim` or any :class:`rss6.types.Robot`, e.g. ``rss6.can.simulated_robot(...)``):
@@ -206,7 +207,10 @@ def collect(
     camera frame (through ``sensor_in_base`` ᴼχ_C and ``target_in_effector`` ᴱχ_t) into joint
     commands the drive's PID tracks. ``progress(done_s, total_s)`` every ``segment`` s of robot time
     (raise in it, or Ctrl-C, to stop: the exception propagates); ``mcap``: log every tick there as the
-    run goes. Raises :class:`rss6.IdentificationError` if no camera frame arrived."""
+    run goes. ``commands`` (T, 6): joint commands (drive convention, one per tick, e.g. a recorded
+    run's :attr:`IdentificationData.theta_cmd`) sent instead of the visual PID's — the run replayed
+    with the robot's own inputs (frames are still measured; T must cover every tick). Raises
+    :class:`rss6.IdentificationError` if no camera frame arrived."""
     if not isinstance(excitation, Excitation):
         raise InvalidInputError("excitation must be an rss6.identify.Excitation")
     if int(periods) < 1:
@@ -225,6 +229,7 @@ def collect(
         segment=segment,
         progress=progress,
         mcap=None if mcap is None else str(mcap),
+        commands=None if commands is None else np.asarray(commands, dtype=np.float64),
     )
     if int(raw["frames"]) == 0 or raw["frame_t"].size == 0:
         raise IdentificationError(

@@ -106,11 +106,14 @@ def test_every_effect_has_bounds_a_null_value_and_scopes() -> None:
         effects.candidates(["gremlins"])
 
 
+@pytest.mark.parametrize(("commands", "width"), [("recorded", 12), ("simulated", 18)])
 def test_replay_with_an_effect_equals_the_twin_that_hides_it(
-    truth: Any, excitation: identify.Excitation, tmp_path: Path
+    truth: Any, excitation: identify.Excitation, tmp_path: Path, commands: str, width: int
 ) -> None:
     """The model with an applied effect replays exactly what the twin with that hidden effect
-    measures (noise off): friction through the model's coefficients, the rest as twin effects."""
+    measures (noise off): friction through the model's coefficients, the rest as twin effects —
+    driven by the run's recorded commands (poses and potentiometers compared) or in the model's
+    own loop (commands compared too)."""
     hidden = {
         "joint_friction": {"coulomb": 0.3, "viscous": 0.2, "joint": 2.0},
         "camera_latency": {"latency": 0.01},
@@ -118,8 +121,9 @@ def test_replay_with_an_effect_equals_the_twin_that_hides_it(
     }
     robot = _robot(truth, 3, hidden, pixel_noise=0.0, potentiometer_noise=0.0)
     data = _collect(robot, excitation)
-    run = run_of(data)
-    assert run.width == 18
+    run = run_of(data, commands=commands)
+    assert run.width == width
+    assert (run.commands is not None) == (commands == "recorded")
     model = _model(
         truth,
         robot,
@@ -158,11 +162,13 @@ def test_a_logged_run_reads_back_as_the_same_run(
 # the workflow ------------------------------------------------------------------------------------
 
 
-def _diagnose(truth: Any, exc: identify.Excitation, hidden: Any) -> discrepancy.DiscrepancyReport:
+def _diagnose(
+    truth: Any, exc: identify.Excitation, hidden: Any, **kw: Any
+) -> discrepancy.DiscrepancyReport:
     fit = _robot(truth, 11, hidden)
     val = _robot(truth, 12, hidden)
     return discrepancy.diagnose(
-        _collect(fit, exc), _model(truth, fit), validation=_collect(val, exc)
+        _collect(fit, exc), _model(truth, fit), validation=_collect(val, exc), **kw
     )
 
 
@@ -318,14 +324,21 @@ def test_confounded_candidates_are_reported_as_ambiguous_not_named(
     truth: Any, excitation: identify.Excitation
 ) -> None:
     """A 20 kg payload at the platform's origin and a change of the drive gains leave nearly the
-    same signature on this excitation (mimicry ρ = 0.90): the workflow must say so rather than pick
-    one, and say what would separate them."""
-    rep = _diagnose(truth, excitation, {"payload": {"mass": 20.0, "x": 0.0, "y": 0.0, "z": 0.0}})
+    same signature on this excitation when the replay closes its own loop (mimicry ρ = 0.90): the
+    workflow must say so rather than pick one, and say what would separate them. Driven by the
+    robot's recorded commands the two separate (the loop no longer corrects the sag the payload
+    causes): the payload is named, with its mass."""
+    hidden = {"payload": {"mass": 20.0, "x": 0.0, "y": 0.0, "z": 0.0}}
+    rep = _diagnose(truth, excitation, hidden, commands="simulated")
     assert rep.ambiguous, rep.table()
     assert {"payload (payload)", "pid_gains (drive)"} <= set(rep.ambiguous[0].candidates)
     assert not rep.named
     assert "excite" in rep.ambiguous[0].separate
     assert rep.verdict.startswith("ambiguous")
+    rec = _diagnose(truth, excitation, hidden)
+    assert [e.name for e in rec.named] == ["payload"], rec.table()
+    lo, hi = rec.named[0].ci["mass"]
+    assert lo < 20.0 < hi, rec.table()
 
 
 def test_the_identification_loop_takes_the_named_effects_as_the_replay_does(
@@ -349,22 +362,35 @@ def test_the_identification_loop_takes_the_named_effects_as_the_replay_does(
             AppliedEffect("pid_gains", "drive", {"l_p": 0.1, "l_i": -0.1, "l_d": 0.2}),
         ),
     )
-    run = run_of(_collect(robot, excitation))
+    run = run_of(_collect(robot, excitation), commands="simulated")
     from rss6.discrepancy.model import simulate
 
     rep = simulate(model, run)
     dp, pid, kw = loop_effects(model)
-    chi = identify.simulate(
+    loop = {"derivative_filter": T_F, "friction_smoothing": EPS, **kw}
+    chi = identify.simulate(KP, dp, pid, excitation, times=rep.frame_t, **loop)
+    err = np.abs(chi - rep.poses).max()
+    assert err < 1e-9, err
+    # Driven by recorded commands (a robot that hides exactly these effects): the identification
+    # loop holding the robot's commands at its frames replays what the discrepancy replay does.
+    hiding = rss6.ModelSim(
         KP,
         dp,
-        pid,
-        excitation,
-        times=rep.frame_t,
-        derivative_filter=T_F,
+        pid=pid,
+        seed=5,
+        drive_derivative_filter=T_F,
         friction_smoothing=EPS,
-        **kw,
+        effects=model.change().twin,
+        pixel_noise=0.0,
+        potentiometer_noise=0.0,
     )
-    err = np.abs(chi - rep.poses).max()
+    data = _collect(hiding, excitation)
+    recorded = run_of(data)
+    assert recorded.commands is not None
+    chi = identify.simulate(
+        KP, dp, pid, excitation, times=data.t, commands=data.frame_commands(), **loop
+    )
+    err = np.abs(chi - replay(model, recorded)[:, :6]).max()
     assert err < 1e-9, err
     assert np.abs(replay(model, run) - replay(model.with_effects(()), run))[:, :6].max() > 1e-4
     with pytest.raises(rss6.InvalidInputError, match="backlash"):

@@ -30,6 +30,10 @@ pub struct IdentSpec {
     pub duration: f64,
     /// Observer progress period (s of robot time).
     pub segment: f64,
+    /// Joint commands (drive convention) to send, one per tick, instead of the visual PID's: a
+    /// recorded run replayed on the model with the robot's own inputs. Frames are still measured
+    /// and recorded; the visual PID does not run (no faults). Must cover every tick.
+    pub commands: Option<Vec<Vec6>>,
 }
 
 impl IdentSpec {
@@ -43,6 +47,7 @@ impl IdentSpec {
             gains: CartesianPidGains::thesis(),
             duration: 20.0,
             segment: 1.0,
+            commands: None,
         }
     }
 }
@@ -79,6 +84,19 @@ pub fn run<R: Robot, T: Trajectory + ?Sized>(
     let theta0 = spec.drive.theta_from_reading(&robot.potentiometers());
     let mut pid = VisualPid::new(spec.kp_model, spec.gains, &theta0)?;
     let ticks = (spec.duration / dt).round() as u32;
+    if let Some(c) = &spec.commands {
+        if c.len() < ticks as usize {
+            return Err(ExpError::InvalidInput(format!(
+                "{} recorded commands for a run of {ticks} ticks",
+                c.len()
+            )));
+        }
+        if let Some(k) = c.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+            return Err(ExpError::InvalidInput(format!(
+                "recorded command {k} is not finite"
+            )));
+        }
+    }
     let segment_ticks = ((spec.segment / dt).round() as u32).max(1);
     let mut command = theta0;
     let mut last_frame: Option<(f64, Vec6)> = None;
@@ -95,7 +113,11 @@ pub fn run<R: Robot, T: Trajectory + ?Sized>(
         let kappa = robot.potentiometers();
         let truth = robot.true_state();
         let measured = frame.map(|z| spec.externals.effector_pose(&z));
-        if let Some(chi) = measured {
+        if let Some(recorded) = &spec.commands {
+            // Length checked above: every tick has one.
+            command = recorded[(done - 1) as usize];
+            outcome.frames += u32::from(measured.is_some());
+        } else if let Some(chi) = measured {
             let (rate, h) = match last_frame {
                 Some((tp, prev)) if t > tp => ((chi - prev) / (t - tp), t - tp),
                 _ => (Vec6::zeros(), dt),

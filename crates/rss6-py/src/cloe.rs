@@ -103,9 +103,11 @@ impl Observer for Collector {
 /// frame the visual PID consumed `frame_t` and `measured` (χ_E); `frames`, `ticks`, `fault`
 /// (None or (t, reason)). `progress(done_s, total_s)` every `segment` s of robot time; if it raises
 /// (KeyboardInterrupt included) the run stops and the exception propagates; Ctrl-C is checked at
-/// the same points. `mcap`: log the run there as it goes. Releases the GIL.
+/// the same points. `mcap`: log the run there as it goes. `commands` (T, 6): joint commands
+/// (drive convention) sent one per tick instead of the visual PID's (a recorded run replayed;
+/// frames are still measured). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, f0, coefficients, duration, kp_model, sensor_in_base, target_in_effector, *, segment=1.0, progress=None, mcap=None))]
+#[pyo3(signature = (robot, f0, coefficients, duration, kp_model, sensor_in_base, target_in_effector, *, segment=1.0, progress=None, mcap=None, commands=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identification_run<'py>(
     py: Python<'py>,
@@ -119,6 +121,7 @@ pub(crate) fn identification_run<'py>(
     segment: f64,
     progress: Option<Py<PyAny>>,
     mcap: Option<std::path::PathBuf>,
+    commands: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let exc = excitation(f0, coefficients)?;
     let externals = Externals {
@@ -128,6 +131,7 @@ pub(crate) fn identification_run<'py>(
     let mut spec = IdentSpec::new(kp_model.inner, externals);
     spec.duration = duration;
     spec.segment = segment;
+    spec.commands = commands.map(|c| rows6(c, "commands")).transpose()?;
     let mut log = match &mcap {
         Some(path) => Some(create_log(
             path,

@@ -14,7 +14,9 @@ the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``rep
 (default 16); ``friction``: "table" (Table 5.2's, default) or "none" (robot and model without joint
 friction); ``friction_law``: "tanh" (default: robot twin and model with f_c tanh(θ̇/ε), ε = 1 rad/s;
 the plant keeps its sticking motor, 35–160 µm from the model open loop) or "implicit" (robot and
-model with the shared stick–slip law, the plant at 48 solver iterations: ≈ 1.5 µm from the model).
+model with the shared stick–slip law, the plant at 48 solver iterations: ≈ 1.5 µm from the model);
+``commands``: "recorded" (default: replays driven by the robot's per-tick commands; an effect's
+magnitude is then its size with the commands held) or "simulated" (replays close the model's loop).
 """
 
 from __future__ import annotations
@@ -226,7 +228,7 @@ def hidden_case(
     reached: list[float] = []
     applied_names: list[str] = []
     if library:
-        run0 = run_of(collect(probe))
+        run0 = run_of(collect(probe), commands=str(spec.get("commands", "recorded")))
         for n in library:
             e, scope = _split(n)
             params = spec.get("params") or None
@@ -299,6 +301,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         validation=case.validation,
         replicates=int(spec.get("replicates", 16)),
         seed=7919 + seed,
+        commands=str(spec.get("commands", "recorded")),
     )
     names = case.hidden
     library = case.library
@@ -314,6 +317,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "robot": robot_kind,
         "friction": str(spec.get("friction", "table")),
         "friction_law": str(spec.get("friction_law", "tanh")),
+        "commands": str(spec.get("commands", "recorded")),
         "seed": seed,
         "kind": "none"
         if not names
@@ -367,13 +371,22 @@ def cases(
     robot: str = "twin",
     friction: str = "table",
     friction_law: str = "tanh",
+    commands: str = "recorded",
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
     out-of-library discrepancies at each magnitude, and two pairs. Spec ids start with the robot
-    kind (+ "-implicit" with the implicit friction law)."""
+    kind (+ "-implicit" with the implicit friction law, + "-loop" for replays that close the
+    model's loop, ``commands="simulated"``)."""
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
-    common = {"robot": robot, "friction": friction, "friction_law": friction_law}
+    if commands != "recorded":
+        tag += "-loop"
+    common = {
+        "robot": robot,
+        "friction": friction,
+        "friction_law": friction_law,
+        "commands": commands,
+    }
     effs = (
         list(effects)
         if effects is not None

@@ -65,6 +65,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="tanh",
         help="robot and model friction: smoothed (tanh, default) or the shared stick–slip law",
     )
+    p.add_argument(
+        "--commands",
+        choices=("recorded", "simulated"),
+        default="recorded",
+        help="replays driven by the run's recorded joint commands (default) or closing the "
+        "model's own visual PID",
+    )
     p.add_argument("--alpha", type=float, default=0.01)
     p.add_argument("--reidentify", action="store_true", help="re-identify friction and gains")
     p.add_argument("--out", default="out-diagnose", help="report directory (default out-diagnose/)")
@@ -107,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             robot="plant" if args.plant == "rapier" else "twin",
             friction_law=args.friction_law,
+            commands=args.commands,
         )
         if spec["robot"] == "plant":
             import rss6
@@ -135,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
         alpha=args.alpha,
         reidentify=bool(args.reidentify),
         progress=progress,
+        commands=args.commands,
     )
     out = Path(args.out)
     files = rep.save(out)

@@ -1,8 +1,9 @@
 """The discrepancy workflow end to end (issue 14): detect, name, add, show the gap shrink.
 
-1. Replay the model in the run's closed loop (the model twin with the same reference and camera
-   timing) and learn the loop's noise from K noisy replays (every channel: poses, potentiometers,
-   commands).
+1. Replay the model on the run (the model twin with the same reference and camera timing, driven
+   by the robot's recorded per-tick commands when the run has them, else in its own closed loop)
+   and learn the noise from K noisy replays (every channel: poses, potentiometers, and the
+   commands when they are not the input).
 2. Detect: :func:`rss6.discrepancy.detect` on the pose residual against that noise.
 3. Name: screen every effect × scope of the library at its null value (score test calibrated on
    the replays, Holm over the candidates), fit the strongest ones by simulation (jointly with the
@@ -90,6 +91,7 @@ def diagnose(
     reidentify: bool | Sequence[str] = False,
     workers: int = 2,
     seed: int = 1_000_003,
+    commands: str = "recorded",
 ) -> DiscrepancyReport:
     """Finds where ``model`` disagrees with the ``measured`` run, names the missing effects from
     the library, adds them and shows the gap on the held-out run (module docs).
@@ -103,19 +105,23 @@ def diagnose(
     calibrate the noise; ``max_effects``: at most this many named; ``refit``: candidates fitted by
     simulation per round; ``reidentify``: re-identify the drive gains and friction with the named
     effects (True) or the named CLOE parameters (:func:`rss6.identify.parameter_names`) by CLOE;
-    ``workers``: threads for the replays; ``progress(stage, done, total)``."""
+    ``workers``: threads for the replays; ``progress(stage, done, total)``. ``commands``:
+    "recorded" (default) drives every replay with the run's own per-tick joint commands when it
+    has them (a run from poses alone is replayed in the model's closed loop); "simulated" closes
+    the model's visual PID on its own frames and compares the commands too
+    (:func:`~rss6.discrepancy.model.run_of`)."""
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     if replicates < 8:
         raise InvalidInputError(f"replicates must be >= 8 (got {replicates})")
     pool = library(candidates)
-    run = run_of(measured, kinematics=model.kinematics)
+    run = run_of(measured, kinematics=model.kinematics, commands=commands)
     n = len(run.t)
     if validation is None:
         fit_part = _Part(run, slice(0, n // 2))
         held = _Part(run, slice(n // 2, n))
     else:
-        vrun = run_of(validation, kinematics=model.kinematics)
+        vrun = run_of(validation, kinematics=model.kinematics, commands=commands)
         if vrun.width != run.width:
             raise InvalidInputError(
                 f"the validation run has {vrun.width} channels, the measured run {run.width}"
@@ -370,16 +376,29 @@ def _diagnose(
     held_after = held_named
     after_model = final_model
     notes = list(dropped) + notes_fit
+    notes.append(
+        "replays driven by the run's recorded commands"
+        if fit.run.commands is not None
+        else "replays close the model's own visual PID (the run has no per-tick commands)"
+    )
     if reidentify and named:
         from rss6 import identify
 
         last = fit.t[-1] + fit.run.dt
+        per_tick: dict[str, Any] = {}
+        if fit.run.commands is not None:
+            ticks = min(len(fit.run.commands), round(float(last) / fit.run.dt) + 1)
+            per_tick = {
+                "tick_t": np.arange(ticks) * fit.run.dt,
+                "theta_cmd": fit.run.commands[:ticks],
+            }
         data = identify.IdentificationData(
             t=fit.t,
             reference=fit.run.reference,
             measured=fit.measured[:, :6],
             duration=float(last),
             dt=fit.run.dt,
+            **per_tick,
         )
         _tell(progress, "re-identification", 0, 1)
         try:

@@ -7,13 +7,19 @@ drive gains, ᴼχ_C, ᴱχ_t, the loop's smoothing options) plus a list of name
 
 A :class:`Run` is one measured identification run (the loop of Fig. 5.1): its reference
 (an :class:`~rss6.identify.Excitation`), the camera frames, and — when they were measured — the
-potentiometers and the joint commands, averaged over each camera interval. Every channel is used:
-poses (6), potentiometers (6, bit), commands (6, rad).
+potentiometers and the joint commands, averaged over each camera interval. Every channel is used.
+With the robot's per-tick commands (``commands="recorded"``, the default when the run has them)
+they are the replay's *input*: the model is driven by the commands the robot received, and the
+channels compared are the poses (6) and potentiometers (6, bit). Without them (or with
+``commands="simulated"``) the model's own visual PID closes the loop on its frames and the
+commands are compared as well (6 more, rad).
 
-:func:`replay` runs the model twin (``rss6.ModelSim``: the same closed loop, reference and camera
-timing; every library effect is one of its hidden effects) and returns the same channels at the
-run's frame times; with a ``seed`` the twin's sensors are noisy (Table 4.1), which is how the noise
-of the closed loop is learnt.
+:func:`replay` runs the model twin (``rss6.ModelSim``: the same reference and camera timing; every
+library effect is one of its hidden effects) and returns the same channels at the run's frame
+times; with a ``seed`` the twin's sensors are noisy (Table 4.1), which is how the noise is learnt.
+Why recorded commands: with stick–slip friction the visual PID closed on noisy frames decides
+where joints break away, so a closed-loop replay wanders from the robot by up to 0.69 mm on a
+2 s run that its own commands reproduce exactly (docs/identification.md, "Stick–slip").
 """
 
 from __future__ import annotations
@@ -38,7 +44,17 @@ from rss6 import identify
 from rss6.discrepancy.effects import Change, get
 from rss6.errors import InvalidInputError, ShapeError
 
-__all__ = ["CHANNELS", "AppliedEffect", "Model", "Replay", "Run", "replay", "run_of", "simulate"]
+__all__ = [
+    "CHANNELS",
+    "COMMAND_MODES",
+    "AppliedEffect",
+    "Model",
+    "Replay",
+    "Run",
+    "replay",
+    "run_of",
+    "simulate",
+]
 
 F64 = NDArray[np.float64]
 
@@ -47,7 +63,11 @@ CHANNELS: tuple[str, ...] = (
     *(f"κ{i}" for i in range(6)),
     *(f"θcmd{i}" for i in range(6)),
 )
-"""The channels compared: camera pose χ_E (m, rad), potentiometers κ (bit), joint commands (rad)."""
+"""The channels compared: camera pose χ_E (m, rad), potentiometers κ (bit), joint commands (rad;
+only when the replay closes its own loop)."""
+
+COMMAND_MODES: tuple[str, ...] = ("recorded", "simulated")
+"""How a replay drives the model: the run's per-tick commands, or the model's own visual PID."""
 
 
 @dataclass(frozen=True)
@@ -178,13 +198,16 @@ class Model:
 class Run:
     """One measured run of the identification loop: the ``reference`` excitation, ``duration`` (s),
     frame times ``t`` (N,) s and ``channels`` (N, C) at them (:data:`CHANNELS`' first C: 6 without
-    the per-tick channels, 18 with them), the joint tick ``dt`` (s)."""
+    the per-tick channels, 12 with recorded ``commands``, 18 without), the joint tick ``dt`` (s),
+    and ``commands`` (T, 6): the joint commands the robot received, one per tick from t = 0
+    (drive convention, rad), which replays then send instead of closing the model's loop."""
 
     reference: identify.Excitation
     duration: float
     t: F64
     channels: F64
     dt: float = 1e-3
+    commands: F64 | None = None
 
     @property
     def poses(self) -> F64:
@@ -208,14 +231,19 @@ def _interval_means(tick_t: F64, values: F64, frame_t: F64) -> F64:
     return np.asarray((csum[idx] - csum[starts]) / counts, dtype=np.float64)
 
 
-def run_of(data: Any, *, kinematics: Any = None) -> Run:
+def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> Run:
     """A :class:`Run` from :class:`rss6.identify.IdentificationData` (every channel it has) or from
     an MCAP path written by :func:`rss6.identify.collect` (its reference is refitted from the
-    logged desired poses with the logged f0 and harmonics; ``kinematics`` checks it)."""
+    logged desired poses with the logged f0 and harmonics; ``kinematics`` checks it).
+    ``commands``: "recorded" — replays send the run's per-tick commands when it has them (the
+    channels are then poses and potentiometers); "simulated" — replays close the model's visual
+    PID and the commands are compared too. A :class:`Run` is returned as it is."""
+    if commands not in COMMAND_MODES:
+        raise InvalidInputError(f"commands must be one of {COMMAND_MODES}, got {commands!r}")
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, Path)):
-        return _run_from_mcap(Path(data), kinematics)
+        return _run_from_mcap(Path(data), kinematics, commands)
     if not isinstance(data, identify.IdentificationData):
         raise InvalidInputError(
             "measured data must be rss6.identify.IdentificationData, a Run or an MCAP path; "
@@ -227,20 +255,32 @@ def run_of(data: Any, *, kinematics: Any = None) -> Run:
             "loop was open after it; use data.before_fault() or another run"
         )
     ch = [np.asarray(data.measured, dtype=np.float64)]
+    recorded = None
     if data.tick_t is not None and data.kappa is not None and data.theta_cmd is not None:
         tt = np.asarray(data.tick_t, dtype=np.float64)
+        cmd = np.asarray(data.theta_cmd, dtype=np.float64)
         ch.append(_interval_means(tt, np.asarray(data.kappa, dtype=np.float64), data.t))
-        ch.append(_interval_means(tt, np.asarray(data.theta_cmd, dtype=np.float64), data.t))
+        if commands == "recorded":
+            ticks = round(float(data.duration) / float(data.dt))
+            if cmd.shape[0] < ticks or abs(float(tt[0])) > 0.5 * float(data.dt):
+                raise InvalidInputError(
+                    f"the run has {cmd.shape[0]} per-tick commands from t = {tt[0]:.4f} s for "
+                    f"{ticks} ticks from 0: not a whole run (use commands='simulated')"
+                )
+            recorded = cmd[:ticks]
+        else:
+            ch.append(_interval_means(tt, cmd, data.t))
     return Run(
         data.reference,
         float(data.duration),
         np.asarray(data.t, dtype=np.float64),
         np.hstack(ch),
         float(data.dt),
+        recorded,
     )
 
 
-def _run_from_mcap(path: Path, kinematics: Any) -> Run:
+def _run_from_mcap(path: Path, kinematics: Any, commands: str) -> Run:
     from rss6 import logs
 
     if not path.is_file():
@@ -290,7 +330,7 @@ def _run_from_mcap(path: Path, kinematics: Any) -> Run:
         kappa=np.asarray(kappa, dtype=np.float64),
         theta_cmd=np.asarray(theta_cmd, dtype=np.float64),
     )
-    return run_of(data)
+    return run_of(data, commands=commands)
 
 
 def dynamics_with(dp: Any, change: Change) -> Any:
@@ -306,11 +346,16 @@ def dynamics_with(dp: Any, change: Change) -> Any:
 @dataclass(frozen=True)
 class Replay:
     """One simulated run at the model's own camera frames: ``frame_t`` (F,) s, ``poses`` (F, 6),
-    and the per-tick channels averaged over the measured run's camera intervals (N, 12) or None."""
+    the per-tick channels averaged over the measured run's camera intervals (N, 6 or 12) or None;
+    for a replay driven by recorded commands also the model's true pose per tick (``tick_t``,
+    ``true_pose``) and its total camera ``latency`` (s)."""
 
     frame_t: F64
     poses: F64
     ticks: F64 | None
+    tick_t: F64 | None = None
+    true_pose: F64 | None = None
+    latency: float = 0.0
 
     def _index(self, run: Run) -> NDArray[np.int64] | None:
         """Frame k of the model for frame k of the run when both cameras capture on the same
@@ -326,13 +371,22 @@ class Replay:
         return np.minimum(np.arange(n), f - 1)
 
     def at(self, run: Run) -> F64:
-        """The channels (N, C) at the run's frames: the model's frame captured at the same time
+        """The channels (N, C) at the run's frames. Driven by recorded commands: the model's pose
+        ``latency`` before each stamp (its true pose per tick, linear between ticks — noise-free
+        frames are exactly that pose), so a latency shows as the lag between the frames and the
+        commands and potentiometers. In a closed loop: the model's frame captured at the same time
         (frame by frame when the two cameras share their capture schedule and differ only in
         latency — their stamps then differ by a constant), else a cubic spline through the
         model's frames at the run's stamps."""
         out = np.empty_like(run.channels)
-        idx = self._index(run)
-        if idx is not None:
+        idx = None if run.commands is not None else self._index(run)
+        if run.commands is not None:
+            if self.tick_t is None or self.true_pose is None:
+                raise ShapeError("the replay has no per-tick poses")
+            at = run.t - self.latency
+            for j in range(6):
+                out[:, j] = np.interp(at, self.tick_t, self.true_pose[:, j])
+        elif idx is not None:
             out[:, :6] = self.poses[idx]
         else:
             from scipy.interpolate import CubicSpline
@@ -415,6 +469,7 @@ def simulate(
         sensor_in_base=model.sensor_in_base,
         target_in_effector=model.target_in_effector,
         periods=periods,
+        commands=run.commands,
     )
     if data.fault is not None:
         raise rss6.IdentificationError(
@@ -424,10 +479,20 @@ def simulate(
     if run.width > 6:
         if data.tick_t is None or data.kappa is None or data.theta_cmd is None:
             raise ShapeError("the replay has no per-tick channels")
-        ticks = np.hstack(
-            [
-                _interval_means(data.tick_t, data.kappa, run.t),
-                _interval_means(data.tick_t, data.theta_cmd, run.t),
-            ]
-        )
-    return Replay(np.asarray(data.t), np.asarray(data.measured), ticks)
+        parts = [_interval_means(data.tick_t, data.kappa, run.t)]
+        if run.width > 12:
+            parts.append(_interval_means(data.tick_t, data.theta_cmd, run.t))
+        ticks = np.hstack(parts)
+    if run.commands is None:
+        return Replay(np.asarray(data.t), np.asarray(data.measured), ticks)
+    if data.true_pose is None or not np.all(np.isfinite(data.true_pose)):
+        raise ShapeError("the model twin gave no true poses")
+    latency = model.camera_latency + c.twin.get("camera_latency", {}).get("latency", 0.0)
+    return Replay(
+        np.asarray(data.t),
+        np.asarray(data.measured),
+        ticks,
+        np.asarray(data.tick_t, dtype=np.float64),
+        np.asarray(data.true_pose, dtype=np.float64),
+        float(latency),
+    )

@@ -69,11 +69,6 @@ def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[M
     dynamics and gains, the other effects kept) and a note."""
     from rss6 import identify
 
-    if model.implicit_friction:
-        raise InvalidInputError(
-            "re-identification runs CLOE, whose loop has no implicit stick–slip friction yet "
-            "(sign or tanh only): diagnose without reidentify, or with friction_smoothing"
-        )
     chosen: Sequence[str] = REIDENTIFY_DEFAULT if isinstance(which, bool) else which
     names = list(chosen)
     dp, pid, kw = loop_effects(model)
@@ -85,6 +80,8 @@ def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[M
         parameters=names,
         derivative_filter=model.derivative_filter,
         friction_smoothing=model.friction_smoothing,
+        implicit_friction=model.implicit_friction,
+        commands="recorded" if getattr(data, "theta_cmd", None) is not None else "simulated",
         torque_limit=model.torque_limit,
         **kw,
     )
