@@ -180,7 +180,8 @@ def screen(
 class Fit:
     """Fitted effect parameters: ``values`` per effect (list of dicts in the order of the
     effects fitted), their Wald standard errors, the whitened residual, its sum of squares, the
-    whitened Jacobian at the optimum (M, n), whether the optimiser converged, and its message."""
+    whitened Jacobian at the optimum (M, n), whether the optimiser converged, its message, and
+    which parameters (the Jacobian's columns) ended on a bound (within 10⁻³ of their scale)."""
 
     values: list[dict[str, float]]
     se: list[dict[str, float]]
@@ -189,6 +190,7 @@ class Fit:
     jacobian: F64
     converged: bool
     message: str
+    at_bound: NDArray[np.bool_] | None = None
 
 
 def fit_effects(
@@ -274,7 +276,11 @@ def fit_effects(
     for e, _ in effects:
         se.append({p.name: float(se_all[k + i]) for i, p in enumerate(e.params)})
         k += len(e.params)
-    return Fit(values(sol.x), se, r, float(r @ r), jm, bool(sol.success), str(sol.message))
+    tol = 1e-3 * scale
+    at_bound = (sol.x <= lo + tol) | (sol.x >= hi - tol)
+    return Fit(
+        values(sol.x), se, r, float(r @ r), jm, bool(sol.success), str(sol.message), at_bound
+    )
 
 
 def heldout_test(delta_w: F64, residual_w: F64, replicates: F64) -> tuple[float, float]:
