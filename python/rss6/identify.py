@@ -7,7 +7,7 @@ re-exported here), the identification loop of Fig. 5.1 on a robot (:func:`collec
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -341,8 +341,12 @@ class IdentificationResult:
     estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
     ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
     ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
-    stopped at its sweep bound (0 expected; otherwise χ_s is approximate there). ``guess`` and
-    ``model`` keep what :func:`validate` needs."""
+    stopped at its sweep bound (0 expected; otherwise χ_s is approximate there); ``aliases``: for
+    each unidentifiable quantity, the estimated ones that absorb it — {name: ({estimated: c},
+    residual)}: a relative change δ of it moves the output at the guess as relative changes c·δ of
+    those do (|c| ≥ 0.05, at most 4), ``residual`` the relative misfit of that combination (≈ 0:
+    it combines into them; near 1: the output hardly sees it); :meth:`alias_text` says it in
+    words. ``guess`` and ``model`` keep what :func:`validate` needs."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -359,6 +363,16 @@ class IdentificationResult:
     guess: tuple[_rss6.DynamicParams, tuple[float, float, float]]
     model: LoopModel
     inexact_friction_ticks: int = 0
+    aliases: dict[str, tuple[dict[str, float], float]] = field(default_factory=dict)
+
+    def alias_text(self) -> list[str]:
+        """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
+        out = []
+        for name, (like, res) in self.aliases.items():
+            terms = " ".join(f"{c:+.2f}·{n}" for n, c in like.items()) or "nothing estimated"
+            how = "combines into" if res < 0.1 else "partly like" if res < 0.9 else "unseen; like"
+            out.append(f"{name} {how} {terms} (misfit {res:.1e})")
+        return out
 
     def std(self, name: str) -> float:
         """Relative standard deviation of the identified quantity ``name``."""
@@ -502,6 +516,10 @@ def cloe(
         pid=(float(lp), float(li), float(ld)),
         identified=tuple(r["identified"]),
         unidentifiable=tuple(r["unidentifiable"]),
+        aliases={
+            str(n): ({str(k): float(c) for k, c in like}, float(res))
+            for n, like, res in r["aliases"]
+        },
         relative_std=np.asarray(r["relative_std"]),
         poorly_identified=tuple(r["poorly_identified"]),
         rms_before=np.asarray(r["rms_before"]),

@@ -90,6 +90,8 @@ class IdentifyReport:
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
     inexact_friction_ticks: int = 0
+    #: What each unidentifiable quantity combines into (IdentificationResult.alias_text()).
+    aliases: list[str] = field(default_factory=list)
 
     def table_5_2(self) -> str:
         """Table 5.2 analog: per estimated quantity the initial, identified and true value, the
@@ -231,6 +233,7 @@ class IdentifyReport:
                     f"3. CLOE: {len(self.identified)} quantities estimated, "
                     f"{len(self.unidentifiable)} not identifiable; {status}"
                 ),
+                *(f"   {a}" for a in self.aliases),
                 f"   cost history: {hist}",
                 "",
                 "Table 5.2 — identified parameters",

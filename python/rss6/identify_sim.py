@@ -421,4 +421,5 @@ def run(
         reidentified=(len(good), conv),
         inexact_friction_ticks=result.inexact_friction_ticks,
         loop=loop_text(t_f, eps, implicit),
+        aliases=result.alias_text(),
     )

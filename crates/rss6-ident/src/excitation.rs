@@ -343,6 +343,35 @@ pub fn base_columns(h: &DMatrix<f64>, relative: f64) -> Vec<usize> {
         .collect()
 }
 
+/// How the output mimics each column outside `base`: for column u, the least-squares coefficients c
+/// with h_u ≈ Σ_j c_j h_{base_j} (columns as given) and the relative residual ‖h_u − H_b c‖ / ‖h_u‖
+/// (0: u is exactly a combination of the base columns). With columns ∂Y/∂log q, c_j says that a
+/// relative change δ of u moves the output as relative changes c_j δ of the base quantities do:
+/// what the estimate of each base quantity absorbs of u. Returned for every u not in `base`, in
+/// column order; a zero column gets no coefficients and residual 1.
+pub fn aliases(h: &DMatrix<f64>, base: &[usize]) -> Vec<(usize, Vec<f64>, f64)> {
+    let hb = h.select_columns(base);
+    let svd = hb.clone().svd(true, true);
+    (0..h.ncols())
+        .filter(|j| !base.contains(j))
+        .map(|u| {
+            let hu = h.column(u).clone_owned();
+            let n = hu.norm();
+            if n == 0.0 || base.is_empty() {
+                return (u, vec![0.0; base.len()], 1.0);
+            }
+            let tol = 1e-12 * svd.singular_values.max();
+            match svd.solve(&hu, tol) {
+                Ok(c) => {
+                    let res = (&hu - &hb * &c).norm() / n;
+                    (u, c.iter().copied().collect(), res)
+                }
+                Err(_) => (u, vec![0.0; base.len()], 1.0),
+            }
+        })
+        .collect()
+}
+
 /// A trajectory is sampled over one period and then held at rest at its end pose (= its start).
 impl Trajectory for Excitation {
     fn sample(&self, t: f64) -> Reference {

@@ -35,7 +35,7 @@ pub use crate::calibrate::{
 };
 pub use crate::cloe::{
     cloe, cloe_observed, parameter_names as loop_parameter_names, simulate as simulate_loop,
-    table_5_2_truth, CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams,
+    table_5_2_truth, Alias, CloeData, CloeOptions, CloeResult, Consistent, LoopConfig, LoopParams,
     LoopRun, StateJacobians, DRIVE_UNIT_TO_NM, N_A, N_PSI,
 };
 pub use crate::data::{
@@ -43,7 +43,8 @@ pub use crate::data::{
 };
 pub use crate::error::{IdentError, Method, Result};
 pub use crate::excitation::{
-    base_columns, observability_of, Excitation, ExcitationLimits, ExcitationProblem, Violation,
+    aliases, base_columns, observability_of, Excitation, ExcitationLimits, ExcitationProblem,
+    Violation,
 };
 pub use crate::generator::{
     perturb_external, AnalyticRobot, NoiseModel, TrueRobot, NOMINAL_SENSOR_IN_BASE,

@@ -5,7 +5,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rss6_core::{home_pose, KinematicParams, Vec6};
 use rss6_ctrl::Trajectory;
-use rss6_ident::{base_columns, Excitation, ExcitationLimits};
+use rss6_ident::{aliases, base_columns, Excitation, ExcitationLimits};
 
 fn random_free(n: usize, scale: [f64; 2], seed: u64) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -98,6 +98,19 @@ fn identifiable_columns_and_observability() {
         base_columns(&h, 1e-3).len()
     );
     assert_eq!(base.len(), 31, "{base:?}");
+    // Every other column is a combination of the base ones (the regressor's structural null
+    // space), and the aliases say which: measured worst misfit ≈ 1e-9 here.
+    let al = aliases(&h, &base);
+    assert_eq!(al.len(), 64 - 31);
+    let seen: Vec<_> = al.iter().filter(|a| h.column(a.0).norm() > 0.0).collect();
+    let worst = seen.iter().map(|a| a.2).fold(0.0_f64, f64::max);
+    println!(
+        "{} non-base columns are zero; worst alias misfit of the other {}: {worst:.2e}",
+        al.len() - seen.len(),
+        seen.len()
+    );
+    assert!(!seen.is_empty());
+    assert!(worst < 1e-6, "{worst}");
     let (o1, c1) = e.observability(&kp, &base, 200).unwrap();
     // Twice the excitation: larger velocities and accelerations, better conditioned columns.
     let e2 = Excitation::at_rest(n, 0.1, &home_pose(), &random_free(n, [0.001, 0.004], 4)).unwrap();
@@ -135,4 +148,34 @@ fn the_objective_prefers_feasible_and_more_exciting_candidates() {
         f[2] > 1.0,
         "an infeasible candidate scores above every feasible one: {f:?}"
     );
+}
+
+#[test]
+fn aliases_recover_a_known_combination_and_flag_an_unseen_column() {
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let mut h = nalgebra::DMatrix::<f64>::from_fn(50, 4, |_, _| rng.random_range(-1.0..1.0));
+    let combo = h.column(0) * 2.0 - h.column(1) * 0.5;
+    h.set_column(2, &combo);
+    h.set_column(3, &nalgebra::DVector::zeros(50));
+    let base = base_columns(&h, 1e-8);
+    assert_eq!(base.len(), 2, "{base:?}");
+    let al = aliases(&h, &base);
+    // Whichever of columns 0, 1, 2 the pivoting left out is the combination of the other two.
+    let (u, c, misfit) = al.iter().find(|a| a.0 != 3).unwrap();
+    assert!(*misfit < 1e-12, "{misfit}");
+    let rebuilt = base
+        .iter()
+        .zip(c)
+        .fold(nalgebra::DVector::zeros(50), |acc, (&j, &v)| {
+            acc + h.column(j) * v
+        });
+    assert!((rebuilt - h.column(*u)).amax() < 1e-12);
+    if !base.contains(&2) {
+        let coef = |j: usize| c[base.iter().position(|&b| b == j).unwrap()];
+        assert!((coef(0) - 2.0).abs() < 1e-10 && (coef(1) + 0.5).abs() < 1e-10);
+    }
+    // The zero column is seen by nothing: misfit 1, no coefficients.
+    let c3 = al.iter().find(|a| a.0 == 3).unwrap();
+    assert_eq!(c3.2, 1.0);
+    assert!(c3.1.iter().all(|&v| v == 0.0));
 }

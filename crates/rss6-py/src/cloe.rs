@@ -457,6 +457,12 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("pid", (g.lp, g.li, g.ld))?;
     d.set_item("identified", r.identified)?;
     d.set_item("unidentifiable", r.unidentifiable)?;
+    let aliases: Vec<(String, Vec<(String, f64)>, f64)> = r
+        .aliases
+        .into_iter()
+        .map(|a| (a.name, a.like, a.residual))
+        .collect();
+    d.set_item("aliases", aliases)?;
     d.set_item("relative_std", out1(py, &r.relative_std))?;
     d.set_item("poorly_identified", r.poorly_identified)?;
     d.set_item("rms_before", out1(py, r.rms_before.as_slice()))?;

@@ -103,6 +103,17 @@ impl Default for CloeOptions {
     }
 }
 
+/// How an unidentifiable quantity shows in the output: as a combination of estimated ones.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Alias {
+    /// The unidentifiable quantity.
+    pub name: String,
+    /// (estimated quantity, relative coefficient), largest |coefficient| first.
+    pub like: Vec<(String, f64)>,
+    /// ‖h_u − Σ c h‖ / ‖h_u‖ of the combination.
+    pub residual: f64,
+}
+
 /// What [`cloe`] returns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CloeResult {
@@ -114,6 +125,11 @@ pub struct CloeResult {
     pub identified: Vec<String>,
     /// Names of the quantities the data cannot identify (kept at the guess).
     pub unidentifiable: Vec<String>,
+    /// For each unidentifiable quantity, in the order of `unidentifiable`: the estimated quantities
+    /// that absorb it — (name, c) with a relative change δ of it moving the output at the guess as
+    /// relative changes c·δ of those do (|c| ≥ 0.05, largest first, at most 4) — and the relative
+    /// residual of that combination (≈ 0: a base combination; near 1: the output hardly sees it).
+    pub aliases: Vec<Alias>,
     /// Relative standard deviation of every estimated quantity (same order as `identified`).
     pub relative_std: Vec<f64>,
     /// Estimated quantities whose relative standard deviation exceeds `poor_std`.
@@ -321,6 +337,30 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         .filter(|k| !base.contains(k))
         .map(|k| names[k].clone())
         .collect();
+    let aliases: Vec<Alias> = {
+        let local: Vec<usize> = base
+            .iter()
+            .filter_map(|b| free.iter().position(|f| f == b))
+            .collect();
+        crate::excitation::aliases(&g0.select_columns(&free), &local)
+            .into_iter()
+            .map(|(u, c, residual)| {
+                let mut like: Vec<(String, f64)> = local
+                    .iter()
+                    .zip(&c)
+                    .filter(|(_, v)| v.abs() >= 0.05)
+                    .map(|(&j, &v)| (names[free[j]].clone(), v))
+                    .collect();
+                like.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+                like.truncate(4);
+                Alias {
+                    name: names[free[u]].clone(),
+                    like,
+                    residual,
+                }
+            })
+            .collect()
+    };
 
     // The prior as extra residual rows √w(ψ_guess − ψ) with unit-weight Jacobian rows.
     let prior_cost = |psi: &[f64]| -> f64 {
@@ -481,6 +521,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         psi,
         identified,
         unidentifiable,
+        aliases,
         relative_std,
         poorly_identified,
         rms_before,
