@@ -190,6 +190,9 @@ type SimulatedFrames<'py> = (
     usize,
 );
 
+/// An unidentifiable quantity, what it combines into (name, coefficient), and the misfit.
+type AliasTuple = (String, Vec<(String, f64)>, f64);
+
 /// (ψ (43,), dynamics, (l_p, l_i, l_d)).
 type PsiAndParams<'py> = (Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64, f64));
 
@@ -457,7 +460,7 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("pid", (g.lp, g.li, g.ld))?;
     d.set_item("identified", r.identified)?;
     d.set_item("unidentifiable", r.unidentifiable)?;
-    let aliases: Vec<(String, Vec<(String, f64)>, f64)> = r
+    let aliases: Vec<AliasTuple> = r
         .aliases
         .into_iter()
         .map(|a| (a.name, a.like, a.residual))
