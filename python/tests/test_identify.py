@@ -422,14 +422,7 @@ def test_unidentifiable_quantities_say_what_they_combine_into(kp: rss6.Kinematic
         pixel_noise=0.0,
         potentiometer_noise=0.0,
     )
-    tr = twin.truth()
-    full = identify.collect(
-        twin,
-        exc,
-        kp_model=kp,
-        sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
-    )
+    full = _collect(twin, exc)
     keep = full.t < 3.0
     data = identify.IdentificationData.from_arrays(full.t[keep], exc, full.measured[keep])
     res = identify.cloe(
