@@ -4,7 +4,7 @@ Twin as the robot, a 30 s run (three periods of a 10 s excitation) and a held-ou
 excitation; every one of the 19 candidates screened. Prints seconds without an effect and with a
 hidden camera latency (one fit round, the held-out checks, a second screening round).
 
-    python benches/python/discrepancy_speed.py [--workers 2]
+    python benches/python/discrepancy_speed.py [--workers 2] [--commands recorded|simulated]
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from rss6 import discrepancy, identify
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--commands", default="recorded", choices=("recorded", "simulated"))
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
@@ -55,10 +56,13 @@ def main() -> None:
             friction_smoothing=1.0,
         )
         t0 = time.perf_counter()
-        rep = discrepancy.diagnose(runs[0], model, validation=runs[1], workers=args.workers)
+        rep = discrepancy.diagnose(
+            runs[0], model, validation=runs[1], workers=args.workers, commands=args.commands
+        )
         dt = time.perf_counter() - t0
         print(
-            f"30 s run, {len(discrepancy.effects.candidates())} candidates, hidden {hidden}: "
+            f"30 s run ({args.commands} commands), {len(discrepancy.effects.candidates())} "
+            f"candidates, hidden {hidden}: "
             f"{dt:.1f} s -> {rep.verdict}"
         )
 
