@@ -7,6 +7,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from rss6.errors import InvalidInputError
+
 __all__ = ["add_arguments", "run"]
 
 
@@ -23,6 +25,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://HOST:8786)")
     p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=1,
+        help="discrepancy: seeds per effect × magnitude (seed, seed + 1, …; default 1)",
+    )
     p.add_argument(
         "--plant",
         action="store_true",
@@ -68,7 +76,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         from rss6.discrepancy.benchmark import cases
 
-        specs = cases(seeds=(args.seed,), n_null=args.n, robot="plant" if args.plant else "twin")
+        if args.seeds < 1:
+            raise InvalidInputError(f"--seeds must be >= 1, got {args.seeds}")
+        specs = cases(
+            seeds=tuple(range(args.seed, args.seed + args.seeds)),
+            n_null=args.n,
+            robot="plant" if args.plant else "twin",
+        )
         df = studies.discrepancy_benchmark(specs, **common)
         print(studies.summary_discrepancy(df))
     bad = int((df["status"] != "ok").sum())
