@@ -348,3 +348,26 @@ def test_detect_on_the_dsmc_closed_loop_is_silent_without_an_effect_and_finds_fr
     heavy = track(1, effects={"payload": {"mass": 0.1, "x": 0.0, "y": 0.0, "z": 0.0}})
     det = discrepancy.detect(heavy.frame_time, heavy.measured - replay.measured, sig, noise)
     assert det.axes == ("z",), det.summary()
+
+
+def test_a_fit_that_ends_on_a_bound_says_so() -> None:
+    """A latency fitted to a residual that wants a negative latency stops at the bound 0 and marks
+    that parameter (the held-out consistency test then leaves it out: a constrained optimum has a
+    nonzero score); one inside the bounds is recovered and not marked."""
+    from rss6.discrepancy.effects import Change, get
+    from rss6.discrepancy.search import Whitener, fit_effects
+
+    e = get("camera_latency")
+    shape = np.sin(np.linspace(0.0, 6.0, 300))[:, None] * np.ones((1, 6))
+    whitener = Whitener(discrepancy.NoiseModel.white(np.full(6, 1e-3)))
+
+    def simulate(c: Change) -> F64:
+        return shape * c.twin.get("camera_latency", {}).get("latency", 0.0)
+
+    # Started on the bound (the null value 0): it must still move (scipy's trf alone does not).
+    inside = fit_effects([(e, "sensor")], [{"latency": 0.0}], shape * 0.03, simulate, whitener)
+    assert inside.values[0]["latency"] == pytest.approx(0.03, rel=1e-6)
+    assert inside.at_bound is not None and not inside.at_bound.any()
+    below = fit_effects([(e, "sensor")], [{"latency": 0.01}], shape * -0.02, simulate, whitener)
+    assert below.values[0]["latency"] == pytest.approx(0.0, abs=1e-9)
+    assert below.at_bound is not None and below.at_bound.all()

@@ -230,7 +230,11 @@ def fit_effects(
         ]
     )
     scale = np.array([p.scale for _, _, p in layout])
-    x0 = np.clip(x0, lo, hi)
+    # Start strictly inside: scipy's trf scales steps by the distance to a bound, so a start on a
+    # bound (e.g. a latency whose one-step estimate was negative, clipped to 0) never moves.
+    span = np.where(np.isfinite(hi - lo), hi - lo, np.inf)
+    margin = np.minimum(scale, 0.25 * span)
+    x0 = np.clip(x0, lo + margin, hi - margin)
 
     def values(x: F64) -> list[dict[str, float]]:
         out: list[dict[str, float]] = []
