@@ -65,6 +65,7 @@ from rss6.discrepancy.search import (
     fit_effects,
     heldout_test,
     mimicry,
+    robust_se,
 )
 from rss6.errors import InvalidInputError
 
@@ -348,13 +349,21 @@ def _diagnose(
         rms_cur = _rms((held.measured - current_held[held.rows])[:, :6])
         dof = max(1, len(best.residual_w) - best.jacobian.shape[1])
         scale = max(1.0, best.cost / dof)
-        ci = {
-            name: (
-                v - 1.96 * best.se[-1][name] * np.sqrt(scale),
-                v + 1.96 * best.se[-1][name] * np.sqrt(scale),
-            )
-            for name, v in best.values[-1].items()
-        }
+        # The larger of the Wald error (scaled by the misfit) and the sandwich error with the
+        # residual's own long-run covariance: model error the noise model does not hold widens it.
+        # Every effect of the joint fit (earlier ones were refitted with the new one) gets its
+        # interval from it, inside the parameter's bounds.
+        rob = robust_se(best, cal.whitener, len(fit.t))
+        defs = [_def(a.name) for a in prev] + [s.effect]
+        cis = []
+        for i, vals in enumerate(best.values):
+            ci_i = {}
+            for name, v in vals.items():
+                h = 1.96 * max(best.se[i][name] * np.sqrt(scale), rob[i][name])
+                lo, hi = defs[i].param(name).bounds
+                ci_i[name] = (max(v - h, lo), min(v + h, hi))
+            cis.append(ci_i)
+        ci = cis[-1]
         dll = 0.5 * (float(rw @ rw) - best.cost)
         for i, sc in enumerate(screens):
             if i == i_best:
@@ -429,8 +438,8 @@ def _diagnose(
             continue
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
-            NamedEffect(a.name, a.scope, dict(a.params), ne.ci, ne.p_value, ne.gap_after)
-            for a, ne in zip(new_effects[len(base_model.applied()) :], named, strict=False)
+            NamedEffect(a.name, a.scope, dict(a.params), c, ne.p_value, ne.gap_after)
+            for a, ne, c in zip(new_effects[len(base_model.applied()) :], named, cis, strict=False)
         ]
         named.append(
             NamedEffect(s.effect.name, s.scope, dict(best.values[-1]), ci, p_held, rms_new)

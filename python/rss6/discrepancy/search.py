@@ -25,6 +25,7 @@ from rss6.errors import InvalidInputError
 F64 = NDArray[np.float64]
 
 __all__ = [
+    "HAC_LAGS",
     "Calibration",
     "Fit",
     "Screen",
@@ -34,6 +35,7 @@ __all__ = [
     "heldout_test",
     "hotelling",
     "mimicry",
+    "robust_se",
     "signature",
 ]
 
@@ -285,6 +287,45 @@ def fit_effects(
     return Fit(
         values(sol.x), se, r, float(r @ r), jm, bool(sol.success), str(sol.message), at_bound
     )
+
+
+HAC_LAGS = 30
+"""Bartlett lags (camera frames, 1 s) of :func:`robust_se`'s long-run covariance."""
+
+
+def robust_se(
+    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS
+) -> list[dict[str, float]]:
+    """Standard errors of ``fit`` that do not trust the noise model: the sandwich
+    (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S the Newey–West long-run covariance (Bartlett weights, ``lags``
+    frames) of the per-frame scores g_t = Σ_c J_tc r_tc of the whitened residual (channels aligned
+    on their last common frames). Equal to the Wald errors in expectation when the residual is the
+    noise model's; larger when the residual holds slow model error the effect's signature overlaps
+    (on the rapier plant an offset drift's rate was biased 2–17 % low with Wald intervals a tenth of
+    that). ``fit.se`` if the residual's layout is not the whitener's."""
+    j, r = fit.jacobian, fit.residual_w
+    lens = [n_frames - len(whitener.noise.ar[c]) for c in range(whitener.noise.axes)]
+    m = min(lens)
+    if sum(lens) != len(r) or m < 2:
+        return fit.se
+    g = np.zeros((m, j.shape[1]))
+    start = 0
+    for n in lens:
+        seg = slice(start + n - m, start + n)
+        g += j[seg] * r[seg, None]
+        start += n
+    s = g.T @ g
+    for h in range(1, min(lags, m - 1) + 1):
+        gh = g[h:].T @ g[:-h]
+        s += (1.0 - h / (lags + 1.0)) * (gh + gh.T)
+    a = np.linalg.pinv(j.T @ j)
+    se_all = np.sqrt(np.maximum(np.diag(a @ s @ a), 0.0))
+    out: list[dict[str, float]] = []
+    k = 0
+    for d in fit.se:
+        out.append({name: float(se_all[k + i]) for i, name in enumerate(d)})
+        k += len(d)
+    return out
 
 
 def heldout_test(delta_w: F64, residual_w: F64, replicates: F64) -> tuple[float, float]:

@@ -1,0 +1,51 @@
+"""The discrepancy workflow's Name step where the model is not the robot (issue 14): the rapier plant
+with the shared stick–slip law hides an effect at 5× the camera noise, and the model — the plant's
+truth without the effect — differs from the plant by 0.1–0.6× the noise even with the effect added
+(the plant's 48 constraint iterations; docs/discrepancy.md, "The model is not the robot"). And an
+out-of-library camera drift on the twin, which a joint's offset drift can mimic on x only.
+
+Measured (seed 0, recorded commands, 16 replicates; each case ≈ 40–60 s on an idle machine):
+base tilt (0.3, 0.3) rad → (0.2982, 0.2998) from the best global start (the one-step start had
+fitted (0.09, −0.24)); friction on joint 2 (1.767 N·m, 8.837 N·m·s/rad) → (1.703, 8.968), named
+although its held-out refit differs beyond the noise (transfer 100 %); camera drift at 5× →
+"unexplained", the offset drift of joint 4 refused for making z 34 % of the floor worse."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import rss6
+from rss6.discrepancy import benchmark
+
+pytestmark = pytest.mark.skipif(not hasattr(rss6, "Plant"), reason="built without the rapier plant")
+
+PLANT = {"robot": "plant", "friction_law": "implicit", "magnitude": 5.0, "seed": 0}
+
+
+def test_a_large_base_tilt_on_the_plant_is_fitted_from_a_global_start() -> None:
+    rec = benchmark.benchmark_case({**PLANT, "effect": "base_tilt"})
+    assert rec["first_right"], rec["verdict"] + " | " + rec["notes"]
+    truth, est = json.loads(rec["truth"]), json.loads(rec["estimate"])
+    # Measured error ≤ 0.0018 rad; bound ≈ 3×.
+    for k in ("roll", "pitch"):
+        assert abs(est[k] - truth[k]) <= 0.006, (k, est, truth)
+
+
+def test_model_error_on_the_plant_does_not_refuse_the_true_friction() -> None:
+    rec = benchmark.benchmark_case({**PLANT, "effect": "joint_friction@joint 2"})
+    assert rec["named"] == "joint_friction (joint 2)", rec["verdict"] + " | " + rec["notes"]
+    # The held-out refit differs beyond the noise (T² 33, p = 2e-4): named as model error because
+    # the fitting run's values reach (nearly) all of the held-out run's own gain.
+    assert "difference taken as model error" in rec["notes"]
+    truth, est = json.loads(rec["truth"]), json.loads(rec["estimate"])
+    # Measured relative error ≤ 3.6 %; bound ≈ 3×.
+    for k in ("coulomb", "viscous"):
+        assert abs(est[k] - truth[k]) <= 0.11 * abs(truth[k]), (k, est, truth)
+
+
+def test_a_camera_drift_is_not_named_a_joint_offset_drift() -> None:
+    rec = benchmark.benchmark_case({"effect": "camera_drift", "magnitude": 5.0, "seed": 0})
+    assert rec["named"] == "none", rec["verdict"]
+    assert rec["unexplained"], rec["verdict"]
+    assert "worse by" in rec["notes"] and "mimics something outside the library" in rec["notes"]
