@@ -12,7 +12,6 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-import rss6
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, simulate
 from rss6.discrepancy.noise import NoiseModel
@@ -29,7 +28,7 @@ from rss6.discrepancy.search import (
     screen,
     signature,
 )
-from rss6.errors import InvalidInputError
+from rss6.errors import Rss6Error
 
 F64 = NDArray[np.float64]
 
@@ -212,8 +211,8 @@ def _consistency(
             hcal.whitener,
             bounds=partial(_physical, base_model),
         )
-    except (InvalidInputError, rss6.IdentificationError):
-        return 1.0, float("-inf"), "held-out refit failed"
+    except Rss6Error as err:
+        return 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})"
     # A parameter on a bound in either fit has a nonzero score at a constrained optimum: the test
     # is on the free ones (a benchmark effect scaled to its bound was otherwise rejected as a mimic
     # with the truth's values on both runs, e.g. Coulomb 5 vs 4.998 N·m).
@@ -380,7 +379,8 @@ def _best_start(
     def cost(x: F64) -> float:
         try:
             r = whitener.vec(measured - simulate(change(x)))
-        except (InvalidInputError, rss6.IdentificationError):
+        except Rss6Error:
+            # A start the model cannot run (e.g. a drift that takes a leg out of reach) is no start.
             return float("inf")
         return float(r @ r)
 

@@ -67,7 +67,7 @@ from rss6.discrepancy.search import (
     mimicry,
     robust_se,
 )
-from rss6.errors import InvalidInputError
+from rss6.errors import InvalidInputError, Rss6Error
 
 __all__ = [
     "MAX_MIMICS",
@@ -325,7 +325,8 @@ def _diagnose(
                         ),
                     )
                 )
-            except (InvalidInputError, rss6.IdentificationError) as err:
+            except Rss6Error as err:
+                # E.g. the trust region stepping to a model that leaves the workspace.
                 notes_fit.append(f"{s.effect.name} ({s.scope}) not fitted: {err}")
             _tell(progress, f"fit round {round_ + 1}", j + 1, len(top))
         if not fits:
