@@ -1,0 +1,96 @@
+"""How far the model is from the rapier plant when both carry the same effect (issue 14, docs/
+discrepancy.md "The model is not the robot"): noise-free plant runs (shared stick–slip law,
+48 solver iterations) with each benchmark effect at the 5× magnitude, replayed on the model driven
+by the run's recorded commands, without and with the true effect. Prints the pose residual RMS per
+axis in units of Table 4.1's camera noise.
+
+    python benches/python/plant_model_gap.py [EFFECT@SCOPE ...]
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import rss6
+from rss6 import identify
+from rss6.discrepancy import benchmark as bm
+from rss6.discrepancy.model import Model, replay, run_of
+
+EFFECTS = [
+    "joint_friction@joint 2",
+    "joint_friction@all joints",
+    "backlash",
+    "camera_latency",
+    "payload",
+    "base_tilt",
+    "pid_gains",
+    "joint_offset_drift@joint 3",
+    "joint_offset_drift@all joints",
+]
+
+
+def main() -> None:
+    kp = rss6.KinematicParams.nominal()
+    dp, pid = identify.table_5_2_truth()
+    exc = identify.random_excitation(kp, seed=1000)
+
+    def plant(hidden: dict | None, gains: tuple[float, ...] = tuple(pid)) -> rss6.Plant:
+        return rss6.Plant(
+            kp,
+            dp,
+            pid=tuple(float(g) for g in gains),
+            seed=1,
+            effects=hidden,
+            drive_derivative_filter=5e-3,
+            implicit_friction=True,
+            solver_iterations=48,
+            pixel_noise=0.0,
+            potentiometer_noise=0.0,
+        )
+
+    tr = plant(None).truth()
+    model = Model(
+        kp,
+        dp,
+        pid,
+        tr["sensor_in_base"],
+        tr["target_in_effector"],
+        derivative_filter=5e-3,
+        implicit_friction=True,
+    )
+
+    def collect(robot: rss6.Plant) -> identify.IdentificationData:
+        return identify.collect(
+            robot,
+            exc,
+            kp_model=kp,
+            sensor_in_base=tr["sensor_in_base"],
+            target_in_effector=tr["target_in_effector"],
+        )
+
+    def rms(x: np.ndarray) -> np.ndarray:
+        return np.round(np.sqrt(np.mean(x[:, :6] ** 2, axis=0)) / bm.CAMERA_SIGMA, 2)
+
+    run0 = run_of(collect(plant(None)))
+    print("no effect: model − plant, RMS / σ per axis", rms(run0.channels - replay(model, run0)))
+    for name in sys.argv[1:] or EFFECTS:
+        e, scope = bm._split(name)
+        params, got = bm.magnitude(model, run0, name, 5.0)
+        params = e.check(params, scope)
+        c = e.apply(params, scope)
+        hidden = {k: dict(v) for k, v in c.twin.items()}
+        if any(c.coulomb) or any(c.viscous):
+            fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
+            if scope != "all joints":
+                fr["joint"] = float(scope.removeprefix("joint "))
+            hidden["joint_friction"] = fr
+        gains = tuple(g * (1 + d) for g, d in zip(pid, c.gains, strict=True))
+        run = run_of(collect(plant(hidden or None, gains)))
+        print(f"{name} at {got:.2f}× ({params})")
+        print("   without the effect", rms(run.channels - replay(model, run)))
+        print("   with the true effect", rms(run.channels - replay(model, run, c)))
+
+
+if __name__ == "__main__":
+    main()
