@@ -17,17 +17,14 @@ from rss6 import identify
 from rss6.discrepancy import benchmark as bm
 from rss6.discrepancy.model import Model, replay, run_of
 
-EFFECTS = [
-    "joint_friction@joint 2",
-    "joint_friction@all joints",
-    "backlash",
-    "camera_latency",
-    "payload",
-    "base_tilt",
-    "pid_gains",
-    "joint_offset_drift@joint 3",
-    "joint_offset_drift@all joints",
-]
+#: The benchmark grid's library effects (benchmark.cases' defaults).
+EFFECTS = sorted(
+    {
+        str(c["effect"])
+        for c in bm.cases(magnitudes=(5.0,), n_null=0)
+        if isinstance(c["effect"], str) and c["effect"] not in bm.OUT_OF_LIBRARY
+    }
+)
 
 
 def main() -> None:
