@@ -335,7 +335,9 @@ class IdentificationResult:
 
     ``dynamics`` (:class:`rss6.DynamicParams`) and ``pid`` (l_p, l_i, l_d): the estimate
     (unidentifiable quantities at the guess); ``identified``: names of the estimated quantities (see
-    :func:`parameter_names`) and ``relative_std`` (same order) their relative standard deviations;
+    :func:`parameter_names`) and ``relative_std`` (same order) their relative standard deviations
+    (the larger of the Wald value ``relative_std_wald``, which assumes white residuals, and a
+    Newey–West sandwich that also sees residuals correlated in time);
     ``poorly_identified``: those above 10 %; ``unidentifiable``: quantities the data cannot see;
     ``rms_before``/``rms_after`` (6,): RMS of χ_m − χ_s per axis (m, rad) at the guess and at the
     estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
@@ -364,6 +366,7 @@ class IdentificationResult:
     model: LoopModel
     inexact_friction_ticks: int = 0
     aliases: dict[str, tuple[dict[str, float], float]] = field(default_factory=dict)
+    relative_std_wald: F64 = field(default_factory=lambda: np.zeros(0))
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -521,6 +524,7 @@ def cloe(
             for n, like, res in r["aliases"]
         },
         relative_std=np.asarray(r["relative_std"]),
+        relative_std_wald=np.asarray(r["relative_std_wald"]),
         poorly_identified=tuple(r["poorly_identified"]),
         rms_before=np.asarray(r["rms_before"]),
         rms_after=np.asarray(r["rms_after"]),

@@ -467,6 +467,7 @@ pub(crate) fn cloe_identify<'py>(
         .collect();
     d.set_item("aliases", aliases)?;
     d.set_item("relative_std", out1(py, &r.relative_std))?;
+    d.set_item("relative_std_wald", out1(py, &r.relative_std_wald))?;
     d.set_item("poorly_identified", r.poorly_identified)?;
     d.set_item("rms_before", out1(py, r.rms_before.as_slice()))?;
     d.set_item("rms_after", out1(py, r.rms_after.as_slice()))?;

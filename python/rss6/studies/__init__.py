@@ -146,6 +146,7 @@ def identification_variation(
     fields = ["seed", "robot", "friction_law", "iterations"]
     fields += [f"est_{n}" for n in identify.parameter_names()]
     fields += [f"std_{n}" for n in identify.parameter_names()]
+    fields += [f"wald_{n}" for n in identify.parameter_names()]
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
     return _study(identification_task, specs, fields, out, client, workers, progress)
 
@@ -221,16 +222,17 @@ def summary_identification(df: Any) -> str:
     if len(ok) >= 2:
         lines.append(
             "Table 5.5 (variation = std / |mean| over the trajectories; predicted: median relative "
-            "σ CLOE reported, where it estimated the quantity):"
+            "σ CLOE reported, where it estimated the quantity — the larger of Wald and sandwich; "
+            "Wald: white-residual σ alone):"
         )
         for c in est:
             v = ok[c].astype(float)
             line = f"  {c[4:]:12s} {float(v.std(ddof=1) / abs(v.mean())):.3g}"
-            sd = f"std_{c[4:]}"
-            if sd in ok.columns:
-                p = ok[sd].replace("", np.nan).astype(float).dropna()
-                if len(p):
-                    line += f"   predicted {float(p.median()):.3g}"
+            for col, label in ((f"std_{c[4:]}", "predicted"), (f"wald_{c[4:]}", "Wald")):
+                if col in ok.columns:
+                    p = ok[col].replace("", np.nan).astype(float).dropna()
+                    if len(p):
+                        line += f"   {label} {float(p.median()):.3g}"
             lines.append(line)
     lines.append("Table 5.4 (RMS after, mm / mrad):")
     for _, r in ok.iterrows():

@@ -103,6 +103,8 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         rec[f"est_{name}"] = float(v)
     for name, sd in zip(res.identified, res.relative_std, strict=True):
         rec[f"std_{name}"] = float(sd)
+    for name, sd in zip(res.identified, res.relative_std_wald, strict=True):
+        rec[f"wald_{name}"] = float(sd)
     rec["iterations"] = int(res.iterations)
     for i, a in enumerate(_AXES):
         rec[f"rms_before_{a}"] = float(res.rms_before[i])

@@ -23,6 +23,7 @@
 use super::closed_loop::simulate;
 use super::config::{LoopConfig, LoopParams, LoopRun};
 use super::consistent::{Consistent, N_PSI};
+use super::hac::long_run_covariance;
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
 use nalgebra::{DMatrix, DVector};
@@ -38,6 +39,9 @@ pub struct CloeData {
     /// χ_m (m, rad).
     pub measured: Vec<Vec6>,
 }
+
+/// Default [`CloeOptions::hac_lags`]: 30 camera frames (1 s at 30 Hz).
+pub const HAC_LAGS: usize = 30;
 
 /// Options of [`cloe`].
 #[derive(Debug, Clone, PartialEq)]
@@ -81,6 +85,9 @@ pub struct CloeOptions {
     /// (σ/σ_prior)² of its distance to the guess. `None`: the pure output error of eq. 5.7
     /// (noise-free checks).
     pub prior_log_std: Option<f64>,
+    /// Lags (camera frames) of the residual autocovariance behind the sandwich standard deviations
+    /// (see [`CloeResult::relative_std`]); 0: residual frames uncorrelated in time.
+    pub hac_lags: usize,
 }
 
 impl Default for CloeOptions {
@@ -99,6 +106,7 @@ impl Default for CloeOptions {
             tol_gradient: 1e-4,
             per_tick_jacobians: false,
             prior_log_std: Some(1.0),
+            hac_lags: HAC_LAGS,
         }
     }
 }
@@ -130,8 +138,16 @@ pub struct CloeResult {
     /// relative changes c·δ of those do (|c| ≥ 0.05, largest first, at most 4) — and the relative
     /// residual of that combination (≈ 0: a base combination; near 1: the output hardly sees it).
     pub aliases: Vec<Alias>,
-    /// Relative standard deviation of every estimated quantity (same order as `identified`).
+    /// Relative standard deviation of every estimated quantity (same order as `identified`): the
+    /// larger of [`relative_std_wald`](Self::relative_std_wald) and the sandwich A⁻¹ S A⁻¹, A = GᵀG
+    /// (prior rows included), S = Σ_l w_l Σ_k G_kᵀ γ(l) G_{k−l} with γ(l) the residual's
+    /// autocovariance between frames l apart (Bartlett weights, [`CloeOptions::hac_lags`] lags).
+    /// The Wald value assumes white residuals of the weighted size; the sandwich also sees
+    /// residuals correlated in time (the loop's own model error), which the spread over
+    /// trajectories shows.
     pub relative_std: Vec<f64>,
+    /// The Wald relative standard deviation alone: sqrt(Φ/(N − p) · (GᵀG)⁻¹_kk).
+    pub relative_std_wald: Vec<f64>,
     /// Estimated quantities whose relative standard deviation exceeds `poor_std`.
     pub poorly_identified: Vec<String>,
     /// RMS of χ_m − χ_s per axis at the guess (m, rad).
@@ -500,14 +516,24 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
     let (ga, _) = augment(g, &cur.residual, &psi);
     let dof = (n_data as f64 - active.len() as f64).max(1.0);
     let sigma2 = cur.cost / dof;
-    let relative_std: Vec<f64> = match ga.tr_mul(&ga).cholesky() {
+    let (relative_std_wald, relative_std) = match ga.tr_mul(&ga).cholesky() {
         Some(c) => {
             let inv = c.inverse();
-            (0..active.len())
+            let wald: Vec<f64> = (0..active.len())
                 .map(|k| (sigma2 * inv[(k, k)]).sqrt())
-                .collect()
+                .collect();
+            let gs = g.select_columns(&active);
+            let s = long_run_covariance(&gs, &cur.residual, 6, options.hac_lags);
+            let sandwich = &inv * s * &inv;
+            let robust = (0..active.len())
+                .map(|k| wald[k].max(sandwich[(k, k)].max(0.0).sqrt()))
+                .collect();
+            (wald, robust)
         }
-        None => vec![f64::INFINITY; active.len()],
+        None => (
+            vec![f64::INFINITY; active.len()],
+            vec![f64::INFINITY; active.len()],
+        ),
     };
     let identified: Vec<String> = active.iter().map(|&k| names[k].clone()).collect();
     let poorly_identified = identified
@@ -523,6 +549,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         unidentifiable,
         aliases,
         relative_std,
+        relative_std_wald,
         poorly_identified,
         rms_before,
         rms_after: cur.rms,

@@ -7,10 +7,11 @@ mod config;
 mod consistent;
 mod estimator;
 mod friction;
+mod hac;
 mod truth;
 
 pub use closed_loop::simulate;
 pub use config::{parameter_names, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 pub use consistent::{Consistent, N_PSI};
-pub use estimator::{cloe, cloe_observed, Alias, CloeData, CloeOptions, CloeResult};
+pub use estimator::{cloe, cloe_observed, Alias, CloeData, CloeOptions, CloeResult, HAC_LAGS};
 pub use truth::{table_5_2_truth, DRIVE_UNIT_TO_NM};
