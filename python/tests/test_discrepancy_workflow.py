@@ -247,6 +247,26 @@ def test_a_hidden_effect_is_named_and_the_gap_shrinks(
     assert rep.model.applied()[-1].name == name
 
 
+def test_a_held_out_refit_that_fails_is_said_in_the_notes(
+    truth: Any, excitation: identify.Excitation, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The held-out run's own refit raising (e.g. a leg out of reach at its start) leaves the
+    # parameters' consistency untested: the effect may still be named on its held-out change and
+    # gap, and the report must say what was not tested.
+    import importlib
+
+    dg = importlib.import_module("rss6.discrepancy.diagnose")
+
+    def failing(*args: Any, **kw: Any) -> tuple[float, float, str]:
+        return 1.0, float("-inf"), "held-out refit failed (UnreachableError: leg 3)"
+
+    monkeypatch.setattr(dg, "_consistency", failing)
+    rep = _diagnose(truth, excitation, {"camera_latency": {"latency": 0.01}})
+    assert [e.name for e in rep.named] == ["camera_latency"], rep.table()
+    notes = [n for n in rep.notes if "held-out refit failed" in n]
+    assert notes and "not tested" in notes[0], rep.notes
+
+
 # command line --------------------------------------------------------------------------------------
 
 

@@ -437,6 +437,12 @@ def _diagnose(
             if mimics > MAX_MIMICS:
                 break
             continue
+        elif cons_text.startswith("held-out refit failed") or cons_text.endswith("not tested"):
+            # The held-out run's own fit could not run, or left nothing free to test.
+            notes_fit.append(
+                f"{s.effect.name} ({s.scope}): {cons_text}; the consistency of its parameters "
+                "between the runs is not tested (named on its held-out change and gap alone)"
+            )
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
             NamedEffect(a.name, a.scope, dict(a.params), c, ne.p_value, ne.gap_after)

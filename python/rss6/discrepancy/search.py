@@ -297,27 +297,38 @@ def robust_se(
     fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS
 ) -> list[dict[str, float]]:
     """Standard errors of ``fit`` that do not trust the noise model: the sandwich
-    (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S the Newey–West long-run covariance (Bartlett weights, ``lags``
-    frames) of the per-frame scores g_t = Σ_c J_tc r_tc of the whitened residual (channels aligned
-    on their last common frames). Equal to the Wald errors in expectation when the residual is the
-    noise model's; larger when the residual holds slow model error the effect's signature overlaps
-    (on the rapier plant an offset drift's rate was biased 2–17 % low with Wald intervals a tenth of
-    that). ``fit.se`` if the residual's layout is not the whitener's."""
+    (JᵀJ)⁻¹ S (JᵀJ)⁻¹ with S = Σ_h w_h Σ_t J_tᵀ γ(h) J_{t−h} — γ(h) the whitened residual's
+    autocovariance between frames h apart across channels (channels aligned on their last common
+    frames), w_h Bartlett's weights over ``lags`` frames. Equal to the Wald errors in expectation
+    when the residual is the noise model's; larger when the residual holds slow model error the
+    effect's signature overlaps (on the rapier plant an offset drift's rate was biased 2–17 % low
+    with Wald intervals a tenth of that). Not Newey–West on the per-frame scores: at the optimum
+    they sum to zero, and an effect seen in a window shorter than ``lags`` (a start transient) had
+    its variance cancelled. ``fit.se`` if the residual's layout is not the whitener's."""
     j, r = fit.jacobian, fit.residual_w
     lens = [n_frames - len(whitener.noise.ar[c]) for c in range(whitener.noise.axes)]
     m = min(lens)
     if sum(lens) != len(r) or m < 2:
         return fit.se
-    g = np.zeros((m, j.shape[1]))
+    jt = np.zeros((m, len(lens), j.shape[1]))
+    rt = np.zeros((m, len(lens)))
     start = 0
-    for n in lens:
+    for c, n in enumerate(lens):
         seg = slice(start + n - m, start + n)
-        g += j[seg] * r[seg, None]
+        jt[:, c, :] = j[seg]
+        rt[:, c] = r[seg]
         start += n
-    s = g.T @ g
+    p = j.shape[1]
+
+    def lagged(h: int) -> F64:
+        """Σ_t J_tᵀ γ(h) J_{t−h}."""
+        gamma = rt[h:].T @ rt[: m - h] / m
+        return jt[h:].reshape(-1, p).T @ (gamma @ jt[: m - h]).reshape(-1, p)
+
+    s = lagged(0)
     for h in range(1, min(lags, m - 1) + 1):
-        gh = g[h:].T @ g[:-h]
-        s += (1.0 - h / (lags + 1.0)) * (gh + gh.T)
+        sh = lagged(h)
+        s += (1.0 - h / (lags + 1.0)) * (sh + sh.T)
     a = np.linalg.pinv(j.T @ j)
     se_all = np.sqrt(np.maximum(np.diag(a @ s @ a), 0.0))
     out: list[dict[str, float]] = []
