@@ -122,4 +122,35 @@ proptest! {
         let scale = xa.dot(&((m_dot.abs() + c.abs() * 2.0) * xa));
         prop_assert!((x.dot(&(m_dot * x)) - 2.0 * x.dot(&(c * x))).abs() <= 1e-9 * scale);
     }
+
+    #[test]
+    fn forward_dynamics_state_jacobians_from_the_inverse_dynamics_derivatives(
+        p in pose(), pd in vec6(0.2, 1.0), tau in vec6(5.0, 5.0), dp in params()
+    ) {
+        // ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ/∂x (implicit function theorem) against central differences of the
+        // forward dynamics itself (Coulomb off: its sign is held in one and not the other).
+        let kp = KinematicParams::nominal();
+        let mut dp = dp;
+        dp.coulomb = [0.0; 6];
+        let env = Environment::default();
+        let a = forward_dynamics_with_env(&kp, &dp, &p, &pd, &tau, &env).unwrap();
+        let (dtp, dtv) =
+            inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &a, &env, 1e-6, 1e-2).unwrap();
+        let ft = mass_matrix(&kp, &dp, &p).unwrap().cholesky().unwrap()
+            .solve(&jacobian_theta(&kp, &p).unwrap().transpose());
+        let (fp, fv) = (-(ft * dtp), -(ft * dtv));
+        for k in 0..6 {
+            let e = Vec6::from_fn(|i, _| if i == k { 1.0 } else { 0.0 });
+            let f = |x: &Vec6, v: &Vec6| forward_dynamics_with_env(&kp, &dp, x, v, &tau, &env).unwrap();
+            let cp = (f(&(p + e * 1e-6), &pd) - f(&(p - e * 1e-6), &pd)) / 2e-6;
+            let cv = (f(&p, &(pd + e * 1e-2)) - f(&p, &(pd - e * 1e-2))) / 2e-2;
+            let ep = (fp.column(k) - cp).amax() / cp.amax().max(1.0);
+            let ev = (fv.column(k) - cv).amax() / cv.amax().max(1.0);
+            prop_assert!(ep <= STATE_JACOBIAN_TOL && ev <= STATE_JACOBIAN_TOL, "column {k}: {ep:.2e} {ev:.2e}");
+        }
+    }
 }
+
+/// Largest relative difference allowed between the two state Jacobians: measured 2.5·10⁻⁹ (χ
+/// columns; the χ̇ columns 6.4·10⁻¹³) over the 128 cases; 3× that.
+const STATE_JACOBIAN_TOL: f64 = 7.5e-9;

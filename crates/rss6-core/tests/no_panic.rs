@@ -190,10 +190,11 @@ proptest! {
 
     #[test]
     fn dynamics_with_env(kp in kinematics(), dp in dynamics(), p in pose(), pd in rate(),
-                         pdd in rate(), env in environment(), l in load()) {
+                         pdd in rate(), env in environment(), l in load(), h in wild(), k in wild()) {
         let _ = l.validate();
         let _ = (l.inertia_about_e(), PlatformLoad::point(l.mass, l.com));
         let _ = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
+        let _ = inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &pdd, &env, h, k);
         let _ = forward_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         let _ = mass_matrix_with_env(&kp, &dp, &p, &env);
         let _ = dynamics_terms_with_env(&kp, &dp, &p, &pd, &env);

@@ -79,7 +79,8 @@ pub use self::matrices::{
 pub(crate) use self::newton_euler::leg_acc;
 pub use self::newton_euler::{
     forward_dynamics, forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
-    inverse_dynamics_with_env, inverse_dynamics_with_gravity,
+    inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,
+    inverse_dynamics_with_gravity,
 };
 
 use crate::error::{check_finite, Result};

@@ -3,7 +3,7 @@
 
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
-use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
+use super::{check_finite, check_state, joint_friction, sign0, twist_and_rate, z_cross, z_triple};
 use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
 use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
@@ -239,12 +239,95 @@ pub fn inverse_dynamics_with_env(
     check_state(pose_dot, pose_ddot)?;
     env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
+    let (tau, theta_dot) = rigid_torques(&geom, dp, pose, pose_dot, pose_ddot, env)?;
+    Ok(tau + joint_friction(dp, &theta_dot))
+}
+
+/// The actuator torques of the rigid bodies (friction not included) and θ̇, at a known geometry.
+fn rigid_torques(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    env: &Environment,
+) -> Result<(Vec6, Vec6)> {
     let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
-    let (mut f, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &v_dot, &env.gravity)?;
+    let (mut f, theta_dot, j_ad_t) = twist_force(geom, dp, &v, &v_dot, &env.gravity)?;
     if let Some(load) = &env.load {
         f += LoadAt::new(load, &geom.rot).force(&v, &v_dot, &env.gravity);
     }
-    Ok(solve_j_ad_t(&j_ad_t, &f)? + joint_friction(dp, &theta_dot))
+    Ok((solve_j_ad_t(&j_ad_t, &f)?, theta_dot))
+}
+
+/// State derivatives of the inverse dynamics, (∂τ_a/∂χ, ∂τ_a/∂χ̇) at (χ, χ̇, χ̈) in `env`, by
+/// central differences with steps `h_pose` (m, rad) in χ and `h_vel` in χ̇, Coulomb friction's sign
+/// held at the given state's θ̇ (the derivative of the smooth part). τ_a is quadratic in χ̇ plus the
+/// viscous term, so the χ̇ columns are exact up to rounding for any `h_vel`; the χ̇ steps reuse the
+/// state's geometry (no IK), which makes this cheaper than differencing the forward dynamics.
+///
+/// With them the forward dynamics' state Jacobians follow from the implicit function theorem:
+/// ∂χ̈/∂χ = −M̃⁻¹J_θᵀ ∂τ_a/∂χ and ∂χ̈/∂χ̇ = −M̃⁻¹J_θᵀ ∂τ_a/∂χ̇ (∂τ_a/∂χ̈ = J_θ⁻ᵀM̃).
+///
+/// Errors: as [`inverse_dynamics_with_env`] at the state or a stepped one;
+/// [`CoreError::InvalidParameter`] for a step that is not finite and > 0.
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_derivatives_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    env: &Environment,
+    h_pose: f64,
+    h_vel: f64,
+) -> Result<(Mat6, Mat6)> {
+    check_state(pose_dot, pose_ddot)?;
+    env.check()?;
+    if !(h_pose.is_finite() && h_pose > 0.0 && h_vel.is_finite() && h_vel > 0.0) {
+        return Err(CoreError::InvalidParameter(
+            "finite-difference steps must be finite and > 0",
+        ));
+    }
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let (_, theta_dot) = rigid_torques(&geom, dp, pose, pose_dot, pose_ddot, env)?;
+    let sign = theta_dot.map(sign0);
+    let torque = |(t, td): (Vec6, Vec6)| -> Vec6 {
+        Vec6::from_fn(|i, _| t[i] + dp.coulomb[i] * sign[i] + dp.viscous[i] * td[i])
+    };
+    let mut d_pose = Mat6::zeros();
+    let mut d_vel = Mat6::zeros();
+    for k in 0..6 {
+        let (mut pp, mut pm) = (*pose, *pose);
+        pp[k] += h_pose;
+        pm[k] -= h_pose;
+        let tp = torque(rigid_torques(
+            &LegGeometry::at_pose(kp, &pp)?,
+            dp,
+            &pp,
+            pose_dot,
+            pose_ddot,
+            env,
+        )?);
+        let tm = torque(rigid_torques(
+            &LegGeometry::at_pose(kp, &pm)?,
+            dp,
+            &pm,
+            pose_dot,
+            pose_ddot,
+            env,
+        )?);
+        d_pose.set_column(k, &((tp - tm) / (pp[k] - pm[k])));
+        let (mut vp, mut vm) = (*pose_dot, *pose_dot);
+        vp[k] += h_vel;
+        vm[k] -= h_vel;
+        let tp = torque(rigid_torques(&geom, dp, pose, &vp, pose_ddot, env)?);
+        let tm = torque(rigid_torques(&geom, dp, pose, &vm, pose_ddot, env)?);
+        d_vel.set_column(k, &((tp - tm) / (vp[k] - vm[k])));
+    }
+    check_finite(d_pose.as_slice())?;
+    check_finite(d_vel.as_slice())?;
+    Ok((d_pose, d_vel))
 }
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator

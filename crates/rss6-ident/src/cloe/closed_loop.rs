@@ -40,14 +40,14 @@
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
 use rss6_core::{
-    forward_dynamics_with_env, ik, jacobian_theta, mass_matrix_with_env, regressor_with_gravity,
-    DynamicParams, Mat6, Vec6, LEGS, N_DYN,
+    forward_dynamics_with_env, ik, inverse_dynamics_derivatives_with_env, jacobian_theta,
+    mass_matrix_with_env, regressor_with_gravity, DynamicParams, Mat6, Vec6, LEGS, N_DYN,
 };
 use rss6_ctrl::{PidGains, Trajectory};
 use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
-use super::friction::{self, central_jacobians, sign0, sim_err, Sens, StepSens, COULOMB};
+use super::friction::{self, central_jacobians, sim_err, Sens, StepSens, COULOMB};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -476,30 +476,41 @@ impl<'a> Lean<'a> {
         };
         let j_theta = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
         let theta_dot = j_theta * v;
-        let tau_eff = Vec6::from_fn(|i, _| tau[i] - self.dp.coulomb[i] * sign0(theta_dot[i]));
-        let f = |pp: &Vec6, vv: &Vec6| {
-            let (dp, tau_pv) = if implicit {
-                (&self.dp_nf, *tau)
-            } else if eps > 0.0 {
-                (&self.dp_nc, smooth_tau(pp, vv)?)
-            } else {
-                (&self.dp_nc, tau_eff)
-            };
-            forward_dynamics_with_env(&cfg.kp, dp, pp, vv, &tau_pv, &env).map_err(|e| sim_err(t, e))
-        };
-        let (fp, fv) = match frozen {
-            Some(j) => j,
-            // Smoothed friction is not quadratic in χ̇: a small step there too.
-            None => central_jacobians(f, p, v, if eps > 0.0 { 1e-6 } else { 1e-2 })?,
-        };
-        // With a load on the platform: τ = Γ Ξ + τ_load(χ, χ̇, χ̈), so ∂χ̈/∂Ξ = −M̃_tot⁻¹ J_θᵀ Γ with
-        // the load's inertia in M̃_tot.
+        // With the load: ∂χ̈/∂Ξ = −M̃_tot⁻¹ J_θᵀ Γ, the load's inertia in M̃_tot.
         let m = mass_matrix_with_env(&cfg.kp, &self.dp, p, &env).map_err(|e| sim_err(t, e))?;
         let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
             time: t,
             message: "the mass matrix is not positive definite".into(),
         })?;
         let ft = chol.solve(&j_theta.transpose());
+        let (fp, fv) = match frozen {
+            Some(j) => j,
+            // Sign (Coulomb frozen) or implicit (friction-free model): ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ/∂x of
+            // the inverse dynamics, whose χ̇ steps need no IK.
+            None if eps == 0.0 => {
+                let dp = if implicit { &self.dp_nf } else { &self.dp_nc };
+                let (dtp, dtv) =
+                    inverse_dynamics_derivatives_with_env(&cfg.kp, dp, p, v, &a, &env, 1e-6, 1e-2)
+                        .map_err(|e| sim_err(t, e))?;
+                (-(ft * dtp), -(ft * dtv))
+            }
+            // Smoothed friction is not quadratic in χ̇: central differences of the forward
+            // dynamics with a small step there too.
+            None => {
+                let f = |pp: &Vec6, vv: &Vec6| {
+                    forward_dynamics_with_env(
+                        &cfg.kp,
+                        &self.dp_nc,
+                        pp,
+                        vv,
+                        &smooth_tau(pp, vv)?,
+                        &env,
+                    )
+                    .map_err(|e| sim_err(t, e))
+                };
+                central_jacobians(f, p, v, 1e-6)?
+            }
+        };
         let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
         let mut fxi = Sens::zeros(s.columns.len());
         for (c, &col) in s.columns.iter().enumerate() {
