@@ -576,6 +576,7 @@ def identification_run(
     progress: Callable[[float, float], Any] | None = None,
     mcap: _Path | None = None,
     commands: ArrayLike | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
 ) -> dict[str, Any]: ...
 def simulate_identification(
     kp: KinematicParams,
@@ -596,6 +597,7 @@ def simulate_identification(
     gravity: ArrayLike | None = None,
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
 ) -> tuple[_F64, _F64, int]: ...
 def cloe_identify(
     t: ArrayLike,
@@ -629,6 +631,7 @@ def cloe_identify(
     gravity: ArrayLike | None = None,
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...
 def table_5_2_truth_params() -> tuple[DynamicParams, tuple[float, float, float]]: ...

@@ -80,7 +80,8 @@ class IdentificationData:
     (from rest at ``start`` = its pose at t = 0); ``duration`` (s) of the run; ``dt`` (s) the joint
     tick. When collected on a robot also per tick: ``tick_t``, ``kappa`` (potentiometers, bit),
     ``theta_cmd`` (commands, drive convention, rad), ``reference_pose`` (χ_d) and ``true_pose`` (NaN
-    rows on a real robot), and ``fault`` (None or (t, reason) of the visual PID's first fault)."""
+    rows on a real robot), ``fault`` (None or (t, reason) of the visual PID's first fault) and
+    ``outer_gains`` (k_p, k_i, k_d) of the visual PID that ran (None: the thesis's)."""
 
     t: F64
     reference: Excitation
@@ -93,6 +94,7 @@ class IdentificationData:
     reference_pose: F64 | None = None
     true_pose: F64 | None = None
     fault: tuple[float, str] | None = None
+    outer_gains: tuple[float, float, float] | None = None
 
     @property
     def start(self) -> F64:
@@ -199,6 +201,7 @@ def collect(
     progress: Callable[[float, float], Any] | None = None,
     segment: float = 1.0,
     commands: ArrayLike | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
 ) -> IdentificationData:
     """Runs the identification loop of Fig. 5.1 on ``robot`` (:class:`rss6.Plant`,
     :class:`rss6.ModelSim` or any :class:`rss6.types.Robot`, e.g. ``rss6.can.simulated_robot(...)``):
@@ -209,7 +212,9 @@ def collect(
     (raise in it, or Ctrl-C, to stop: the exception propagates); ``mcap``: log every tick there as the
     run goes. ``commands`` (T, 6): joint commands (drive convention, one per tick, e.g. a recorded
     run's :attr:`IdentificationData.theta_cmd`) sent instead of the visual PID's — the run replayed
-    with the robot's own inputs (frames are still measured; T must cover every tick). Raises
+    with the robot's own inputs (frames are still measured; T must cover every tick).
+    ``outer_gains`` (k_p, k_i 1/s, k_d s): the visual PID's gains on every axis (None: the thesis's
+    0.3, 2.4, 0.001; §5.6.3 validates on other gains too). Raises
     :class:`rss6.IdentificationError` if no camera frame arrived."""
     if not isinstance(excitation, Excitation):
         raise InvalidInputError("excitation must be an rss6.identify.Excitation")
@@ -230,6 +235,7 @@ def collect(
         progress=progress,
         mcap=None if mcap is None else str(mcap),
         commands=None if commands is None else np.asarray(commands, dtype=np.float64),
+        outer_gains=outer_gains,
     )
     if int(raw["frames"]) == 0 or raw["frame_t"].size == 0:
         raise IdentificationError(
@@ -248,6 +254,7 @@ def collect(
         reference_pose=np.asarray(raw["reference"]),
         true_pose=np.asarray(raw["true_pose"]),
         fault=None if raw["fault"] is None else (float(raw["fault"][0]), str(raw["fault"][1])),
+        outer_gains=outer_gains,
     )
 
 
@@ -286,6 +293,7 @@ def simulate(
     gravity: ArrayLike | None = None,
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
 ) -> F64:
     """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
     Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
@@ -294,7 +302,8 @@ def simulate(
     (:meth:`IdentificationData.frame_commands`), held instead of the model's visual PID output. Effects the model can express:
     ``gravity`` (3,) m/s² in the base frame (a tilted base), ``load`` = (mass kg, centre of mass (3,)
     m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform, ``offset_drift`` (6,) rad/s of the
-    potentiometer offsets. Returns the model's camera frames at ``times``
+    potentiometer offsets; ``outer_gains``: the visual PID's (k_p, k_i, k_d) (None: the thesis's).
+    Returns the model's camera frames at ``times``
     (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
     otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
@@ -315,6 +324,7 @@ def simulate(
         friction_smoothing=friction_smoothing,
         implicit_friction=implicit_friction,
         commands=None if commands is None else np.asarray(commands, dtype=np.float64),
+        outer_gains=outer_gains,
         **_effect_kwargs(gravity, load, offset_drift),
     )
     ts = np.asarray(ts)
@@ -538,6 +548,7 @@ def cloe(
         tol_step=tol_step,
         prior_log_std=0.0 if prior_log_std is None else float(prior_log_std),
         progress=progress,
+        outer_gains=data.outer_gains,
         **_effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]

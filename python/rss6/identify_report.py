@@ -90,6 +90,8 @@ class IdentifyReport:
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
     inexact_friction_ticks: int = 0
+    #: One validation run with the visual PID's gains at ``identify_sim.OTHER_OUTER_GAINS``.
+    validation_other_gains: identify.Validation | None = None
     #: What each unidentifiable quantity combines into (IdentificationResult.alias_text()).
     aliases: list[str] = field(default_factory=list)
 
@@ -163,6 +165,21 @@ class IdentifyReport:
                 lines.append(
                     "      thesis      " + " ".join(f"{1e3 * x:8.3f}" for x in thesis.TABLE_5_4[j])
                 )
+        o = self.validation_other_gains
+        if o is not None:
+            from rss6.identify_sim import OTHER_OUTER_GAINS
+
+            g = ", ".join(f"{x:g}" for x in OTHER_OUTER_GAINS)
+            lines.append(
+                "gains identified  "
+                + " ".join(f"{1e3 * x:8.4f}" for x in o.rms[0])
+                + f"   {np.max(o.ratio[0]):.3f}   (outer gains k_p, k_i, k_d = {g})"
+            )
+            lines.append(
+                "      initial     " + " ".join(f"{1e3 * x:8.4f}" for x in o.rms_initial[0])
+            )
+            if o.faulted:
+                lines.append("      (the run with these gains faulted on the robot)")
         good = [j for j in range(v.rms.shape[0]) if j not in v.faulted]
         ok = bool(good) and bool(np.all(v.ratio[good] <= 1 / 3))
         lines.append(

@@ -33,6 +33,9 @@ from rss6.identify_report import IdentifyReport, loop_text, quantities
 
 __all__ = ["IdentifyReport", "estimate_from_initial", "initial_model", "run"]
 
+#: The visual PID's gains (k_p, k_i 1/s, k_d s) of the extra validation run (§5.6.3: the identified
+#: model must also predict the loop with gains other than the identification run's 0.3, 2.4, 0.001).
+OTHER_OUTER_GAINS = (0.45, 1.6, 0.002)
 #: Friction of the initial model (N·m, N·m·s/rad).
 INITIAL_FRICTION = (0.1, 0.1)
 #: Drive gains of the initial model (rss6's tuned gains, PidGains::tuned).
@@ -363,6 +366,17 @@ def run(
     if b is not None:
         b.close()
     files += [outdir / f"validation_{i}.mcap" for i in range(n_val)]
+    # §5.6.3: one more validation run with outer-loop gains other than the identification run's.
+    other = identify.validate(
+        result,
+        make_robot(),
+        n=1,
+        seed=seed + 2000,
+        harmonics=harmonics,
+        f0=f0,
+        amplitude=amplitude,
+        outer_gains=OTHER_OUTER_GAINS,
+    )
     elapsed["validation"] = time.perf_counter() - t0
     d1 = val.data[0]
     plots.identification_fit(
@@ -414,6 +428,7 @@ def run(
         rms_before=np.asarray(rms_b),
         rms_after=np.asarray(rms_a),
         validation=val,
+        validation_other_gains=other,
         error=error,
         files=files,
         elapsed=elapsed,

@@ -64,6 +64,7 @@ def validate(
     amplitude: tuple[float, float] = (0.001, 0.005),
     mcap_dir: str | Path | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    outer_gains: tuple[float, float, float] | None = None,
     **limits: Any,
 ) -> Validation:
     """Validation on fresh trajectories (thesis §5.5, Tables 5.3–5.5): ``n`` random feasible
@@ -71,7 +72,9 @@ def validate(
     collected on ``robot`` (:func:`collect`), then the identified model and the initial one
     (``result.guess``) simulated in the loop at the frame times. ``kp_model`` defaults to the model's
     kinematics; ``sensor_in_base``/``target_in_effector`` to the robot's truth (simulated robots).
-    ``mcap_dir``: one log per trajectory (``validation_<i>.mcap``). ``progress(done, n)``."""
+    ``mcap_dir``: one log per trajectory (``validation_<i>.mcap``). ``progress(done, n)``.
+    ``outer_gains`` (k_p, k_i, k_d): the visual PID's gains on the robot and in the model (None: the
+    thesis's) — the thesis also validates with gains other than the identification run's."""
     kp = result.model.kp if kp_model is None else kp_model
     if sensor_in_base is None or target_in_effector is None:
         if not hasattr(robot, "truth"):
@@ -100,6 +103,7 @@ def validate(
             sensor_in_base=sensor_in_base,
             target_in_effector=target_in_effector,
             mcap=mcap,
+            outer_gains=outer_gains,
         )
         for out, (dp, pid) in ((rms, (result.dynamics, result.pid)), (rms0, result.guess)):
             chi = simulate(
@@ -115,6 +119,7 @@ def validate(
                 friction_smoothing=m.friction_smoothing,
                 implicit_friction=m.implicit_friction,
                 commands=d.frame_commands() if m.commands == "recorded" else None,
+                outer_gains=outer_gains,
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

@@ -7,7 +7,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rss6_core::{Mat3, PlatformLoad, Vec3, Vec6};
-use rss6_ctrl::PidGains;
+use rss6_ctrl::{CartesianPidGains, PidGains};
 use rss6_exp::ident::{self, IdentSpec};
 use rss6_exp::{Externals, Flow, Observer, Progress, Record};
 use rss6_ident::{
@@ -105,9 +105,10 @@ impl Observer for Collector {
 /// (KeyboardInterrupt included) the run stops and the exception propagates; Ctrl-C is checked at
 /// the same points. `mcap`: log the run there as it goes. `commands` (T, 6): joint commands
 /// (drive convention) sent one per tick instead of the visual PID's (a recorded run replayed;
-/// frames are still measured). Releases the GIL.
+/// frames are still measured). `outer_gains` (k_p, k_i, k_d): the visual PID's gains on every axis
+/// (None: the thesis's). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, f0, coefficients, duration, kp_model, sensor_in_base, target_in_effector, *, segment=1.0, progress=None, mcap=None, commands=None))]
+#[pyo3(signature = (robot, f0, coefficients, duration, kp_model, sensor_in_base, target_in_effector, *, segment=1.0, progress=None, mcap=None, commands=None, outer_gains=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identification_run<'py>(
     py: Python<'py>,
@@ -122,6 +123,7 @@ pub(crate) fn identification_run<'py>(
     progress: Option<Py<PyAny>>,
     mcap: Option<std::path::PathBuf>,
     commands: Option<&Bound<'py, PyAny>>,
+    outer_gains: Option<(f64, f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let exc = excitation(f0, coefficients)?;
     let externals = Externals {
@@ -132,6 +134,7 @@ pub(crate) fn identification_run<'py>(
     spec.duration = duration;
     spec.segment = segment;
     spec.commands = commands.map(|c| rows6(c, "commands")).transpose()?;
+    spec.gains = self::outer_gains(outer_gains)?;
     let mut log = match &mcap {
         Some(path) => Some(create_log(
             path,
@@ -198,6 +201,24 @@ type PsiAndParams<'py> = (Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64,
 
 fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
     PidGains { lp, li, ld }
+}
+
+/// The outer visual PID's gains (k_p, k_i 1/s, k_d s) on every axis, the thesis's anti-windup bound
+/// kept; `None`: the thesis's (0.3, 2.4, 0.001).
+pub(crate) fn outer_gains(g: Option<(f64, f64, f64)>) -> PyResult<CartesianPidGains> {
+    let mut gains = CartesianPidGains::thesis();
+    if let Some((kp, ki, kd)) = g {
+        if !(kp.is_finite() && kp > 0.0 && ki.is_finite() && ki >= 0.0 && kd.is_finite() && kd >= 0.0)
+        {
+            return Err(invalid(format!(
+                "outer_gains must be finite with k_p > 0 and k_i, k_d >= 0, got ({kp}, {ki}, {kd})"
+            )));
+        }
+        gains.kp = Vec6::repeat(kp);
+        gains.ki = Vec6::repeat(ki);
+        gains.kd = Vec6::repeat(kd);
+    }
+    Ok(gains)
 }
 
 /// The loop's configuration: `LoopConfig::new` with the given fields set.
@@ -270,7 +291,7 @@ fn apply_effects(
 /// `offset_drift` (6,) rad/s of the potentiometer offsets. Returns (frame times (F,), χ_s (F, 6),
 /// joint-ticks with the torque clamped).
 #[pyfunction]
-#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None))]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None, outer_gains=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_identification<'py>(
     py: Python<'py>,
@@ -291,6 +312,7 @@ pub(crate) fn simulate_identification<'py>(
     gravity: Option<&Bound<'py, PyAny>>,
     load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     offset_drift: Option<&Bound<'py, PyAny>>,
+    outer_gains: Option<(f64, f64, f64)>,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
     let mut cfg = loop_config(
@@ -304,6 +326,7 @@ pub(crate) fn simulate_identification<'py>(
         (friction_smoothing, implicit_friction),
         (gravity, load, offset_drift),
     )?;
+    cfg.gains = self::outer_gains(outer_gains)?;
     if let Some(c) = commands {
         cfg.recorded_commands = Some(rows6(c, "commands")?);
     }
@@ -332,7 +355,7 @@ pub(crate) fn simulate_identification<'py>(
 /// `simulate_identification` (re-identification with named effects). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -366,6 +389,7 @@ pub(crate) fn cloe_identify<'py>(
     gravity: Option<&Bound<'py, PyAny>>,
     load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     offset_drift: Option<&Bound<'py, PyAny>>,
+    outer_gains: Option<(f64, f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -387,6 +411,7 @@ pub(crate) fn cloe_identify<'py>(
         (friction_smoothing, implicit_friction),
         (gravity, load, offset_drift),
     )?;
+    cfg.gains = self::outer_gains(outer_gains)?;
     if let Some(c) = commands {
         cfg.recorded_commands = Some(rows6(c, "commands")?);
     }
