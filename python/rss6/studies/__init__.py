@@ -228,11 +228,14 @@ def summary_identification(df: Any) -> str:
         for c in est:
             v = ok[c].astype(float)
             line = f"  {c[4:]:12s} {float(v.std(ddof=1) / abs(v.mean())):.3g}"
+            spread = float(v.std(ddof=1) / abs(v.mean()))
             for col, label in ((f"std_{c[4:]}", "predicted"), (f"wald_{c[4:]}", "Wald")):
                 if col in ok.columns:
                     p = ok[col].replace("", np.nan).astype(float).dropna()
                     if len(p):
                         line += f"   {label} {float(p.median()):.3g}"
+                        if label == "predicted" and spread > 0:
+                            line += f" ({float(p.median()) / spread:.2f}× the spread)"
             lines.append(line)
     lines.append("Table 5.4 (RMS after, mm / mrad):")
     for _, r in ok.iterrows():
