@@ -208,7 +208,12 @@ fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
 pub(crate) fn outer_gains(g: Option<(f64, f64, f64)>) -> PyResult<CartesianPidGains> {
     let mut gains = CartesianPidGains::thesis();
     if let Some((kp, ki, kd)) = g {
-        if !(kp.is_finite() && kp > 0.0 && ki.is_finite() && ki >= 0.0 && kd.is_finite() && kd >= 0.0)
+        if !(kp.is_finite()
+            && kp > 0.0
+            && ki.is_finite()
+            && ki >= 0.0
+            && kd.is_finite()
+            && kd >= 0.0)
         {
             return Err(invalid(format!(
                 "outer_gains must be finite with k_p > 0 and k_i, k_d >= 0, got ({kp}, {ki}, {kd})"
