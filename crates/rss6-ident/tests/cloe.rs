@@ -56,7 +56,9 @@ fn spread_guess(truth: &LoopParams, names: &[String], spread: f64, seed: u64) ->
     cons.params(&moved)
 }
 
-const SANDWICH_WHITE_MAX: f64 = 10.0;
+/// Largest reported/Wald σ ratio on white noise: measured 1.000 in both noisy tests (the sandwich
+/// stayed at or below the Wald σ, which the report then keeps); 3× that.
+const SANDWICH_WHITE_MAX: f64 = 3.0;
 
 #[test]
 #[ignore = "≈ 10–20 s in release, over a minute in the debug test profile: cargo test --release -p rss6-ident --test cloe -- --include-ignored"]
@@ -211,8 +213,8 @@ fn noisy_cloe(cfg: &LoopConfig, truth: &LoopParams, seed: u64) {
         );
         assert!(z.abs() < 4.0, "{name}: z = {z}");
     }
-    // White noise: the sandwich (with 30 lags of serial correlation) adds little to the Wald σ
-    // (ratio measured below; bound 3× its excess over 1). It is never below the Wald value.
+    // White noise: the sandwich (with 30 lags of serial correlation) adds nothing to the Wald σ here
+    // (see the bound's comment). The reported σ is never below the Wald value.
     let worst = res
         .relative_std
         .iter()

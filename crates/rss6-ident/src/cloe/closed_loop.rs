@@ -487,7 +487,7 @@ impl<'a> Lean<'a> {
             Some(j) => j,
             // Sign (Coulomb frozen) or implicit (friction-free model): ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ/∂x of
             // the inverse dynamics, whose χ̇ steps need no IK.
-            None if eps == 0.0 => {
+            None if eps == 0.0 || implicit => {
                 let dp = if implicit { &self.dp_nf } else { &self.dp_nc };
                 let (dtp, dtv) =
                     inverse_dynamics_derivatives_with_env(&cfg.kp, dp, p, v, &a, &env, 1e-6, 1e-2)
