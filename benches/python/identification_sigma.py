@@ -1,11 +1,13 @@
 """How honest CLOE's σ is (docs/identification.md, "How honest is the σ" and "Filtering χ_m"):
 identifications of random thesis-size trajectories on the model twin (stick–slip law, the study's
 task `rss6.studies.tasks.identification_task`), optionally with the twin's potentiometer noise off
-or χ_m low-passed; prints per quantity the bias and spread of log(estimate/truth), the RMS of the
+or χ_m low-passed, or CLOE replaying the recorded potentiometer noise in the model's drive
+(``--pot-replay recorded``; ``exact``: the twin's true noise, docs/identification.md "Replaying the potentiometer noise"); prints per quantity the bias and spread of log(estimate/truth), the RMS of the
 reported σ and of its Wald part, and the median residual RMS. For the plant, use
 `rss6 study identification --n 10` (its summary prints σ / spread).
 
     python benches/python/identification_sigma.py [--n 10] [--pot-noise on|off] [--cutoff HZ]
+        [--pot-replay none|recorded|exact] [--robot twin|plant]
 """
 
 from __future__ import annotations
@@ -23,8 +25,10 @@ from rss6.studies import tasks
 NAMES = ["fc1", "fc2", "fc3", "fc4", "fc5", "fc6", "fv4", "li", "ld"]
 
 
-def run(seed: int, pot_noise: bool, cutoff: float | None) -> dict[str, Any]:
-    """One twin identification; the twin's constructor and CLOE patched in this worker only."""
+def run(
+    seed: int, pot_noise: bool, cutoff: float | None, replay: str, robot: str
+) -> dict[str, Any]:
+    """One identification; the twin's constructor and CLOE patched in this worker only."""
     if not pot_noise:
         cls = rss6.ModelSim
 
@@ -35,7 +39,22 @@ def run(seed: int, pot_noise: bool, cutoff: float | None) -> dict[str, Any]:
         rss6.ModelSim = twin  # type: ignore[misc]  # the task builds rss6.ModelSim for "twin"
     if cutoff is not None:
         identify.cloe = partial(identify.cloe, measured_cutoff=cutoff)  # type: ignore[assignment]
-    return tasks.identification_task({"seed": seed, "robot": "twin", "friction_law": "implicit"})
+    if replay == "recorded":
+        identify.cloe = partial(identify.cloe, pot_noise="recorded")  # type: ignore[assignment]
+    elif replay == "exact" and not getattr(identify.cloe, "exact_noise", False):
+        # The twin's true noise: its reading minus the true angle (a simulation only).
+        inner = identify.cloe
+
+        def exact(data: identify.IdentificationData, *a: Any, **k: Any) -> Any:
+            kp = rss6.KinematicParams.nominal()
+            theta = np.array([rss6.ik(kp, p) for p in np.asarray(data.true_pose)])
+            kappa = np.asarray(data.kappa)
+            read = np.array([kp.theta_from_reading(r) for r in kappa])
+            return inner(data, *a, pot_noise=read - theta, **k)
+
+        exact.exact_noise = True  # type: ignore[attr-defined]  # a worker runs several tasks
+        identify.cloe = exact  # type: ignore[assignment]
+    return tasks.identification_task({"seed": seed, "robot": robot, "friction_law": "implicit"})
 
 
 def main() -> None:
@@ -43,18 +62,27 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=10)
     ap.add_argument("--pot-noise", default="on", choices=("on", "off"))
     ap.add_argument("--cutoff", type=float, default=None)
+    ap.add_argument("--pot-replay", default="none", choices=("none", "recorded", "exact"))
+    ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
     dp, pid = identify.table_5_2_truth()
     truth = dict(
         zip(identify.parameter_names(), np.exp(np.asarray(rss6._rss6.cloe_psi(dp, pid)[0])))
     )
-    job = partial(run, pot_noise=args.pot_noise == "on", cutoff=args.cutoff)
+    job = partial(
+        run,
+        pot_noise=args.pot_noise == "on",
+        cutoff=args.cutoff,
+        replay=args.pot_replay,
+        robot=args.robot,
+    )
     with ProcessPoolExecutor(args.workers) as ex:
         recs = list(ex.map(job, range(args.n)))
     ok = [r for r in recs if r.get("status", "ok") == "ok"]
     print(
-        f"twin, potentiometer noise {args.pot_noise}, cutoff {args.cutoff}: {len(ok)}/{args.n} ok"
+        f"{args.robot}, potentiometer noise {args.pot_noise}, cutoff {args.cutoff}, "
+        f"noise replayed {args.pot_replay}: {len(ok)}/{args.n} ok"
     )
     for n in NAMES:
         rel = np.array([np.log(r[f"est_{n}"] / truth[n]) for r in ok])

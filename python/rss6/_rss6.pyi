@@ -598,6 +598,7 @@ def simulate_identification(
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
+    pot_dither: ArrayLike | None = None,
 ) -> tuple[_F64, _F64, int]: ...
 def cloe_identify(
     t: ArrayLike,
@@ -632,6 +633,7 @@ def cloe_identify(
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
+    pot_dither: ArrayLike | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...
 def table_5_2_truth_params() -> tuple[DynamicParams, tuple[float, float, float]]: ...

@@ -22,7 +22,7 @@ from rss6.errors import (
     ShapeError,
 )
 from rss6.excitation import Excitation, excitation, random_excitation
-from rss6.identify_linear import LinearGuess, linear_guess
+from rss6.identify_linear import LinearGuess, linear_guess, potentiometer_noise
 
 __all__ = [
     "Excitation",
@@ -36,6 +36,7 @@ __all__ = [
     "excitation",
     "linear_guess",
     "parameter_names",
+    "potentiometer_noise",
     "random_excitation",
     "simulate",
     "table_5_2_truth",
@@ -274,6 +275,7 @@ class LoopModel:
     friction_smoothing: float = 0.0
     implicit_friction: bool = False
     commands: str = "simulated"
+    pot_noise: str = "none"
 
 
 def simulate(
@@ -294,6 +296,7 @@ def simulate(
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
+    pot_dither: ArrayLike | None = None,
 ) -> F64:
     """χ_s (len(times), 6) of the model (``kp``, ``dynamics``, drive gains ``pid``) in the loop of
     Fig. 5.1 following ``excitation`` from rest at its start (drive ``derivative_filter`` T_f s,
@@ -302,8 +305,9 @@ def simulate(
     (:meth:`IdentificationData.frame_commands`), held instead of the model's visual PID output. Effects the model can express:
     ``gravity`` (3,) m/s² in the base frame (a tilted base), ``load`` = (mass kg, centre of mass (3,)
     m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform, ``offset_drift`` (6,) rad/s of the
-    potentiometer offsets; ``outer_gains``: the visual PID's (k_p, k_i, k_d) (None: the thesis's).
-    Returns the model's camera frames at ``times``
+    potentiometer offsets; ``outer_gains``: the visual PID's (k_p, k_i, k_d) (None: the thesis's);
+    ``pot_dither`` (T, 6) rad: potentiometer noise added to the model's readings, one row per tick
+    (:func:`rss6.identify.potentiometer_noise`). Returns the model's camera frames at ``times``
     (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
     otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
@@ -325,6 +329,7 @@ def simulate(
         implicit_friction=implicit_friction,
         commands=None if commands is None else np.asarray(commands, dtype=np.float64),
         outer_gains=outer_gains,
+        pot_dither=None if pot_dither is None else np.asarray(pot_dither, dtype=np.float64),
         **_effect_kwargs(gravity, load, offset_drift),
     )
     ts = np.asarray(ts)
@@ -462,6 +467,7 @@ def cloe(
     load: tuple[float, ArrayLike, ArrayLike] | None = None,
     offset_drift: ArrayLike | None = None,
     measured_cutoff: float | None = None,
+    pot_noise: str | ArrayLike = "none",
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
@@ -490,6 +496,11 @@ def cloe(
     above the 15 Hz of a 30 Hz camera and is refused). Default ``None``: no filter — the weights
     assume white noise and filtering correlates it; the reported σ (sandwich on the residual's
     autocovariance) stays honest either way (docs/identification.md, "Filtering χ_m").
+    ``pot_noise="recorded"``: the model's drive reads its potentiometers with the robot's recorded
+    noise added (:func:`rss6.identify.potentiometer_noise`, needs per-tick data): with stick–slip
+    the noise dithers the drive torque and breaks sticking joints free earlier; ``"none"``
+    (default): noise-free readings; an array (T, 6) rad: that noise, one row per tick (this run
+    only: the result's model replays none on other runs) (docs/identification.md, "Replaying the potentiometer noise").
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
@@ -520,6 +531,7 @@ def cloe(
     if commands not in ("simulated", "recorded"):
         raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
     held = data.frame_commands() if commands == "recorded" else None
+    dither = _dither(data, pot_noise)
     pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
     measured = data.measured if measured_cutoff is None else _lowpass(data, measured_cutoff)
     r = _rss6.cloe_identify(
@@ -549,6 +561,7 @@ def cloe(
         prior_log_std=0.0 if prior_log_std is None else float(prior_log_std),
         progress=progress,
         outer_gains=data.outer_gains,
+        pot_dither=dither,
         **_effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]
@@ -580,8 +593,21 @@ def cloe(
             friction_smoothing=friction_smoothing,
             implicit_friction=implicit_friction,
             commands=commands,
+            # An array is this run's noise: other runs (validation) replay none.
+            pot_noise=pot_noise if isinstance(pot_noise, str) else "none",
         ),
     )
+
+
+def _dither(data: IdentificationData, pot_noise: str | ArrayLike) -> F64 | None:
+    """The potentiometer noise to replay for ``pot_noise`` ("none", "recorded" or (T, 6) rad)."""
+    if not isinstance(pot_noise, str):
+        return _rows6(pot_noise, "pot_noise")
+    if pot_noise not in ("none", "recorded"):
+        raise InvalidInputError(f"pot_noise must be 'none' or 'recorded', got {pot_noise!r}")
+    if pot_noise == "none":
+        return None
+    return potentiometer_noise(data)
 
 
 # Validation and Table 5.5 live in identify_validate (they use the names above).

@@ -17,6 +17,7 @@ from rss6.excitation import Excitation, random_excitation
 from rss6.identify import (
     IdentificationData,
     IdentificationResult,
+    _dither,
     collect,
     parameter_names,
     simulate,
@@ -120,6 +121,7 @@ def validate(
                 implicit_friction=m.implicit_friction,
                 commands=d.frame_commands() if m.commands == "recorded" else None,
                 outer_gains=outer_gains,
+                pot_dither=_dither(d, m.pot_noise),
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

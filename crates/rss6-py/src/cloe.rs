@@ -293,10 +293,11 @@ fn apply_effects(
 /// held instead of the simulated visual PID's (None: the loop of eq. 5.4 closed on χ_s). Effects the model can express (the
 /// discrepancy workflow's candidates): `gravity` (3,) in the base frame (a tilted base), `load` =
 /// (mass kg, centre of mass (3,) m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform,
-/// `offset_drift` (6,) rad/s of the potentiometer offsets. Returns (frame times (F,), χ_s (F, 6),
-/// joint-ticks with the torque clamped).
+/// `offset_drift` (6,) rad/s of the potentiometer offsets. `pot_dither` (T, 6): potentiometer
+/// noise (drive convention, rad) added to the model's reading at each sampling tick (row = tick).
+/// Returns (frame times (F,), χ_s (F, 6), joint-ticks with the torque clamped).
 #[pyfunction]
-#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None, outer_gains=None))]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simulate_identification<'py>(
     py: Python<'py>,
@@ -318,6 +319,7 @@ pub(crate) fn simulate_identification<'py>(
     load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     offset_drift: Option<&Bound<'py, PyAny>>,
     outer_gains: Option<(f64, f64, f64)>,
+    pot_dither: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<SimulatedFrames<'py>> {
     let exc = excitation(f0, coefficients)?;
     let mut cfg = loop_config(
@@ -334,6 +336,9 @@ pub(crate) fn simulate_identification<'py>(
     cfg.gains = self::outer_gains(outer_gains)?;
     if let Some(c) = commands {
         cfg.recorded_commands = Some(rows6(c, "commands")?);
+    }
+    if let Some(d) = pot_dither {
+        cfg.pot_dither = Some(rows6(d, "pot_dither")?);
     }
     let a = LoopParams {
         dynamics: dp.inner,
@@ -357,10 +362,10 @@ pub(crate) fn simulate_identification<'py>(
 /// `torque_limit`, `camera_latency`, `dt`, run for `duration` s. `progress(iteration, cost)` after
 /// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
 /// propagates. `gravity`, `load`, `offset_drift`: effects of the model, as for
-/// `simulate_identification` (re-identification with named effects). Returns a dict (see
+/// `simulate_identification` (re-identification with named effects); `pot_dither` as there. Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -395,6 +400,7 @@ pub(crate) fn cloe_identify<'py>(
     load: Option<(f64, Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     offset_drift: Option<&Bound<'py, PyAny>>,
     outer_gains: Option<(f64, f64, f64)>,
+    pot_dither: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -419,6 +425,9 @@ pub(crate) fn cloe_identify<'py>(
     cfg.gains = self::outer_gains(outer_gains)?;
     if let Some(c) = commands {
         cfg.recorded_commands = Some(rows6(c, "commands")?);
+    }
+    if let Some(d) = pot_dither {
+        cfg.pot_dither = Some(rows6(d, "pot_dither")?);
     }
     let guess = LoopParams {
         dynamics: dp_guess.inner,

@@ -155,7 +155,7 @@ impl<'a> Lean<'a> {
         let mut dp_nf = dp_nc;
         dp_nf.viscous = [0.0; LEGS];
         let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
-        let theta_meas = cfg.pot_angle(&theta, 0.0);
+        let theta_meas = cfg.pot_angle(&theta, 0.0) + cfg.dither(0, 0.0)?;
         let pot_scale = Vec6::from_fn(|i, _| cfg.drive.eta[i] / cfg.kp.eta[i]);
         // The visual PID starts from the drive-convention angle of the first reading.
         let bias = theta_meas;
@@ -253,19 +253,26 @@ impl<'a> Lean<'a> {
                 .iter()
                 .filter(|t| t.abs() >= cfg.torque_limit)
                 .count();
-            let held = if cfg.implicit_friction {
-                let st = self.friction(&tau_sens, t)?;
+            if cfg.implicit_friction {
+                let (p0, v0) = (self.pose, self.pose_dot);
+                let st = friction::solve(cfg, &self.dp, &p0, &v0, &tau_sens.0, t)?;
                 out.inexact_friction += usize::from(!st.exact);
                 out.stuck_joint_ticks += st.stuck;
-                (st.net, st.s_net)
+                // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
+                let s1 = self.stage(&p0, &v0, &st.net, t, None)?;
+                let s_net = self.friction_sensitivity(&st, &tau_sens.1, &s1, t)?;
+                self.rk4(&(st.net, s_net), t, Some(s1))?;
             } else {
-                tau_sens
-            };
-            self.rk4(&held, t)?;
+                self.rk4(&tau_sens, t, None)?;
+            }
             let tick_new = tick + 1;
             if tick_new % self.pot_ticks == 0 {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
+                // The last reading of the run is never used: no dither row is needed for it.
                 self.theta_meas = cfg.pot_angle(&theta, t + cfg.dt);
+                if tick_new < ticks {
+                    self.theta_meas += cfg.dither(tick_new, t + cfg.dt)?;
+                }
                 if let Some(s) = self.sens.as_mut() {
                     let j =
                         jacobian_theta(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
@@ -426,18 +433,32 @@ impl<'a> Lean<'a> {
     }
 
     /// The implicit friction of this tick under the drive torques (see [`super::friction`]).
-    fn friction(&self, tau: &(Vec6, Option<Sens>), t: f64) -> Result<friction::Step> {
-        let sens = match (&self.sens, &tau.1) {
-            (Some(s), Some(s_tau)) => Some(StepSens {
-                columns: &s.columns,
-                p: &s.p,
-                v: &s.v,
-                tau: s_tau,
-            }),
-            _ => None,
+    /// ∂(τ_a − τ_f)/∂A of the solved tick `st` (None without sensitivities), from the tick's
+    /// first RK4 stage `s1`.
+    fn friction_sensitivity(
+        &self,
+        st: &friction::Step,
+        s_tau: &Option<Sens>,
+        s1: &Stage,
+        t: f64,
+    ) -> Result<Option<Sens>> {
+        let (Some(s), Some(s_tau), Some((fp, fv, _, fxi))) = (&self.sens, s_tau, &s1.jac) else {
+            return Ok(None);
+        };
+        let sens = StepSens {
+            columns: &s.columns,
+            p: &s.p,
+            v: &s.v,
+            tau: s_tau,
+        };
+        let first = friction::FirstStage {
+            a: &s1.a,
+            fp,
+            fv,
+            fxi,
         };
         let (p, v) = (&self.pose, &self.pose_dot);
-        friction::step(self.cfg, &self.dp, &self.dp_nf, p, v, &tau.0, sens, t)
+        friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
     }
 
     /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
@@ -531,11 +552,15 @@ impl<'a> Lean<'a> {
     }
 
     /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
-    fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64) -> Result<()> {
+    /// `first`: the first stage if already evaluated at the current state with `tau`.
+    fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64, first: Option<Stage>) -> Result<()> {
         let dt = self.cfg.dt;
         let (tau, s_tau) = tau;
         let (p0, v0) = (self.pose, self.pose_dot);
-        let s1 = self.stage(&p0, &v0, tau, t, None)?;
+        let s1 = match first {
+            Some(s) => s,
+            None => self.stage(&p0, &v0, tau, t, None)?,
+        };
         // PerTick: the state Jacobians of stage 1 serve all four stages.
         let frozen = match (&s1.jac, self.cfg.state_jacobians) {
             (Some((fp, fv, _, _)), StateJacobians::PerTick) => Some((*fp, *fv)),

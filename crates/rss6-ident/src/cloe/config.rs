@@ -67,6 +67,12 @@ pub struct LoopConfig {
     /// camera noise fed back through the visual PID moves the robot by more than the noise itself
     /// (docs/identification.md); with the recorded commands that motion is in the input.
     pub recorded_commands: Option<Vec<Vec6>>,
+    /// Potentiometer noise to replay (drive convention, rad), one row per joint-loop tick: at each
+    /// sampling tick k the simulated reading is the noise-free angle plus row k. The robot's drive
+    /// reacts to its noisy potentiometers, and with stick–slip that dither breaks sticking joints
+    /// free earlier than a clean replay does (docs/identification.md, "Replaying the
+    /// potentiometer noise"). `None`: noise-free readings. Its sensitivity is 0 (data).
+    pub pot_dither: Option<Vec<Vec6>>,
 }
 
 /// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
@@ -105,6 +111,7 @@ impl LoopConfig {
             duration,
             state_jacobians: StateJacobians::Exact,
             recorded_commands: None,
+            pot_dither: None,
         }
     }
 
@@ -145,6 +152,13 @@ impl LoopConfig {
             if let Some(k) = rec.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
                 return Err(IdentError::InvalidInput(format!(
                     "recorded command {k} is not finite"
+                )));
+            }
+        }
+        if let Some(d) = &self.pot_dither {
+            if let Some(k) = d.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+                return Err(IdentError::InvalidInput(format!(
+                    "potentiometer dither row {k} is not finite"
                 )));
             }
         }
@@ -216,6 +230,20 @@ impl LoopConfig {
             let kappa = (theta[i] - (m.dtheta[i] + self.offset_drift[i] * t)) / m.eta[i] + 0.0;
             d.eta[i] * kappa + d.dtheta[i]
         })
+    }
+
+    /// Row `tick` of [`pot_dither`](Self::pot_dither) (0 without one); a list that ends before
+    /// the run does is an [`IdentError::InvalidInput`].
+    pub(super) fn dither(&self, tick: u64, t: f64) -> Result<Vec6> {
+        match &self.pot_dither {
+            None => Ok(Vec6::zeros()),
+            Some(d) => d.get(tick as usize).copied().ok_or_else(|| {
+                IdentError::InvalidInput(format!(
+                    "the potentiometer dither ends at tick {} (t = {t:.4} s)",
+                    d.len()
+                ))
+            }),
+        }
     }
 
     /// Gravity and the platform load as the dynamics take them.

@@ -23,7 +23,7 @@
 use super::closed_loop::simulate;
 use super::config::{LoopConfig, LoopParams, LoopRun};
 use super::consistent::{Consistent, N_PSI};
-use super::hac::long_run_covariance;
+use super::hac::{local_long_run_covariance, long_run_covariance};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
 use nalgebra::{DMatrix, DVector};
@@ -139,12 +139,14 @@ pub struct CloeResult {
     /// residual of that combination (≈ 0: a base combination; near 1: the output hardly sees it).
     pub aliases: Vec<Alias>,
     /// Relative standard deviation of every estimated quantity (same order as `identified`): the
-    /// larger of [`relative_std_wald`](Self::relative_std_wald) and the sandwich A⁻¹ S A⁻¹, A = GᵀG
-    /// (prior rows included), S = Σ_l w_l Σ_k G_kᵀ γ(l) G_{k−l} with γ(l) the residual's
-    /// autocovariance between frames l apart (Bartlett weights, [`CloeOptions::hac_lags`] lags).
-    /// The Wald value assumes white residuals of the weighted size; the sandwich also sees
-    /// residuals correlated in time (the loop's own model error), which the spread over
-    /// trajectories shows.
+    /// largest of [`relative_std_wald`](Self::relative_std_wald) and two sandwiches A⁻¹ S A⁻¹,
+    /// A = GᵀG (prior rows included), over [`CloeOptions::hac_lags`] frames with Bartlett weights:
+    /// *stationary*, S = Σ_l w_l Σ_k G_kᵀ γ(l) G_{k−l} with γ(l) the residual's autocovariance
+    /// between frames l apart, and *local*, Newey–West on the per-frame scores G_kᵀ r_k (it sees
+    /// model error where it happens, a start transient; alone it cancels the variance of a quantity
+    /// seen in a short window). The Wald value assumes white residuals of the weighted size; the
+    /// sandwiches also see residuals correlated in time (the loop's own model error), which the
+    /// spread over trajectories shows.
     pub relative_std: Vec<f64>,
     /// The Wald relative standard deviation alone: sqrt(Φ/(N − p) · (GᵀG)⁻¹_kk).
     pub relative_std_wald: Vec<f64>,
@@ -523,10 +525,15 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                 .map(|k| (sigma2 * inv[(k, k)]).sqrt())
                 .collect();
             let gs = g.select_columns(&active);
-            let s = long_run_covariance(&gs, &cur.residual, 6, options.hac_lags);
-            let sandwich = &inv * s * &inv;
+            let stationary = long_run_covariance(&gs, &cur.residual, 6, options.hac_lags);
+            let local = local_long_run_covariance(&gs, &cur.residual, 6, options.hac_lags);
+            let sw = &inv * stationary * &inv;
+            let sl = &inv * local * &inv;
             let robust = (0..active.len())
-                .map(|k| wald[k].max(sandwich[(k, k)].max(0.0).sqrt()))
+                .map(|k| {
+                    let v = sw[(k, k)].max(sl[(k, k)]).max(0.0);
+                    wald[k].max(v.sqrt())
+                })
                 .collect();
             (wald, robust)
         }

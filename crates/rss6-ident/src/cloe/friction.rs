@@ -18,16 +18,17 @@
 //! dg = G_χ dχ + G_χ̇ dχ̇ + K dτ_a + dt J_θ ∂χ̈/∂Ξ dΞ      (∂χ̈/∂Ξ = −M̃⁻¹J_θᵀΓ, friction-free)
 //! ```
 //!
-//! G_χ and G_χ̇ are central differences of g with τ_a − τ_f held (12 calls each; g is quadratic in
-//! χ̇, so that difference is exact whatever the step). The derivative of a change of stick set is
-//! ignored, as the sign law's derivative of sign(θ̇) is: both are events of measure zero in A.
+//! G_χ and G_χ̇ come from the tick's first RK4 stage (same state, same held τ_a − τ_f): its state
+//! Jacobians F_χ, F_χ̇ and ∂χ̈/∂Ξ, plus the kinematic part of g by central differences (see
+//! [`sensitivity`]). The derivative of a change of stick set is ignored, as the sign law's
+//! derivative of sign(θ̇) is: both are events of measure zero in A.
 
 use super::config::LoopConfig;
 use crate::error::{IdentError, Result};
 use nalgebra::{Dyn, OMatrix, U6};
 use rss6_core::{
-    forward_dynamics_with_env, implicit_friction, jacobian_theta, mass_matrix_with_env,
-    regressor_with_gravity, DynamicParams, Mat6, Vec6, LEGS,
+    implicit_friction, jacobian_theta, twist_jacobian_dot, twist_jacobian_inverse, DynamicParams,
+    FrictionStep, Mat6, Vec6, LEGS,
 };
 
 /// A 6 × p block of sensitivities (rows: a 6-vector's components, columns: active parameters).
@@ -49,71 +50,95 @@ pub(super) struct StepSens<'s> {
 pub(super) struct Step {
     /// τ_a − τ_f, held over the tick on the friction-free model.
     pub net: Vec6,
-    /// ∂(τ_a − τ_f)/∂A when sensitivities are on.
-    pub s_net: Option<Sens>,
+    /// The core's solution (stick set, rates, compliance K).
+    pub solved: FrictionStep,
     /// Whether the friction solve converged exactly ([`rss6_core::FrictionStep::exact`]).
     pub exact: bool,
     /// How many joints stick over the tick.
     pub stuck: usize,
 }
 
-/// The friction of one tick from (χ, χ̇) = (`p`, `v`) under the held drive torque `tau`, with `dp`
-/// the full parameters (friction included) and `dp_nf` the same without friction.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn step(
+/// The friction of one tick from (χ, χ̇) = (`p`, `v`) under the held drive torque `tau` (the
+/// values only; [`sensitivity`] adds the derivatives once the tick's first RK4 stage is known).
+pub(super) fn solve(
     cfg: &LoopConfig,
     dp: &DynamicParams,
-    dp_nf: &DynamicParams,
     p: &Vec6,
     v: &Vec6,
     tau: &Vec6,
-    sens: Option<StepSens<'_>>,
     t: f64,
 ) -> Result<Step> {
     let env = cfg.environment();
+    let f = implicit_friction(&cfg.kp, dp, p, v, tau, &env, cfg.dt).map_err(|e| sim_err(t, e))?;
+    Ok(Step {
+        net: tau - f.torque,
+        stuck: f.stuck.iter().filter(|&&b| b).count(),
+        exact: f.exact,
+        solved: f,
+    })
+}
+
+/// The tick's first RK4 stage at (χ, χ̇, τ_a − τ_f) on the friction-free model: χ̈, F_χ, F_χ̇,
+/// M̃⁻¹J_θᵀ and −M̃⁻¹J_θᵀΓ on the active columns (zero for friction and gains).
+pub(super) struct FirstStage<'s> {
+    pub a: &'s Vec6,
+    pub fp: &'s Mat6,
+    pub fv: &'s Mat6,
+    pub fxi: &'s Sens,
+}
+
+/// ∂(τ_a − τ_f)/∂A of a solved tick. The free rates are w₀ = J_adᵀ(ξ + dt ξ̇) with ξ = J_s χ̇ and
+/// ξ̇ = J_s χ̈ + J̇_s χ̇ (the twist), i.e. w₀ = J_θ(χ̇ + dt χ̈ + dt J_s⁻¹J̇_s χ̇): with χ̈ the first
+/// stage's, ∂w₀/∂x = ∂w₀/∂x|_χ̈ + dt J_θ F_x and ∂w₀/∂Ξ = dt J_θ ∂χ̈/∂Ξ. The first term is
+/// kinematics only (central differences of J_θ and J̇_s, 24 cheap calls) — the stage's state
+/// Jacobians replace 24 dynamics calls per tick.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn sensitivity(
+    cfg: &LoopConfig,
+    dp: &DynamicParams,
+    step: &Step,
+    p: &Vec6,
+    v: &Vec6,
+    s: StepSens<'_>,
+    first: FirstStage<'_>,
+    t: f64,
+) -> Result<Sens> {
     let dt = cfg.dt;
-    let f = implicit_friction(&cfg.kp, dp, p, v, tau, &env, dt).map_err(|e| sim_err(t, e))?;
-    let net = tau - f.torque;
-    let stuck = f.stuck.iter().filter(|&&b| b).count();
-    let Some(s) = sens else {
-        return Ok(Step {
-            net,
-            s_net: None,
-            exact: f.exact,
-            stuck,
-        });
-    };
+    let f = &step.solved;
     let n = s.columns.len();
-    // g with τ_a − τ_f held: the free rates of a friction-free step.
-    let g = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
-        Ok(implicit_friction(&cfg.kp, dp_nf, pp, vv, &net, &env, dt)
-            .map_err(|e| sim_err(t, e))?
-            .free_rate)
+    let kin = |pp: &Vec6, vv: &Vec6, u: &Vec6| -> Result<Vec6> {
+        let j = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))?;
+        let js_inv = twist_jacobian_inverse(pp).map_err(|e| sim_err(t, e))?;
+        Ok(j * (u + js_inv * (twist_jacobian_dot(pp, vv) * vv) * dt))
     };
+    // χ̈ held: w₀ = kin(χ, χ̇, χ̇ + dt χ̈); χ̇ enters u linearly (identity) and J̇_s χ̇ quadratically.
+    let u = v + first.a * dt;
+    let (mut kp_, mut kv_) = (Mat6::zeros(), Mat6::zeros());
+    for c in 0..6 {
+        let (mut pp, mut pm) = (*p, *p);
+        pp[c] += 1e-6;
+        pm[c] -= 1e-6;
+        kp_.set_column(
+            c,
+            &((kin(&pp, v, &u)? - kin(&pm, v, &u)?) / (pp[c] - pm[c])),
+        );
+        let (mut vp, mut vm) = (*v, *v);
+        vp[c] += 1e-2;
+        vm[c] -= 1e-2;
+        let (up, um) = (vp + first.a * dt, vm + first.a * dt);
+        kv_.set_column(
+            c,
+            &((kin(p, &vp, &up)? - kin(p, &vm, &um)?) / (vp[c] - vm[c])),
+        );
+    }
+    let j = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
+    let jdt = j * dt;
+    let gp = kp_ + jdt * first.fp;
+    let gv = kv_ + jdt * first.fv;
     let mut dg = f.compliance * s.tau;
-    let (gp, gv) = central_jacobians(g, p, v, 1e-2)?;
     dg += gp * s.p + gv * s.v;
     // The mass parameters act through the friction-free acceleration over the tick.
-    if s.columns.iter().any(|&c| c < COULOMB) {
-        let a = forward_dynamics_with_env(&cfg.kp, dp_nf, p, v, &net, &env)
-            .map_err(|e| sim_err(t, e))?;
-        let m = mass_matrix_with_env(&cfg.kp, dp, p, &env).map_err(|e| sim_err(t, e))?;
-        let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
-            time: t,
-            message: "the mass matrix is not positive definite".into(),
-        })?;
-        let j = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
-        let jft = j * chol.solve(&j.transpose()) * dt;
-        let gamma =
-            regressor_with_gravity(&cfg.kp, p, v, &a, &cfg.gravity).map_err(|e| sim_err(t, e))?;
-        for (c, &col) in s.columns.iter().enumerate() {
-            if col < COULOMB {
-                let d = -(jft * gamma.column(col));
-                let mut dst = dg.column_mut(c);
-                dst += d;
-            }
-        }
-    }
+    dg += jdt * first.fxi;
     // The active-set system A dτ_f = R.
     let k = &f.compliance;
     let mut a = Mat6::zeros();
@@ -143,12 +168,7 @@ pub(super) fn step(
         time: t,
         message: "the implicit friction step's active-set system is singular".into(),
     })?;
-    Ok(Step {
-        net,
-        s_net: Some(s.tau - s_tf),
-        exact: f.exact,
-        stuck,
-    })
+    Ok(s.tau - s_tf)
 }
 
 /// Central differences (∂f/∂χ, ∂f/∂χ̇) of a 6-vector function of the state at (`p`, `v`): steps
