@@ -8,6 +8,7 @@ reported σ and of its Wald part, and the median residual RMS. For the plant, us
 
     python benches/python/identification_sigma.py [--n 10] [--pot-noise on|off] [--cutoff HZ]
         [--pot-replay none|recorded|exact] [--robot twin|plant]
+    python benches/python/identification_sigma.py --estimate-error   # potentiometer_noise's error
 """
 
 from __future__ import annotations
@@ -57,6 +58,40 @@ def run(
     return tasks.identification_task({"seed": seed, "robot": robot, "friction_law": "implicit"})
 
 
+def estimate_error() -> None:
+    """RMS of (potentiometer_noise − the twin's true noise) / noise at the sampling ticks, for a
+    thesis-size and a fast 2 s trajectory and three cut-offs."""
+    kp = rss6.KinematicParams.nominal()
+    dp, pid = identify.table_5_2_truth()
+    for name, exc in (
+        ("thesis-size", identify.random_excitation(kp, seed=0, amplitude=(0.001, 0.005))),
+        (
+            "fast 2 s",
+            identify.random_excitation(kp, harmonics=3, f0=0.5, seed=1, amplitude=(0.01, 0.05)),
+        ),
+    ):
+        robot = rss6.ModelSim(
+            kp, dp, pid=pid, seed=3, drive_derivative_filter=5e-3, implicit_friction=True
+        )
+        tr = robot.truth()
+        d = identify.collect(
+            robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
+            target_in_effector=tr["target_in_effector"],
+        )  # fmt: skip
+        theta = np.array([rss6.ik(kp, p) for p in np.asarray(d.true_pose)])
+        noise = np.array([kp.theta_from_reading(k) for k in np.asarray(d.kappa)]) - theta
+        kappa = np.asarray(d.kappa)
+        fresh = np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
+        line = []
+        for cutoff in (50.0, 100.0, 150.0):
+            est = identify.potentiometer_noise(d, cutoff=cutoff)
+            err = np.std(est[fresh] - noise[fresh]) / np.std(noise[fresh])
+            line.append(f"{cutoff:.0f} Hz {err:.2f}")
+        print(
+            f"{name:12s} noise RMS {np.std(noise[fresh]):.2e} rad; error/noise: " + ", ".join(line)
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--n", type=int, default=10)
@@ -65,7 +100,11 @@ def main() -> None:
     ap.add_argument("--pot-replay", default="none", choices=("none", "recorded", "exact"))
     ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--estimate-error", action="store_true")
     args = ap.parse_args()
+    if args.estimate_error:
+        estimate_error()
+        return
     dp, pid = identify.table_5_2_truth()
     truth = dict(
         zip(identify.parameter_names(), np.exp(np.asarray(rss6._rss6.cloe_psi(dp, pid)[0])))

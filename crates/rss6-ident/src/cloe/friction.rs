@@ -106,35 +106,8 @@ pub(super) fn sensitivity(
     let dt = cfg.dt;
     let f = &step.solved;
     let n = s.columns.len();
-    let kin = |pp: &Vec6, vv: &Vec6, u: &Vec6| -> Result<Vec6> {
-        let j = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))?;
-        let js_inv = twist_jacobian_inverse(pp).map_err(|e| sim_err(t, e))?;
-        Ok(j * (u + js_inv * (twist_jacobian_dot(pp, vv) * vv) * dt))
-    };
-    // χ̈ held: w₀ = kin(χ, χ̇, χ̇ + dt χ̈); χ̇ enters u linearly (identity) and J̇_s χ̇ quadratically.
-    let u = v + first.a * dt;
-    let (mut kp_, mut kv_) = (Mat6::zeros(), Mat6::zeros());
-    for c in 0..6 {
-        let (mut pp, mut pm) = (*p, *p);
-        pp[c] += 1e-6;
-        pm[c] -= 1e-6;
-        kp_.set_column(
-            c,
-            &((kin(&pp, v, &u)? - kin(&pm, v, &u)?) / (pp[c] - pm[c])),
-        );
-        let (mut vp, mut vm) = (*v, *v);
-        vp[c] += 1e-2;
-        vm[c] -= 1e-2;
-        let (up, um) = (vp + first.a * dt, vm + first.a * dt);
-        kv_.set_column(
-            c,
-            &((kin(p, &vp, &up)? - kin(p, &vm, &um)?) / (vp[c] - vm[c])),
-        );
-    }
-    let j = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
+    let (gp, gv, j) = free_rate_jacobians(cfg, p, v, &first, t)?;
     let jdt = j * dt;
-    let gp = kp_ + jdt * first.fp;
-    let gv = kv_ + jdt * first.fv;
     let mut dg = f.compliance * s.tau;
     dg += gp * s.p + gv * s.v;
     // The mass parameters act through the friction-free acceleration over the tick.
@@ -169,6 +142,47 @@ pub(super) fn sensitivity(
         message: "the implicit friction step's active-set system is singular".into(),
     })?;
     Ok(s.tau - s_tf)
+}
+
+/// (∂w₀/∂χ, ∂w₀/∂χ̇, J_θ) of the free rates w₀ = J_θ(χ̇ + dt χ̈ + dt J_s⁻¹J̇_s χ̇) at (`p`, `v`) with
+/// the first stage's χ̈ and its state Jacobians (see [`sensitivity`]).
+pub(super) fn free_rate_jacobians(
+    cfg: &LoopConfig,
+    p: &Vec6,
+    v: &Vec6,
+    first: &FirstStage<'_>,
+    t: f64,
+) -> Result<(Mat6, Mat6, Mat6)> {
+    let dt = cfg.dt;
+    let kin = |pp: &Vec6, vv: &Vec6, u: &Vec6| -> Result<Vec6> {
+        let j = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))?;
+        let js_inv = twist_jacobian_inverse(pp).map_err(|e| sim_err(t, e))?;
+        Ok(j * (u + js_inv * (twist_jacobian_dot(pp, vv) * vv) * dt))
+    };
+    // χ̈ held: w₀ = kin(χ, χ̇, χ̇ + dt χ̈); χ̇ enters u linearly and J̇_s χ̇ quadratically (the χ̇
+    // differences are exact for any step).
+    let u = v + first.a * dt;
+    let (mut kp_, mut kv_) = (Mat6::zeros(), Mat6::zeros());
+    for c in 0..6 {
+        let (mut pp, mut pm) = (*p, *p);
+        pp[c] += 1e-6;
+        pm[c] -= 1e-6;
+        kp_.set_column(
+            c,
+            &((kin(&pp, v, &u)? - kin(&pm, v, &u)?) / (pp[c] - pm[c])),
+        );
+        let (mut vp, mut vm) = (*v, *v);
+        vp[c] += 1e-2;
+        vm[c] -= 1e-2;
+        let (up, um) = (vp + first.a * dt, vm + first.a * dt);
+        kv_.set_column(
+            c,
+            &((kin(p, &vp, &up)? - kin(p, &vm, &um)?) / (vp[c] - vm[c])),
+        );
+    }
+    let j = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
+    let jdt = j * dt;
+    Ok((kp_ + jdt * first.fp, kv_ + jdt * first.fv, j))
 }
 
 /// Central differences (∂f/∂χ, ∂f/∂χ̇) of a 6-vector function of the state at (`p`, `v`): steps
@@ -207,5 +221,61 @@ pub(super) fn sim_err(time: f64, e: rss6_core::CoreError) -> IdentError {
     IdentError::Simulation {
         time,
         message: e.to_string(),
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::cloe::truth::table_5_2_truth;
+    use rand::{Rng, SeedableRng};
+    use rss6_core::{forward_dynamics_with_env, home_pose, KinematicParams};
+
+    /// The free rates' derivatives built from the first stage equal central differences of the
+    /// core's own free-rate prediction ([`implicit_friction`]`.free_rate`, friction-free), at
+    /// random states with up to 0.1 rad of rotation: the identity J_θ = J_adᵀJ_s the formula uses.
+    #[test]
+    fn free_rate_jacobians_match_the_cores_prediction() {
+        let kp = KinematicParams::nominal();
+        let cfg = LoopConfig::new(kp, home_pose(), 1.0);
+        let mut dp = table_5_2_truth().dynamics;
+        dp.coulomb = [0.0; LEGS];
+        dp.viscous = [0.0; LEGS];
+        let env = cfg.environment();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let mut worst: f64 = 0.0;
+        for _ in 0..20 {
+            let mut p = home_pose();
+            for k in 0..6 {
+                p[k] += if k < 3 { 0.01 } else { 0.1 } * rng.random_range(-1.0..1.0);
+            }
+            let v = Vec6::from_fn(|_, _| rng.random_range(-0.5..0.5));
+            let tau = Vec6::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let fd = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
+                forward_dynamics_with_env(&kp, &dp, pp, vv, &tau, &env).map_err(|e| sim_err(0.0, e))
+            };
+            let a = fd(&p, &v).unwrap();
+            let (fp, fv) = central_jacobians(fd, &p, &v, 1e-6).unwrap();
+            let fxi = Sens::zeros(0);
+            let first = FirstStage {
+                a: &a,
+                fp: &fp,
+                fv: &fv,
+                fxi: &fxi,
+            };
+            let (gp, gv, _) = free_rate_jacobians(&cfg, &p, &v, &first, 0.0).unwrap();
+            let w0 = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
+                Ok(implicit_friction(&kp, &dp, pp, vv, &tau, &env, cfg.dt)
+                    .map_err(|e| sim_err(0.0, e))?
+                    .free_rate)
+            };
+            let (rp, rv) = central_jacobians(w0, &p, &v, 1e-2).unwrap();
+            worst = worst
+                .max((gp - rp).amax() / rp.amax())
+                .max((gv - rv).amax() / rv.amax());
+        }
+        println!("worst relative difference {worst:.2e}");
+        assert!(worst < 1e-6, "{worst}");
     }
 }
