@@ -316,6 +316,22 @@ fn twin_records(sc: SimConfig, duration: f64) -> Vec<Record> {
     recs
 }
 
+/// Worst |χ_s − true χ| of `run` over its frames against the twin's true poses in `recs`.
+fn worst_gap(recs: &[Record], run: &rss6_ident::LoopRun) -> f64 {
+    let truth_at = |t: f64| {
+        recs.iter()
+            .find(|r| (r.t - t).abs() < 1e-9)
+            .and_then(|r| r.truth)
+            .unwrap()
+            .pose
+    };
+    run.t
+        .iter()
+        .zip(&run.chi)
+        .map(|(&t, c)| (c - truth_at(t)).amax())
+        .fold(0.0, f64::max)
+}
+
 fn recorded_loop(duration: f64, recs: &[Record]) -> LoopConfig {
     let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), duration);
     cfg.derivative_filter = T_F;
@@ -338,20 +354,7 @@ fn with_the_recorded_commands_the_lean_loop_reproduces_the_noisy_twins_true_moti
     let duration = 2.0;
     let recs = noisy_implicit_twin_run(&a, duration);
     let cfg = recorded_loop(duration, &recs);
-    let truth_at = |t: f64| {
-        recs.iter()
-            .find(|r| (r.t - t).abs() < 1e-9)
-            .and_then(|r| r.truth)
-            .unwrap()
-            .pose
-    };
-    let gap = |run: &rss6_ident::LoopRun| {
-        run.t
-            .iter()
-            .zip(&run.chi)
-            .map(|(&t, c)| (c - truth_at(t)).amax())
-            .fold(0.0, f64::max)
-    };
+    let gap = |run: &rss6_ident::LoopRun| worst_gap(&recs, run);
     let run = simulate_loop(&cfg, &a, &excitation(), None).unwrap();
     let mut thesis = cfg.clone();
     thesis.recorded_commands = None;
@@ -392,20 +395,7 @@ fn replaying_the_potentiometer_noise_reproduces_the_twins_motion() {
             Vec6::from_fn(|i, _| kp.eta[i] * r.kappa[i] + kp.dtheta[i] - theta[i])
         })
         .collect();
-    let truth_at = |t: f64| {
-        recs.iter()
-            .find(|r| (r.t - t).abs() < 1e-9)
-            .and_then(|r| r.truth)
-            .unwrap()
-            .pose
-    };
-    let gap = |run: &rss6_ident::LoopRun| {
-        run.t
-            .iter()
-            .zip(&run.chi)
-            .map(|(&t, c)| (c - truth_at(t)).amax())
-            .fold(0.0, f64::max)
-    };
+    let gap = |run: &rss6_ident::LoopRun| worst_gap(&recs, run);
     let clean = simulate_loop(&cfg, &a, &excitation(), None).unwrap();
     let mut with = cfg.clone();
     with.pot_dither = Some(dither.clone());
