@@ -22,7 +22,13 @@ from rss6.errors import (
     ShapeError,
 )
 from rss6.excitation import Excitation, excitation, random_excitation
-from rss6.identify_linear import LinearGuess, linear_guess, potentiometer_noise
+from rss6.identify_linear import (
+    LinearGuess,
+    linear_guess,
+    lowpass_measured,
+    potentiometer_noise,
+    replayed_noise,
+)
 
 __all__ = [
     "Excitation",
@@ -421,26 +427,6 @@ def _effect_kwargs(
     }
 
 
-def _lowpass(data: IdentificationData, cutoff: float) -> F64:
-    """χ_m through a zero-phase 4th-order Butterworth low-pass at ``cutoff`` Hz (scipy filtfilt)."""
-    from scipy import signal
-
-    t = np.asarray(data.t, dtype=np.float64)
-    if len(t) < 2:
-        raise InvalidInputError("filtering χ_m needs at least two camera frames")
-    nyquist = 0.5 / float(np.median(np.diff(t)))
-    if not (np.isfinite(cutoff) and 0.0 < cutoff < nyquist):
-        raise InvalidInputError(
-            f"measured_cutoff must be in (0, {nyquist:.3g}) Hz, the camera's Nyquist frequency; "
-            f"got {cutoff}"
-        )
-    b, a = signal.butter(4, cutoff / nyquist)
-    pad = 3 * max(len(a), len(b))
-    if len(t) <= pad:
-        raise InvalidInputError(f"filtering χ_m needs more than {pad} frames, got {len(t)}")
-    return np.asarray(signal.filtfilt(b, a, data.measured, axis=0), dtype=np.float64)
-
-
 def cloe(
     data: IdentificationData,
     kp: _rss6.KinematicParams,
@@ -531,9 +517,9 @@ def cloe(
     if commands not in ("simulated", "recorded"):
         raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
     held = data.frame_commands() if commands == "recorded" else None
-    dither = _dither(data, pot_noise)
+    dither = replayed_noise(data, pot_noise)
     pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
-    measured = data.measured if measured_cutoff is None else _lowpass(data, measured_cutoff)
+    measured = data.measured if measured_cutoff is None else lowpass_measured(data, measured_cutoff)
     r = _rss6.cloe_identify(
         data.t,
         measured,
@@ -597,17 +583,6 @@ def cloe(
             pot_noise=pot_noise if isinstance(pot_noise, str) else "none",
         ),
     )
-
-
-def _dither(data: IdentificationData, pot_noise: str | ArrayLike) -> F64 | None:
-    """The potentiometer noise to replay for ``pot_noise`` ("none", "recorded" or (T, 6) rad)."""
-    if not isinstance(pot_noise, str):
-        return _rows6(pot_noise, "pot_noise")
-    if pot_noise not in ("none", "recorded"):
-        raise InvalidInputError(f"pot_noise must be 'none' or 'recorded', got {pot_noise!r}")
-    if pot_noise == "none":
-        return None
-    return potentiometer_noise(data)
 
 
 # Validation and Table 5.5 live in identify_validate (they use the names above).

@@ -1,5 +1,6 @@
 """A linear initial guess for CLOE from what the drives did: inverse dynamics on the recorded
-commands and potentiometers (docs/identification.md, "A linear start").
+commands and potentiometers (docs/identification.md, "A linear start"); and the filters of the
+recorded signals CLOE can use (the potentiometer noise to replay, a low-pass of χ_m).
 
 CLOE's cost with stick–slip friction is piecewise smooth, and Levenberg–Marquardt started from the
 thesis's initial model (Table 5.1, no friction) stops in local minima far from the truth. This
@@ -35,12 +36,12 @@ import numpy as np
 from scipy import optimize, signal
 
 from rss6 import _rss6
-from rss6.errors import IdentificationError, InvalidInputError
+from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, ShapeError
 
 if TYPE_CHECKING:
     from rss6.identify import IdentificationData
 
-__all__ = ["LinearGuess", "linear_guess", "potentiometer_noise"]
+__all__ = ["LinearGuess", "linear_guess", "potentiometer_noise", "replayed_noise"]
 
 _N_Q = 43
 _LP, _LI, _LD = 40, 41, 42
@@ -253,3 +254,37 @@ def potentiometer_noise(
     est = theta - signal.filtfilt(b, a, theta, axis=0)
     held = np.searchsorted(fresh, np.arange(kappa.shape[0]), side="right") - 1
     return np.asarray(est[held], dtype=np.float64)
+
+
+def replayed_noise(data: IdentificationData, pot_noise: object) -> np.ndarray | None:
+    """The potentiometer noise :func:`rss6.identify.cloe` replays for ``pot_noise``: ``"none"``
+    (None), ``"recorded"`` (:func:`potentiometer_noise` of ``data``) or an array (T, 6) rad.
+    Raises :class:`rss6.InvalidInputError`, :class:`rss6.ShapeError`, :class:`rss6.NonFiniteError`."""
+    if isinstance(pot_noise, str):
+        if pot_noise not in ("none", "recorded"):
+            raise InvalidInputError(f"pot_noise must be 'none' or 'recorded', got {pot_noise!r}")
+        return None if pot_noise == "none" else potentiometer_noise(data)
+    x = np.asarray(pot_noise, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != 6:
+        raise ShapeError(f"pot_noise must have shape (T, 6), got {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise NonFiniteError("pot_noise contains NaN or infinity")
+    return x
+
+
+def lowpass_measured(data: IdentificationData, cutoff: float) -> np.ndarray:
+    """χ_m through a zero-phase 4th-order Butterworth low-pass at ``cutoff`` Hz (scipy filtfilt)."""
+    t = np.asarray(data.t, dtype=np.float64)
+    if len(t) < 2:
+        raise InvalidInputError("filtering χ_m needs at least two camera frames")
+    nyquist = 0.5 / float(np.median(np.diff(t)))
+    if not (np.isfinite(cutoff) and 0.0 < cutoff < nyquist):
+        raise InvalidInputError(
+            f"measured_cutoff must be in (0, {nyquist:.3g}) Hz, the camera's Nyquist frequency; "
+            f"got {cutoff}"
+        )
+    b, a = signal.butter(4, cutoff / nyquist)
+    pad = 3 * max(len(a), len(b))
+    if len(t) <= pad:
+        raise InvalidInputError(f"filtering χ_m needs more than {pad} frames, got {len(t)}")
+    return np.asarray(signal.filtfilt(b, a, data.measured, axis=0), dtype=np.float64)

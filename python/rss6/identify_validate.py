@@ -17,11 +17,11 @@ from rss6.excitation import Excitation, random_excitation
 from rss6.identify import (
     IdentificationData,
     IdentificationResult,
-    _dither,
     collect,
     parameter_names,
     simulate,
 )
+from rss6.identify_linear import replayed_noise
 
 __all__ = ["Validation", "validate", "variation"]
 
@@ -121,7 +121,7 @@ def validate(
                 implicit_friction=m.implicit_friction,
                 commands=d.frame_commands() if m.commands == "recorded" else None,
                 outer_gains=outer_gains,
-                pot_dither=_dither(d, m.pot_noise),
+                pot_dither=replayed_noise(d, m.pot_noise),
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

@@ -460,9 +460,11 @@ def test_measured_poses_are_low_passed_below_nyquist_only() -> None:
     noise = 1e-5 * rng.standard_normal((900, 6))
     data = SimpleNamespace(t=t, measured=motion[:, None] + noise)
     with pytest.raises(rss6.InvalidInputError, match="Nyquist"):
-        identify._lowpass(data, 60.0)  # type: ignore[arg-type]
-    out = identify._lowpass(data, 10.0)  # type: ignore[arg-type]
-    clean = identify._lowpass(SimpleNamespace(t=t, measured=np.tile(motion[:, None], 6)), 10.0)  # type: ignore[arg-type]
+        identify.lowpass_measured(data, 60.0)  # type: ignore[arg-type]
+    out = identify.lowpass_measured(data, 10.0)  # type: ignore[arg-type]
+    clean = identify.lowpass_measured(
+        SimpleNamespace(t=t, measured=np.tile(motion[:, None], 6)), 10.0
+    )  # type: ignore[arg-type]
     # The motion passes: measured 1.6e-12 m (1.6e-9 of its amplitude) away from the ends; 3× that.
     assert np.abs(clean - motion[:, None])[30:-30].max() < 5e-12
     ratio = float(np.var(out - clean) / np.var(noise))

@@ -48,6 +48,7 @@ use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 use super::friction::{self, central_jacobians, sim_err, Sens, StepSens, COULOMB};
+use super::sens_state::SensState;
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -101,40 +102,6 @@ struct Lean<'a> {
     next_capture: f64,
     pending: VecDeque<(f64, Vec6, Option<Sens>)>,
     sens: Option<SensState>,
-}
-
-struct SensState {
-    columns: Vec<usize>,
-    /// Scale η_nom/η_model of the potentiometer angle in the drive's convention.
-    pot_scale: Vec6,
-    p: Sens,
-    v: Sens,
-    theta_meas: Sens,
-    integral: Sens,
-    prev_error: Sens,
-    prev_derivative: Sens,
-    command: Sens,
-    v_integral: Sens,
-    last_frame: Option<Sens>,
-}
-
-impl SensState {
-    fn zeros(columns: Vec<usize>, pot_scale: Vec6) -> Self {
-        let z = || Sens::zeros(columns.len());
-        SensState {
-            p: z(),
-            v: z(),
-            theta_meas: z(),
-            integral: z(),
-            prev_error: z(),
-            prev_derivative: z(),
-            command: z(),
-            v_integral: z(),
-            last_frame: None,
-            columns,
-            pot_scale,
-        }
-    }
 }
 
 /// One RK4 stage's acceleration and (optionally) its derivatives.

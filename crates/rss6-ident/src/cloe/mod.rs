@@ -8,6 +8,7 @@ mod consistent;
 mod estimator;
 mod friction;
 mod hac;
+mod sens_state;
 mod truth;
 
 pub use closed_loop::simulate;
