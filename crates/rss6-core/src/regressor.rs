@@ -16,7 +16,7 @@ use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::params::{KinematicParams, N_DYN};
 use crate::pose::{twist_jacobian, twist_jacobian_dot};
-use crate::types::{Vec3, Vec6, LEGS};
+use crate::types::{Mat6, Vec3, Vec6, LEGS};
 use nalgebra::SMatrix;
 
 /// A 6 × 64 regressor Γ (eq. 5.1): rows are joints (or twist components), columns follow Ξ.
@@ -39,43 +39,50 @@ fn body_columns(
     check_finite(pose_ddot.as_slice())?;
     check_finite(g.as_slice())?;
     let geom = LegGeometry::at_pose(kp, pose)?;
+    let mut gamma = Regressor::zeros();
+    let theta_dot = body_columns_at(&geom, pose_dot, pose_ddot, g, &mut gamma)?;
+    Ok((geom, gamma, theta_dot))
+}
+
+/// [`body_columns`] at a known geometry (inputs already checked), written into `gamma` (its
+/// friction columns are left as they are); returns θ̇.
+fn body_columns_at(
+    geom: &LegGeometry,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    g: &Vec3,
+    gamma: &mut Regressor,
+) -> Result<Vec6> {
+    let pose = &geom.pose;
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
     let v_dot = js * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot;
     let omega = Vec3::new(v[3], v[4], v[5]);
     let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
     let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
-    let mut gamma = Regressor::zeros();
+    gamma.columns_mut(0, 4 * (1 + 2 * LEGS)).fill(0.0);
     // Platform: m → [Ë − g; 0]; I_k → [0; r_k (r_k·ω̇) + (ω × r_k)(r_k·ω)], r_k = column k of R.
     let lin = e_ddot - g;
-    put(
-        &mut gamma,
-        0,
-        &Vec6::new(lin[0], lin[1], lin[2], 0.0, 0.0, 0.0),
-    );
+    put(gamma, 0, &Vec6::new(lin[0], lin[1], lin[2], 0.0, 0.0, 0.0));
     for k in 0..3 {
         let rk: Vec3 = geom.rot.column(k).into_owned();
         let n = rk * rk.dot(&omega_dot) + omega.cross(&rk) * rk.dot(&omega);
-        put(
-            &mut gamma,
-            1 + k,
-            &Vec6::new(0.0, 0.0, 0.0, n[0], n[1], n[2]),
-        );
+        put(gamma, 1 + k, &Vec6::new(0.0, 0.0, 0.0, n[0], n[1], n[2]));
     }
     let mut theta_dot = Vec6::zeros();
     for i in 0..LEGS {
-        let k = leg_acc(&geom, i, &v, &v_dot)?;
+        let k = leg_acc(geom, i, &v, &v_dot)?;
         theta_dot[i] = k.theta_dot;
         let cw = 4 * (1 + i);
-        put(&mut gamma, cw, &(k.r * k.s_cw.dot(&(k.cw_acc - g))));
-        put(&mut gamma, cw + 3, &(k.r * k.theta_ddot));
+        put(gamma, cw, &(k.r * k.s_cw.dot(&(k.cw_acc - g))));
+        put(gamma, cw + 3, &(k.r * k.theta_ddot));
         let cl = 4 * (7 + i);
-        put(&mut gamma, cl, &k.jbu_t(&(k.cl_acc - g)));
+        put(gamma, cl, &k.jbu_t(&(k.cl_acc - g)));
         let half = k.jbd_t(&k.omega2_dot) * 0.5;
-        put(&mut gamma, cl + 1, &half);
-        put(&mut gamma, cl + 2, &half);
+        put(gamma, cl + 1, &half);
+        put(gamma, cl + 2, &half);
     }
-    Ok((geom, gamma, theta_dot))
+    Ok(theta_dot)
 }
 
 /// Actuator-torque regressor Γ (6 × 64) with τ_a = Γ(χ, χ̇, χ̈)·Ξ, g = [`GRAVITY`]. χ in m and rad,
@@ -141,8 +148,36 @@ pub fn regressor_tau_g(
     pose_dot: &Vec6,
     pose_ddot: &Vec6,
 ) -> Result<Regressor> {
-    let (geom, mut gamma, theta_dot) = body_columns(kp, pose, pose_dot, pose_ddot, &GRAVITY)?;
-    let j_ad = geom.j_ad()?;
+    let (geom, gamma, theta_dot) = body_columns(kp, pose, pose_dot, pose_ddot, &GRAVITY)?;
+    Ok(with_twist_friction_columns(
+        gamma,
+        &geom.j_ad()?,
+        &theta_dot,
+    ))
+}
+
+/// Γ_g (as [`regressor_tau_g`]) at a known geometry with gravity `g`, written into `gamma`; the
+/// state already checked.
+pub(crate) fn regressor_tau_g_into(
+    geom: &LegGeometry,
+    j_ad: &Mat6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    g: &Vec3,
+    gamma: &mut Regressor,
+) -> Result<()> {
+    let theta_dot = body_columns_at(geom, pose_dot, pose_ddot, g, gamma)?;
+    twist_friction_columns(gamma, j_ad, &theta_dot);
+    Ok(())
+}
+
+/// Γ_g's friction columns: J_adᵀ e_i sign(θ̇_i) and J_adᵀ e_i θ̇_i.
+fn with_twist_friction_columns(mut gamma: Regressor, j_ad: &Mat6, theta_dot: &Vec6) -> Regressor {
+    twist_friction_columns(&mut gamma, j_ad, theta_dot);
+    gamma
+}
+
+fn twist_friction_columns(gamma: &mut Regressor, j_ad: &Mat6, theta_dot: &Vec6) {
     for i in 0..LEGS {
         let td = theta_dot[i];
         let s = if td > 0.0 {
@@ -153,8 +188,7 @@ pub fn regressor_tau_g(
             0.0
         };
         let row: Vec6 = j_ad.row(i).transpose();
-        put(&mut gamma, 52 + i, &(row * s));
-        put(&mut gamma, 58 + i, &(row * td));
+        put(gamma, 52 + i, &(row * s));
+        put(gamma, 58 + i, &(row * td));
     }
-    Ok(gamma)
 }

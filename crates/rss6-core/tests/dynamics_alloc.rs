@@ -51,6 +51,16 @@ fn dynamics_hot_paths_do_not_allocate() {
             let t = dynamics_terms(&kp, &dp, p, &pose_dot).unwrap();
             sink += t.m[(2, 2)] + t.c[(0, 1)] + t.g[2] + t.f[0] + t.j_theta[(0, 0)];
             sink += regressor(&kp, p, &pose_dot, &pose_ddot).unwrap()[(0, 4)];
+            let req = JacobianRequest {
+                state: true,
+                rate_step: Some(1e-3),
+                ..JacobianRequest::default()
+            };
+            let env = Environment::default();
+            let mut fj = ForwardJacobians::default();
+            forward_dynamics_jacobians_with_env(&kp, &dp, p, &pose_dot, &tau, &env, &req, &mut fj)
+                .unwrap();
+            sink += fj.d_params[(0, 4)] + fj.d_rates.unwrap()[(1, 1)];
             sink += regressor_tau_g(&kp, p, &pose_dot, &pose_ddot).unwrap()[(2, 0)];
             let legs = leg_jacobians(&kp, p, &pose_dot).unwrap();
             sink += legs[3].j_b_dot[(4, 4)] + legs[2].j_a_dot[(0, 0)];

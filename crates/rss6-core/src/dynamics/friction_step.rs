@@ -105,6 +105,7 @@ pub fn implicit_friction(
         bias,
         theta_dot,
         j_ad_t,
+        ..
     } = twist_dynamics(kp, dp, pose, pose_dot, env)?;
     let chol = m
         .cholesky()

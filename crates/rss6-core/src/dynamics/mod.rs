@@ -64,6 +64,7 @@ mod integration;
 mod load;
 mod matrices;
 mod newton_euler;
+mod sensitivity;
 
 pub use self::friction_step::{implicit_friction, FrictionStep};
 pub use self::integration::{
@@ -81,6 +82,9 @@ pub use self::newton_euler::{
     forward_dynamics, forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
     inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,
     inverse_dynamics_with_gravity,
+};
+pub use self::sensitivity::{
+    forward_dynamics_jacobians_with_env, ForwardJacobians, JacobianRequest,
 };
 
 use crate::error::{check_finite, Result};

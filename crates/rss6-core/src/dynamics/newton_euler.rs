@@ -243,6 +243,28 @@ pub fn inverse_dynamics_with_env(
     Ok(tau + joint_friction(dp, &theta_dot))
 }
 
+/// The twist-space force of the rigid bodies (load included), θ̇ and J_adᵀ at a known geometry.
+fn rigid_forces(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    env: &Environment,
+) -> Result<(Vec6, Vec6, Mat6)> {
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let (mut f, theta_dot, j_ad_t) = twist_force(geom, dp, &v, &v_dot, &env.gravity)?;
+    if let Some(load) = &env.load {
+        f += LoadAt::new(load, &geom.rot).force(&v, &v_dot, &env.gravity);
+    }
+    Ok((f, theta_dot, j_ad_t))
+}
+
+/// J_adᵀ of a geometry.
+fn geom_j_ad_t(geom: &LegGeometry) -> Result<Mat6> {
+    Ok(geom.j_ad()?.transpose())
+}
+
 /// The actuator torques of the rigid bodies (friction not included) and θ̇, at a known geometry.
 fn rigid_torques(
     geom: &LegGeometry,
@@ -252,11 +274,7 @@ fn rigid_torques(
     pose_ddot: &Vec6,
     env: &Environment,
 ) -> Result<(Vec6, Vec6)> {
-    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
-    let (mut f, theta_dot, j_ad_t) = twist_force(geom, dp, &v, &v_dot, &env.gravity)?;
-    if let Some(load) = &env.load {
-        f += LoadAt::new(load, &geom.rot).force(&v, &v_dot, &env.gravity);
-    }
+    let (f, theta_dot, j_ad_t) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
     Ok((solve_j_ad_t(&j_ad_t, &f)?, theta_dot))
 }
 
@@ -291,43 +309,77 @@ pub fn inverse_dynamics_derivatives_with_env(
     }
     let geom = LegGeometry::at_pose(kp, pose)?;
     let (_, theta_dot) = rigid_torques(&geom, dp, pose, pose_dot, pose_ddot, env)?;
+    let (d_pose, d_vel, _) = derivatives_at(
+        kp, &geom, &theta_dot, dp, pose_dot, pose_ddot, env, h_pose, h_vel, None,
+    )?;
+    Ok((d_pose, d_vel))
+}
+
+/// The body of [`inverse_dynamics_derivatives_with_env`] at a known geometry and θ̇ (the state and
+/// steps already checked). With `twist`: also ∂(J_ad(χ) ν)/∂χ at ν = `twist` held, from the same
+/// pose steps (the joint rates' pose derivative, no extra IK).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn derivatives_at(
+    kp: &KinematicParams,
+    geom: &LegGeometry,
+    theta_dot: &Vec6,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+    env: &Environment,
+    h_pose: f64,
+    h_vel: f64,
+    twist: Option<&Vec6>,
+) -> Result<(Mat6, Mat6, Option<Mat6>)> {
+    let pose = &geom.pose;
     let sign = theta_dot.map(sign0);
     let torque = |(t, td): (Vec6, Vec6)| -> Vec6 {
         Vec6::from_fn(|i, _| t[i] + dp.coulomb[i] * sign[i] + dp.viscous[i] * td[i])
     };
     let mut d_pose = Mat6::zeros();
-    let mut d_vel = Mat6::zeros();
+    let (mut d_force, mut d_rate) = (Mat6::zeros(), Mat6::zeros());
+    let mut d_rates = twist.map(|_| Mat6::zeros());
     for k in 0..6 {
         let (mut pp, mut pm) = (*pose, *pose);
         pp[k] += h_pose;
         pm[k] -= h_pose;
-        let tp = torque(rigid_torques(
-            &LegGeometry::at_pose(kp, &pp)?,
-            dp,
-            &pp,
-            pose_dot,
-            pose_ddot,
-            env,
-        )?);
-        let tm = torque(rigid_torques(
-            &LegGeometry::at_pose(kp, &pm)?,
-            dp,
-            &pm,
-            pose_dot,
-            pose_ddot,
-            env,
-        )?);
+        let (gp, gm) = (
+            LegGeometry::at_pose(kp, &pp)?,
+            LegGeometry::at_pose(kp, &pm)?,
+        );
+        let tp = torque(rigid_torques(&gp, dp, &pp, pose_dot, pose_ddot, env)?);
+        let tm = torque(rigid_torques(&gm, dp, &pm, pose_dot, pose_ddot, env)?);
         d_pose.set_column(k, &((tp - tm) / (pp[k] - pm[k])));
+        if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
+            d.set_column(k, &((gp.j_ad()? * nu - gm.j_ad()? * nu) / (pp[k] - pm[k])));
+        }
+        // χ̇ steps at this geometry: difference the twist-space force, map it once below.
         let (mut vp, mut vm) = (*pose_dot, *pose_dot);
         vp[k] += h_vel;
         vm[k] -= h_vel;
-        let tp = torque(rigid_torques(&geom, dp, pose, &vp, pose_ddot, env)?);
-        let tm = torque(rigid_torques(&geom, dp, pose, &vm, pose_ddot, env)?);
-        d_vel.set_column(k, &((tp - tm) / (vp[k] - vm[k])));
+        let (fp, tdp, _) = rigid_forces(geom, dp, pose, &vp, pose_ddot, env)?;
+        let (fm, tdm, _) = rigid_forces(geom, dp, pose, &vm, pose_ddot, env)?;
+        let h = vp[k] - vm[k];
+        d_force.set_column(k, &((fp - fm) / h));
+        d_rate.set_column(k, &((tdp - tdm) / h));
+    }
+    // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇: one solve for the six χ̇ columns.
+    let lu = geom_j_ad_t(geom)?.lu();
+    let mut d_vel = lu
+        .solve(&d_force)
+        .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+    for i in 0..LEGS {
+        let fv = dp.viscous[i];
+        for k in 0..6 {
+            d_vel[(i, k)] += fv * d_rate[(i, k)];
+        }
     }
     check_finite(d_pose.as_slice())?;
     check_finite(d_vel.as_slice())?;
-    Ok((d_pose, d_vel))
+    if let Some(d) = &d_rates {
+        check_finite(d.as_slice())?;
+    }
+    Ok((d_pose, d_vel, d_rates))
 }
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
@@ -379,21 +431,56 @@ pub fn forward_dynamics_with_env(
     env: &Environment,
 ) -> Result<Vec6> {
     check_state(pose_dot, tau_a)?;
+    env.check()?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    Ok(forward_at(&geom, dp, pose_dot, tau_a, env)?.chi_ddot)
+}
+
+/// The forward dynamics at a known geometry, with what the sensitivities reuse.
+pub(super) struct ForwardAt {
+    pub chi_ddot: Vec6,
+    /// The twist v = J_s χ̇ and its rate v̇.
+    pub v: Vec6,
+    pub v_dot: Vec6,
+    pub theta_dot: Vec6,
+    pub j_ad_t: Mat6,
+    pub js_inv: Mat6,
+    pub chol: nalgebra::Cholesky<f64, nalgebra::U6>,
+}
+
+/// [`forward_dynamics_with_env`] at a known geometry (the state and environment already checked).
+pub(super) fn forward_at(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+) -> Result<ForwardAt> {
+    let pose = &geom.pose;
     let TwistDynamics {
         m,
         bias,
         theta_dot,
         j_ad_t,
-    } = twist_dynamics(kp, dp, pose, pose_dot, env)?;
+        v,
+    } = twist_dynamics_at(geom, dp, pose_dot, env)?;
     let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
-    let v_dot = m
+    let chol = m
         .cholesky()
-        .ok_or(CoreError::Singular(SingularKind::Matrix))?
-        .solve(&rhs);
-    let chi_ddot =
-        twist_jacobian_inverse(pose)? * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
+        .ok_or(CoreError::Singular(SingularKind::Matrix))?;
+    let v_dot = chol.solve(&rhs);
+    let js_inv = twist_jacobian_inverse(pose)?;
+    let chi_ddot = js_inv * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
     check_finite(chi_ddot.as_slice())?;
-    Ok(chi_ddot)
+    Ok(ForwardAt {
+        chi_ddot,
+        v,
+        v_dot,
+        theta_dot,
+        j_ad_t,
+        js_inv,
+        chol,
+    })
 }
 
 /// The twist-space dynamics at (χ, χ̇): M (load included), the velocity and gravity forces at zero
@@ -403,6 +490,8 @@ pub(super) struct TwistDynamics {
     pub bias: Vec6,
     pub theta_dot: Vec6,
     pub j_ad_t: Mat6,
+    /// The twist v = J_s χ̇.
+    pub v: Vec6,
 }
 
 /// [`TwistDynamics`] of the state; checks the environment.
@@ -415,9 +504,19 @@ pub(super) fn twist_dynamics(
 ) -> Result<TwistDynamics> {
     env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let v = twist_jacobian(pose) * pose_dot;
-    let mut m = twist_mass_matrix(&geom, dp)?;
-    let (mut bias, theta_dot, j_ad_t) = twist_force(&geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
+    twist_dynamics_at(&geom, dp, pose_dot, env)
+}
+
+/// [`twist_dynamics`] at a known geometry (the environment already checked).
+pub(super) fn twist_dynamics_at(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    env: &Environment,
+) -> Result<TwistDynamics> {
+    let v = twist_jacobian(&geom.pose) * pose_dot;
+    let mut m = twist_mass_matrix(geom, dp)?;
+    let (mut bias, theta_dot, j_ad_t) = twist_force(geom, dp, &v, &Vec6::zeros(), &env.gravity)?;
     if let Some(load) = &env.load {
         let l = LoadAt::new(load, &geom.rot);
         l.add_mass(&mut m);
@@ -428,5 +527,6 @@ pub(super) fn twist_dynamics(
         bias,
         theta_dot,
         j_ad_t,
+        v,
     })
 }

@@ -40,15 +40,16 @@
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
 use rss6_core::{
-    forward_dynamics_with_env, ik, inverse_dynamics_derivatives_with_env, jacobian_theta,
-    mass_matrix_with_env, regressor_with_gravity, DynamicParams, Mat6, Vec6, LEGS, N_DYN,
+    forward_dynamics_jacobians_with_env, forward_dynamics_with_env, ik, jacobian_theta,
+    mass_matrix_with_env, regressor_with_gravity, DynamicParams, ForwardJacobians, JacobianRequest,
+    Mat6, Vec6, LEGS, N_DYN,
 };
 use rss6_ctrl::{PidGains, Trajectory};
 use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 use super::friction::{self, central_jacobians, sim_err, Sens, StepSens, COULOMB};
-use super::sens_state::SensState;
+use super::sens_state::{mul_add, SensState};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -102,13 +103,36 @@ struct Lean<'a> {
     next_capture: f64,
     pending: VecDeque<(f64, Vec6, Option<Sens>)>,
     sens: Option<SensState>,
+    /// The stage's derivatives, written in place (≈ 4 KB: not moved per stage).
+    scratch: std::cell::RefCell<ForwardJacobians>,
 }
 
 /// One RK4 stage's acceleration and (optionally) its derivatives.
 struct Stage {
     a: Vec6,
-    /// F_χ, F_χ̇, M̃⁻¹J_θᵀ, and −M̃⁻¹J_θᵀΓ restricted to the active Ξ columns.
-    jac: Option<(Mat6, Mat6, Mat6, Sens)>,
+    jac: Option<StageJac>,
+}
+
+/// A stage's derivatives.
+struct StageJac {
+    /// F_χ = ∂χ̈/∂χ, F_χ̇ = ∂χ̈/∂χ̇.
+    fp: Mat6,
+    fv: Mat6,
+    /// M̃⁻¹J_θᵀ = ∂χ̈/∂τ.
+    ft: Mat6,
+    /// −M̃⁻¹J_θᵀΓ restricted to the active Ξ columns.
+    fxi: Sens,
+    j_theta: Mat6,
+    /// ∂(J_ad ν)/∂χ of the free rates (the implicit law's first stage only).
+    d_rates: Option<Mat6>,
+}
+
+/// A stage asked for its own state Jacobians always gets them.
+fn unreachable_state(t: f64) -> Result<(Mat6, Mat6)> {
+    Err(IdentError::Simulation {
+        time: t,
+        message: "the dynamics returned no state Jacobians".into(),
+    })
 }
 
 const EPS_CLOCK: f64 = 1e-9;
@@ -147,6 +171,7 @@ impl<'a> Lean<'a> {
             next_capture: 0.0,
             pending: VecDeque::new(),
             sens: columns.map(|c| SensState::zeros(c, pot_scale)),
+            scratch: Default::default(),
         };
         // Nothing is captured yet: the frame of t = 0 is taken by the first `camera_tick(0.0)`.
         Ok(s)
@@ -226,7 +251,7 @@ impl<'a> Lean<'a> {
                 out.inexact_friction += usize::from(!st.exact);
                 out.stuck_joint_ticks += st.stuck;
                 // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
-                let s1 = self.stage(&p0, &v0, &st.net, t, None)?;
+                let s1 = self.stage(&p0, &v0, &st.net, t, None, true)?;
                 let s_net = self.friction_sensitivity(&st, &tau_sens.1, &s1, t)?;
                 self.rk4(&(st.net, s_net), t, Some(s1))?;
             } else {
@@ -243,7 +268,8 @@ impl<'a> Lean<'a> {
                 if let Some(s) = self.sens.as_mut() {
                     let j =
                         jacobian_theta(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
-                    let mut m = j * &s.p;
+                    let mut m = Sens::zeros(s.columns.len());
+                    mul_add(&mut m, &j, &s.p);
                     for (i, mut row) in m.row_iter_mut().enumerate() {
                         row *= s.pot_scale[i];
                     }
@@ -342,7 +368,9 @@ impl<'a> Lean<'a> {
         let t_f = self.cfg.derivative_filter;
         let gains = self.pid;
         let mut tau = Vec6::zeros();
-        let mut s_tau = self.sens.as_ref().map(|s| Sens::zeros(s.columns.len()));
+        let mut unclamped = [false; LEGS];
+        // (e, ∂D/∂l_d, I) of each joint for the sensitivities.
+        let mut terms = [(0.0, 0.0, 0.0); LEGS];
         for i in 0..LEGS {
             let e = self.command[i] - self.theta_meas[i];
             let de = e - self.prev_error[i];
@@ -355,46 +383,20 @@ impl<'a> Lean<'a> {
             let integral = self.integral[i] + e * dt;
             let raw = gains.lp * e + gains.li * integral + d;
             let out = raw.clamp(-lim, lim);
-            if let (Some(s), Some(st)) = (self.sens.as_mut(), s_tau.as_mut()) {
-                let s_e = s.command.row(i) - s.theta_meas.row(i);
-                let s_de = &s_e - s.prev_error.row(i);
-                // ∂D: the same recursion, plus D's explicit dependence on l_d.
-                let mut s_d = match (self.primed, t_f > 0.0) {
-                    (false, _) => s_e.clone() * 0.0,
-                    (true, false) => &s_de * (gains.ld / dt),
-                    (true, true) => {
-                        (s.prev_derivative.row(i) * t_f + &s_de * gains.ld) / (t_f + dt)
-                    }
-                };
-                if self.primed {
-                    let dd_dld = if t_f > 0.0 { de / (t_f + dt) } else { de / dt };
-                    if let Some(c) = s.columns.iter().position(|&col| col == N_DYN + 2) {
-                        s_d[c] += dd_dld;
-                    }
-                }
-                let s_int = s.integral.row(i) + &s_e * dt;
-                if raw == out {
-                    let mut row = &s_e * gains.lp + &s_int * gains.li + &s_d;
-                    for (c, &col) in s.columns.iter().enumerate() {
-                        match col {
-                            N_DYN => row[c] += e,
-                            x if x == N_DYN + 1 => row[c] += integral,
-                            _ => {}
-                        }
-                    }
-                    st.set_row(i, &row);
-                    s.integral.set_row(i, &s_int);
-                }
-                s.prev_error.set_row(i, &s_e);
-                s.prev_derivative.set_row(i, &s_d);
-            }
             if raw == out {
                 self.integral[i] = integral;
             }
+            unclamped[i] = raw == out;
+            let dd_dld = if t_f > 0.0 { de / (t_f + dt) } else { de / dt };
+            terms[i] = (e, if self.primed { dd_dld } else { 0.0 }, integral);
             self.prev_error[i] = e;
             self.prev_derivative[i] = d;
             tau[i] = out;
         }
+        let s_tau = self
+            .sens
+            .as_mut()
+            .map(|s| drive_pid_sensitivity(s, gains, self.primed, dt, t_f, &unclamped, &terms));
         self.primed = true;
         (tau, s_tau)
     }
@@ -409,7 +411,7 @@ impl<'a> Lean<'a> {
         s1: &Stage,
         t: f64,
     ) -> Result<Option<Sens>> {
-        let (Some(s), Some(s_tau), Some((fp, fv, _, fxi))) = (&self.sens, s_tau, &s1.jac) else {
+        let (Some(s), Some(s_tau), Some(jac)) = (&self.sens, s_tau, &s1.jac) else {
             return Ok(None);
         };
         let sens = StepSens {
@@ -418,19 +420,86 @@ impl<'a> Lean<'a> {
             v: &s.v,
             tau: s_tau,
         };
+        let d_rates = jac.d_rates.ok_or_else(|| IdentError::Simulation {
+            time: t,
+            message: "the first stage has no free-rate derivative".into(),
+        })?;
         let first = friction::FirstStage {
             a: &s1.a,
-            fp,
-            fv,
-            fxi,
+            fp: &jac.fp,
+            fv: &jac.fv,
+            fxi: &jac.fxi,
+            j_theta: &jac.j_theta,
+            d_rates: &d_rates,
         };
         let (p, v) = (&self.pose, &self.pose_dot);
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
     }
 
     /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
-    /// implicit law `tau` is τ_a − τ_f and the model is friction-free.
+    /// implicit law `tau` is τ_a − τ_f and the model is friction-free. `frozen`: state Jacobians
+    /// to use instead of computing them; `free_rates`: also the pose derivative of the joint
+    /// rates one tick ahead (the implicit friction's first stage, see [`super::friction`]).
     fn stage(
+        &self,
+        p: &Vec6,
+        v: &Vec6,
+        tau: &Vec6,
+        t: f64,
+        frozen: Option<(Mat6, Mat6)>,
+        free_rates: bool,
+    ) -> Result<Stage> {
+        let cfg = self.cfg;
+        let env = cfg.environment();
+        let eps = cfg.friction_smoothing;
+        let implicit = cfg.implicit_friction;
+        if eps > 0.0 && !implicit {
+            return self.smoothed_stage(p, v, tau, t, frozen);
+        }
+        // Sign law (Coulomb's sign held) or implicit (friction-free model).
+        let dp = if implicit { &self.dp_nf } else { &self.dp };
+        let Some(s) = self.sens.as_ref() else {
+            let a = forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
+                .map_err(|e| sim_err(t, e))?;
+            return Ok(Stage { a, jac: None });
+        };
+        let request = JacobianRequest {
+            state: frozen.is_none(),
+            rate_step: free_rates.then_some(cfg.dt),
+            ..JacobianRequest::default()
+        };
+        let mut fj = self.scratch.borrow_mut();
+        forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, &mut fj)
+            .map_err(|e| sim_err(t, e))?;
+        let (fp, fv) = match (frozen, fj.d_state) {
+            (Some(j), _) | (None, Some(j)) => j,
+            (None, None) => unreachable_state(t)?,
+        };
+        let mut fxi = Sens::zeros(s.columns.len());
+        for (c, &col) in s.columns.iter().enumerate() {
+            // With the implicit law friction acts through τ_f (its sensitivity is in the held
+            // torque's).
+            if col < N_DYN && !(implicit && col >= COULOMB) {
+                fxi.set_column(c, &fj.d_params.column(col));
+            }
+        }
+        Ok(Stage {
+            a: fj.pose_ddot,
+            jac: Some(StageJac {
+                fp,
+                fv,
+                ft: fj.d_torque,
+                fxi,
+                j_theta: fj.j_theta,
+                d_rates: fj.d_rates,
+            }),
+        })
+    }
+
+    /// [`Self::stage`] with the Coulomb torque f_c tanh(θ̇/ε) (smoothed) as a known joint torque on
+    /// the friction-free model, exactly as `rss6_sim::ModelSim` integrates it. Not quadratic in
+    /// χ̇: central differences of the forward dynamics with a small step there too.
+    fn smoothed_stage(
         &self,
         p: &Vec6,
         v: &Vec6,
@@ -442,23 +511,17 @@ impl<'a> Lean<'a> {
         let env = cfg.environment();
         let g = &cfg.gravity;
         let eps = cfg.friction_smoothing;
-        // The Coulomb torque f_c tanh(θ̇/ε) (smoothed) as a known joint torque on the friction-free
-        // model, exactly as `rss6_sim::ModelSim` integrates it.
         let smooth_tau = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
             let theta_dot = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))? * vv;
             Ok(Vec6::from_fn(|i, _| {
                 tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh()
             }))
         };
-        let implicit = cfg.implicit_friction;
-        let a = if implicit {
-            forward_dynamics_with_env(&cfg.kp, &self.dp_nf, p, v, tau, &env)
-        } else if eps > 0.0 {
-            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, p, v, &smooth_tau(p, v)?, &env)
-        } else {
-            forward_dynamics_with_env(&cfg.kp, &self.dp, p, v, tau, &env)
-        }
-        .map_err(|e| sim_err(t, e))?;
+        let fd = |pp: &Vec6, vv: &Vec6| {
+            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, pp, vv, &smooth_tau(pp, vv)?, &env)
+                .map_err(|e| sim_err(t, e))
+        };
+        let a = fd(p, v)?;
         let Some(s) = self.sens.as_ref() else {
             return Ok(Stage { a, jac: None });
         };
@@ -473,38 +536,12 @@ impl<'a> Lean<'a> {
         let ft = chol.solve(&j_theta.transpose());
         let (fp, fv) = match frozen {
             Some(j) => j,
-            // Sign (Coulomb frozen) or implicit (friction-free model): ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ/∂x of
-            // the inverse dynamics, whose χ̇ steps need no IK.
-            None if eps == 0.0 || implicit => {
-                let dp = if implicit { &self.dp_nf } else { &self.dp_nc };
-                let (dtp, dtv) =
-                    inverse_dynamics_derivatives_with_env(&cfg.kp, dp, p, v, &a, &env, 1e-6, 1e-2)
-                        .map_err(|e| sim_err(t, e))?;
-                (-(ft * dtp), -(ft * dtv))
-            }
-            // Smoothed friction is not quadratic in χ̇: central differences of the forward
-            // dynamics with a small step there too.
-            None => {
-                let f = |pp: &Vec6, vv: &Vec6| {
-                    forward_dynamics_with_env(
-                        &cfg.kp,
-                        &self.dp_nc,
-                        pp,
-                        vv,
-                        &smooth_tau(pp, vv)?,
-                        &env,
-                    )
-                    .map_err(|e| sim_err(t, e))
-                };
-                central_jacobians(f, p, v, 1e-6)?
-            }
+            None => central_jacobians(fd, p, v, 1e-6)?,
         };
         let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
         let mut fxi = Sens::zeros(s.columns.len());
         for (c, &col) in s.columns.iter().enumerate() {
-            if implicit && col >= COULOMB {
-                // Friction acts through τ_f (its sensitivity is in the held torque's).
-            } else if eps > 0.0 && (COULOMB..COULOMB + LEGS).contains(&col) {
+            if (COULOMB..COULOMB + LEGS).contains(&col) {
                 // ∂χ̈/∂f_c,i = −M̃⁻¹J_θᵀ e_i tanh(θ̇_i/ε).
                 let i = col - COULOMB;
                 fxi.set_column(c, &(-(ft.column(i) * (theta_dot[i] / eps).tanh())));
@@ -514,7 +551,14 @@ impl<'a> Lean<'a> {
         }
         Ok(Stage {
             a,
-            jac: Some((fp, fv, ft, fxi)),
+            jac: Some(StageJac {
+                fp,
+                fv,
+                ft,
+                fxi,
+                j_theta,
+                d_rates: None,
+            }),
         })
     }
 
@@ -526,22 +570,22 @@ impl<'a> Lean<'a> {
         let (p0, v0) = (self.pose, self.pose_dot);
         let s1 = match first {
             Some(s) => s,
-            None => self.stage(&p0, &v0, tau, t, None)?,
+            None => self.stage(&p0, &v0, tau, t, None, false)?,
         };
         // PerTick: the state Jacobians of stage 1 serve all four stages.
         let frozen = match (&s1.jac, self.cfg.state_jacobians) {
-            (Some((fp, fv, _, _)), StateJacobians::PerTick) => Some((*fp, *fv)),
+            (Some(j), StateJacobians::PerTick) => Some((j.fp, j.fv)),
             _ => None,
         };
         let a1 = s1.a;
         let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));
-        let s2 = self.stage(&p2, &v2, tau, t, frozen)?;
+        let s2 = self.stage(&p2, &v2, tau, t, frozen, false)?;
         let a2 = s2.a;
         let (p3, v3) = (p0 + v2 * (0.5 * dt), v0 + a2 * (0.5 * dt));
-        let s3 = self.stage(&p3, &v3, tau, t, frozen)?;
+        let s3 = self.stage(&p3, &v3, tau, t, frozen, false)?;
         let a3 = s3.a;
         let (p4, v4) = (p0 + v3 * dt, v0 + a3 * dt);
-        let s4 = self.stage(&p4, &v4, tau, t, frozen)?;
+        let s4 = self.stage(&p4, &v4, tau, t, frozen, false)?;
         let a4 = s4.a;
         self.pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
         self.pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);
@@ -554,7 +598,13 @@ impl<'a> Lean<'a> {
         if let (Some(s), Some(s_tau)) = (self.sens.as_mut(), s_tau) {
             let da = |st: &Stage, sp: &Sens, sv: &Sens| -> Sens {
                 match &st.jac {
-                    Some((fp, fv, ft, fxi)) => fp * sp + fv * sv + ft * s_tau + fxi,
+                    Some(j) => {
+                        let mut out = j.fxi.clone();
+                        mul_add(&mut out, &j.fp, sp);
+                        mul_add(&mut out, &j.fv, sv);
+                        mul_add(&mut out, &j.ft, s_tau);
+                        out
+                    }
                     None => Sens::zeros(sp.ncols()),
                 }
             };
@@ -576,4 +626,50 @@ impl<'a> Lean<'a> {
         }
         Ok(())
     }
+}
+
+/// The drive PID's sensitivity (see [`Lean::drive_pid`]) for all joints at once: ∂e, ∂D (the
+/// same recursion as D plus its explicit dependence on l_d), ∂I and ∂τ, zero on clamped joints
+/// (whose integral is frozen too). `terms[i]` = (e, ∂D/∂l_d, I) of joint i.
+fn drive_pid_sensitivity(
+    s: &mut SensState,
+    gains: PidGains,
+    primed: bool,
+    dt: f64,
+    t_f: f64,
+    unclamped: &[bool; LEGS],
+    terms: &[(f64, f64, f64); LEGS],
+) -> Sens {
+    let s_e = &s.command - &s.theta_meas;
+    let s_de = &s_e - &s.prev_error;
+    let mut s_d = match (primed, t_f > 0.0) {
+        (false, _) => Sens::zeros(s_e.ncols()),
+        (true, false) => s_de * (gains.ld / dt),
+        (true, true) => (&s.prev_derivative * t_f + s_de * gains.ld) / (t_f + dt),
+    };
+    let col = |a: usize| s.columns.iter().position(|&c| c == a);
+    let (c_lp, c_li, c_ld) = (col(N_DYN), col(N_DYN + 1), col(N_DYN + 2));
+    if let Some(c) = c_ld {
+        for (i, term) in terms.iter().enumerate() {
+            s_d[(i, c)] += term.1;
+        }
+    }
+    let s_int = &s.integral + &s_e * dt;
+    let mut s_tau = &s_e * gains.lp + &s_int * gains.li + &s_d;
+    for i in 0..LEGS {
+        if unclamped[i] {
+            if let Some(c) = c_lp {
+                s_tau[(i, c)] += terms[i].0;
+            }
+            if let Some(c) = c_li {
+                s_tau[(i, c)] += terms[i].2;
+            }
+            s.integral.set_row(i, &s_int.row(i));
+        } else {
+            s_tau.row_mut(i).fill(0.0);
+        }
+    }
+    s.prev_error = s_e;
+    s.prev_derivative = s_d;
+    s_tau
 }

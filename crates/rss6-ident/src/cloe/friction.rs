@@ -24,10 +24,11 @@
 //! derivative of sign(θ̇) is: both are events of measure zero in A.
 
 use super::config::LoopConfig;
+use super::sens_state::mul_add;
 use crate::error::{IdentError, Result};
 use nalgebra::{Dyn, OMatrix, U6};
 use rss6_core::{
-    implicit_friction, jacobian_theta, twist_jacobian_dot, twist_jacobian_inverse, DynamicParams,
+    implicit_friction, twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse, DynamicParams,
     FrictionStep, Mat6, Vec6, LEGS,
 };
 
@@ -85,6 +86,10 @@ pub(super) struct FirstStage<'s> {
     pub fp: &'s Mat6,
     pub fv: &'s Mat6,
     pub fxi: &'s Sens,
+    /// J_θ at the state.
+    pub j_theta: &'s Mat6,
+    /// ∂(J_ad(χ) ν)/∂χ at ν = ξ + dt ξ̇ held ([`rss6_core::JacobianRequest::rate_step`]).
+    pub d_rates: &'s Mat6,
 }
 
 /// ∂(τ_a − τ_f)/∂A of a solved tick. The free rates are w₀ = J_adᵀ(ξ + dt ξ̇) with ξ = J_s χ̇ and
@@ -106,12 +111,14 @@ pub(super) fn sensitivity(
     let dt = cfg.dt;
     let f = &step.solved;
     let n = s.columns.len();
-    let (gp, gv, j) = free_rate_jacobians(cfg, p, v, &first, t)?;
-    let jdt = j * dt;
-    let mut dg = f.compliance * s.tau;
-    dg += gp * s.p + gv * s.v;
+    let (gp, gv) = free_rate_jacobians(cfg, p, v, &first, t)?;
+    let jdt = first.j_theta * dt;
+    let mut dg = Sens::zeros(n);
+    mul_add(&mut dg, &f.compliance, s.tau);
+    mul_add(&mut dg, &gp, s.p);
+    mul_add(&mut dg, &gv, s.v);
     // The mass parameters act through the friction-free acceleration over the tick.
-    dg += jdt * first.fxi;
+    mul_add(&mut dg, &jdt, first.fxi);
     // The active-set system A dτ_f = R.
     let k = &f.compliance;
     let mut a = Mat6::zeros();
@@ -144,45 +151,41 @@ pub(super) fn sensitivity(
     Ok(s.tau - s_tf)
 }
 
-/// (∂w₀/∂χ, ∂w₀/∂χ̇, J_θ) of the free rates w₀ = J_θ(χ̇ + dt χ̈ + dt J_s⁻¹J̇_s χ̇) at (`p`, `v`) with
-/// the first stage's χ̈ and its state Jacobians (see [`sensitivity`]).
+/// (∂w₀/∂χ, ∂w₀/∂χ̇) of the free rates w₀ = J_ad(χ) ν, ν = J_s(χ)(χ̇ + dt χ̈) + dt J̇_s(χ, χ̇) χ̇,
+/// at (`p`, `v`) with the first stage's χ̈ and its state Jacobians (see [`sensitivity`]). The pose
+/// derivative of J_ad at ν held comes with the stage (from its own pose steps); the rest is the
+/// Euler-angle kinematics J_s, J̇_s (no inverse kinematics): central differences, exact in χ̇
+/// (J̇_s χ̇ is quadratic in χ̇).
 pub(super) fn free_rate_jacobians(
     cfg: &LoopConfig,
     p: &Vec6,
     v: &Vec6,
     first: &FirstStage<'_>,
     t: f64,
-) -> Result<(Mat6, Mat6, Mat6)> {
+) -> Result<(Mat6, Mat6)> {
     let dt = cfg.dt;
-    let kin = |pp: &Vec6, vv: &Vec6, u: &Vec6| -> Result<Vec6> {
-        let j = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))?;
-        let js_inv = twist_jacobian_inverse(pp).map_err(|e| sim_err(t, e))?;
-        Ok(j * (u + js_inv * (twist_jacobian_dot(pp, vv) * vv) * dt))
-    };
-    // χ̈ held: w₀ = kin(χ, χ̇, χ̇ + dt χ̈); χ̇ enters u linearly and J̇_s χ̇ quadratically (the χ̇
-    // differences are exact for any step).
     let u = v + first.a * dt;
-    let (mut kp_, mut kv_) = (Mat6::zeros(), Mat6::zeros());
+    let nu = |pp: &Vec6, vv: &Vec6, uu: &Vec6| -> Vec6 {
+        twist_jacobian(pp) * uu + twist_jacobian_dot(pp, vv) * vv * dt
+    };
+    let (mut np, mut nv) = (Mat6::zeros(), Mat6::zeros());
     for c in 0..6 {
         let (mut pp, mut pm) = (*p, *p);
         pp[c] += 1e-6;
         pm[c] -= 1e-6;
-        kp_.set_column(
-            c,
-            &((kin(&pp, v, &u)? - kin(&pm, v, &u)?) / (pp[c] - pm[c])),
-        );
+        np.set_column(c, &((nu(&pp, v, &u) - nu(&pm, v, &u)) / (pp[c] - pm[c])));
         let (mut vp, mut vm) = (*v, *v);
         vp[c] += 1e-2;
         vm[c] -= 1e-2;
         let (up, um) = (vp + first.a * dt, vm + first.a * dt);
-        kv_.set_column(
-            c,
-            &((kin(p, &vp, &up)? - kin(p, &vm, &um)?) / (vp[c] - vm[c])),
-        );
+        nv.set_column(c, &((nu(p, &vp, &up) - nu(p, &vm, &um)) / (vp[c] - vm[c])));
     }
-    let j = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
-    let jdt = j * dt;
-    Ok((kp_ + jdt * first.fp, kv_ + jdt * first.fv, j))
+    let j_ad = first.j_theta * twist_jacobian_inverse(p).map_err(|e| sim_err(t, e))?;
+    let jdt = first.j_theta * dt;
+    Ok((
+        first.d_rates + j_ad * np + jdt * first.fp,
+        j_ad * nv + jdt * first.fv,
+    ))
 }
 
 /// Central differences (∂f/∂χ, ∂f/∂χ̇) of a 6-vector function of the state at (`p`, `v`): steps
@@ -230,7 +233,10 @@ mod tests {
     use super::*;
     use crate::cloe::truth::table_5_2_truth;
     use rand::{Rng, SeedableRng};
-    use rss6_core::{forward_dynamics_with_env, home_pose, KinematicParams};
+    use rss6_core::{
+        forward_dynamics_jacobians_with_env, forward_dynamics_with_env, home_pose,
+        ForwardJacobians, JacobianRequest, KinematicParams,
+    };
 
     /// The free rates' derivatives built from the first stage equal central differences of the
     /// core's own free-rate prediction ([`implicit_friction`]`.free_rate`, friction-free), at
@@ -258,13 +264,23 @@ mod tests {
             let a = fd(&p, &v).unwrap();
             let (fp, fv) = central_jacobians(fd, &p, &v, 1e-6).unwrap();
             let fxi = Sens::zeros(0);
+            let request = JacobianRequest {
+                state: true,
+                rate_step: Some(cfg.dt),
+                ..JacobianRequest::default()
+            };
+            let mut fj = ForwardJacobians::default();
+            forward_dynamics_jacobians_with_env(&kp, &dp, &p, &v, &tau, &env, &request, &mut fj)
+                .unwrap();
             let first = FirstStage {
                 a: &a,
                 fp: &fp,
                 fv: &fv,
                 fxi: &fxi,
+                j_theta: &fj.j_theta,
+                d_rates: &fj.d_rates.unwrap(),
             };
-            let (gp, gv, _) = free_rate_jacobians(&cfg, &p, &v, &first, 0.0).unwrap();
+            let (gp, gv) = free_rate_jacobians(&cfg, &p, &v, &first, 0.0).unwrap();
             let w0 = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
                 Ok(implicit_friction(&kp, &dp, pp, vv, &tau, &env, cfg.dt)
                     .map_err(|e| sim_err(0.0, e))?

@@ -2,7 +2,7 @@
 //! state variable to the active columns of A.
 
 use super::friction::Sens;
-use rss6_core::Vec6;
+use rss6_core::{Mat6, Vec6};
 
 /// ∂(state)/∂A of the loop: model (χ, χ̇), held potentiometer angle, drive PID, visual PID.
 pub(super) struct SensState {
@@ -36,5 +36,13 @@ impl SensState {
             columns,
             pot_scale,
         }
+    }
+}
+
+/// out += m·x column by column: a 6 × 6 times a 6 × p block with fixed-size products (no packing,
+/// no allocation; the generic product of a dynamic block goes through a general GEMM).
+pub(super) fn mul_add(out: &mut Sens, m: &Mat6, x: &Sens) {
+    for (mut o, xc) in out.column_iter_mut().zip(x.column_iter()) {
+        o += m * xc;
     }
 }

@@ -1,0 +1,171 @@
+//! What the forward sensitivities of a simulated loop need of the dynamics at one state, from one
+//! inverse kinematics: χ̈, J_θ, ∂χ̈/∂τ_a, ∂χ̈/∂Ξ and, on request, the state Jacobians ∂χ̈/∂χ,
+//! ∂χ̈/∂χ̇ and the joint rates' pose derivative at a held twist.
+//!
+//! Separate calls ([`forward_dynamics_with_env`](super::forward_dynamics_with_env),
+//! [`jacobian_theta`](crate::jacobian_theta), [`mass_matrix_with_env`](super::mass_matrix_with_env),
+//! [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env),
+//! [`regressor_with_gravity`](crate::regressor_with_gravity)) solve the inverse kinematics five
+//! times at the same pose and form the mass matrix twice. Here: ∂χ̈/∂τ_a = M̃⁻¹J_θᵀ = J_s⁻¹M⁻¹J_adᵀ
+//! and ∂χ̈/∂Ξ = −M̃⁻¹J_θᵀΓ = −J_s⁻¹M⁻¹Γ_g (Γ_g = J_adᵀΓ, [`crate::regressor_tau_g`]) from the
+//! Cholesky factor of the twist-space M the forward dynamics already has.
+
+use super::check_state;
+use super::load::Environment;
+use super::newton_euler::{derivatives_at, forward_at};
+use crate::error::{CoreError, Result};
+use crate::jacobian::LegGeometry;
+use crate::params::{DynamicParams, KinematicParams};
+use crate::pose::twist_jacobian;
+use crate::regressor::{regressor_tau_g_into, Regressor};
+use crate::types::{Mat6, Vec6};
+
+/// What [`forward_dynamics_jacobians_with_env`] computes beyond χ̈, J_θ, ∂χ̈/∂τ_a and ∂χ̈/∂Ξ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JacobianRequest {
+    /// The state Jacobians ∂χ̈/∂χ, ∂χ̈/∂χ̇ (central differences of the inverse dynamics, as
+    /// [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env)
+    /// with steps `h_pose`, `h_vel`).
+    pub state: bool,
+    /// With `state`: also ∂(J_ad(χ) ν)/∂χ at ν = v + `rate_step`·v̇ held (v = J_s χ̇ the twist, v̇
+    /// its rate at this χ̈): the pose derivative of the joint rates one explicit step of
+    /// `rate_step` s ahead, from the same pose steps (no extra inverse kinematics).
+    pub rate_step: Option<f64>,
+    /// Step in χ (m, rad).
+    pub h_pose: f64,
+    /// Step in χ̇ (exact for any step: τ_a is quadratic in χ̇ plus the viscous term).
+    pub h_vel: f64,
+}
+
+impl Default for JacobianRequest {
+    /// No state Jacobians; steps 10⁻⁶ and 10⁻².
+    fn default() -> Self {
+        JacobianRequest {
+            state: false,
+            rate_step: None,
+            h_pose: 1e-6,
+            h_vel: 1e-2,
+        }
+    }
+}
+
+/// The dynamics' derivatives at one state, written by [`forward_dynamics_jacobians_with_env`]
+/// (≈ 4 KB: keep one and reuse it; `Default` is all zeros).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForwardJacobians {
+    /// χ̈, equal to [`forward_dynamics_with_env`](super::forward_dynamics_with_env)'s bit for bit.
+    pub pose_ddot: Vec6,
+    /// J_θ (θ̇ = J_θ χ̇).
+    pub j_theta: Mat6,
+    /// ∂χ̈/∂τ_a = M̃⁻¹J_θᵀ.
+    pub d_torque: Mat6,
+    /// ∂χ̈/∂Ξ (6 × 64) = −M̃⁻¹J_θᵀΓ(χ, χ̇, χ̈), Coulomb's sign held at this θ̇.
+    pub d_params: Regressor,
+    /// (∂χ̈/∂χ, ∂χ̈/∂χ̇) if requested.
+    pub d_state: Option<(Mat6, Mat6)>,
+    /// ∂(J_ad ν)/∂χ if requested (see [`JacobianRequest::rate_step`]).
+    pub d_rates: Option<Mat6>,
+}
+
+impl Default for ForwardJacobians {
+    fn default() -> Self {
+        ForwardJacobians {
+            pose_ddot: Vec6::zeros(),
+            j_theta: Mat6::zeros(),
+            d_torque: Mat6::zeros(),
+            d_params: Regressor::zeros(),
+            d_state: None,
+            d_rates: None,
+        }
+    }
+}
+
+/// χ̈ of the forward dynamics at (χ, χ̇) under τ_a in `env`, with its derivatives, written into
+/// `out` (see the module docs and [`JacobianRequest`]; `d_state` and `d_rates` are `None` unless
+/// requested). The state Jacobians follow from the inverse dynamics by the implicit-function
+/// theorem: ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ_a/∂x. On an error `out` holds no meaningful values.
+///
+/// Errors: as [`forward_dynamics_with_env`](super::forward_dynamics_with_env) and
+/// [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env)
+/// (with `state`); [`CoreError::InvalidParameter`] for steps that are not finite and > 0 or a
+/// non-finite `rate_step`.
+///
+/// ```
+/// use rss6_core::*;
+/// let (kp, dp) = (KinematicParams::nominal(), DynamicParams::nominal());
+/// let pose = Vec6::new(0.01, -0.01, 0.12, 0.02, 0.0, -0.03);
+/// let (pd, tau) = (Vec6::new(0.1, 0.0, 0.0, 0.0, 0.5, 0.0), Vec6::new(1.0, -1.0, 0.5, 0.0, 2.0, 0.0));
+/// let env = Environment::default();
+/// let req = JacobianRequest { state: true, ..JacobianRequest::default() };
+/// let mut fj = ForwardJacobians::default();
+/// forward_dynamics_jacobians_with_env(&kp, &dp, &pose, &pd, &tau, &env, &req, &mut fj).unwrap();
+/// assert_eq!(fj.pose_ddot, forward_dynamics_with_env(&kp, &dp, &pose, &pd, &tau, &env).unwrap());
+/// // ∂χ̈/∂τ_a by a difference of the forward dynamics
+/// let mut t2 = tau;
+/// t2[2] += 1e-6;
+/// let a2 = forward_dynamics_with_env(&kp, &dp, &pose, &pd, &t2, &env).unwrap();
+/// assert!(((a2 - fj.pose_ddot) / 1e-6 - fj.d_torque.column(2)).amax() < 1e-6 * fj.d_torque.amax());
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn forward_dynamics_jacobians_with_env(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+    request: &JacobianRequest,
+    out: &mut ForwardJacobians,
+) -> Result<()> {
+    check_state(pose_dot, tau_a)?;
+    env.check()?;
+    let h_ok = |h: f64| h.is_finite() && h > 0.0;
+    if request.state
+        && !(h_ok(request.h_pose)
+            && h_ok(request.h_vel)
+            && request.rate_step.is_none_or(f64::is_finite))
+    {
+        return Err(CoreError::InvalidParameter(
+            "finite-difference steps must be finite and > 0, the rate step finite",
+        ));
+    }
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    let f = forward_at(&geom, dp, pose_dot, tau_a, env)?;
+    let j_ad = f.j_ad_t.transpose();
+    out.pose_ddot = f.chi_ddot;
+    out.j_theta = j_ad * twist_jacobian(pose);
+    out.d_torque = f.js_inv * f.chol.solve(&f.j_ad_t);
+    // ∂χ̈/∂Ξ = −J_s⁻¹M⁻¹Γ_g in place, column by column.
+    regressor_tau_g_into(
+        &geom,
+        &j_ad,
+        pose_dot,
+        &f.chi_ddot,
+        &env.gravity,
+        &mut out.d_params,
+    )?;
+    f.chol.solve_mut(&mut out.d_params);
+    for mut c in out.d_params.column_iter_mut() {
+        let x: Vec6 = -(f.js_inv * &c);
+        c.copy_from(&x);
+    }
+    (out.d_state, out.d_rates) = (None, None);
+    if request.state {
+        let nu = request.rate_step.map(|h| f.v + f.v_dot * h);
+        let (dtp, dtv, d_rates) = derivatives_at(
+            kp,
+            &geom,
+            &f.theta_dot,
+            dp,
+            pose_dot,
+            &f.chi_ddot,
+            env,
+            request.h_pose,
+            request.h_vel,
+            nu.as_ref(),
+        )?;
+        out.d_state = Some((-(out.d_torque * dtp), -(out.d_torque * dtv)));
+        out.d_rates = d_rates;
+    }
+    Ok(())
+}
