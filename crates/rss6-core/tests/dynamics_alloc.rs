@@ -61,6 +61,9 @@ fn dynamics_hot_paths_do_not_allocate() {
             forward_dynamics_jacobians_with_env(&kp, &dp, p, &pose_dot, &tau, &env, &req, &mut fj)
                 .unwrap();
             sink += fj.d_params[(0, 4)] + fj.d_rates.unwrap()[(1, 1)];
+            sink += implicit_friction(&kp, &dp, p, &pose_dot, &tau, &env, 1e-3)
+                .unwrap()
+                .torque[0];
             sink += regressor_tau_g(&kp, p, &pose_dot, &pose_ddot).unwrap()[(2, 0)];
             let legs = leg_jacobians(&kp, p, &pose_dot).unwrap();
             sink += legs[3].j_b_dot[(4, 4)] + legs[2].j_a_dot[(0, 0)];
