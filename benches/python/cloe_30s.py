@@ -4,10 +4,13 @@ on the model twin with the stick–slip law (`identify_sim.estimate_from_initial
 commands, per-tick Jacobians while iterating). Prints the wall time of CLOE alone, its iterations
 and simulations, and the per-iteration cost. Run on an idle machine.
 
-    python benches/python/cloe_30s.py [--seed 0] [--periods 3] [--prior-log-std 1.0]
+    python benches/python/cloe_30s.py [--seed 0] [--periods 3] [--prior-log-std 1.0] [--trace]
+        [--parameters fc1,fc2,...]
 
 ``--prior-log-std``: σ of CLOE's log-prior around the linear start (default 1.0, CLOE's own); a
-failure to converge prints the cost history instead of raising.
+failure to converge prints the cost history instead of raising. ``--trace``: Φ and the wall time
+after every accepted iteration. ``--parameters``: estimate only these quantities (the others stay
+at the linear start; l_p stays at the drive's value), e.g. the friction and gains alone.
 """
 
 from __future__ import annotations
@@ -25,7 +28,12 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--periods", type=int, default=3, help="10 s periods of the excitation")
     ap.add_argument("--prior-log-std", type=float, default=1.0)
+    ap.add_argument("--trace", action="store_true", help="print Φ after every iteration")
+    ap.add_argument("--parameters", default="base", help="comma-separated names, or base")
     args = ap.parse_args()
+    params: str | list[str] = (
+        "base" if args.parameters == "base" else [p.strip() for p in args.parameters.split(",")]
+    )
     if args.prior_log_std != 1.0:
         identify.cloe = partial(identify.cloe, prior_log_std=args.prior_log_std)  # type: ignore[assignment]
     kp = rss6.KinematicParams.nominal()
@@ -51,10 +59,16 @@ def main() -> None:
         periods=args.periods,
     )
     t0 = time.perf_counter()
+
+    def trace(iteration: int, cost: float) -> None:
+        if args.trace:
+            print(f"  iteration {iteration:3d}  Φ {cost:10.1f}  {time.perf_counter() - t0:6.1f} s")
+
     try:
         res = identify_sim.estimate_from_initial(
-            data, kp, friction_law="implicit", lp=pid[0], max_iterations=40
-        )
+            data, kp, friction_law="implicit", lp=pid[0], max_iterations=40,
+            parameters=params, progress=trace,
+        )  # fmt: skip
     except rss6.IdentificationError as e:
         wall = time.perf_counter() - t0
         hist = getattr(e, "cost_history", [])
