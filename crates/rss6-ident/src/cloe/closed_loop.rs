@@ -26,30 +26,28 @@
 //! dχ̈ = F_χ dχ + F_χ̇ dχ̇ + M̃⁻¹J_θᵀ dτ − M̃⁻¹J_θᵀ Γ(χ, χ̇, χ̈) dΞ
 //! ```
 //!
-//! (the dynamics are linear in Ξ: τ_a = Γ Ξ, eq. 5.1). F_χ and F_χ̇ are central differences of the
-//! forward dynamics with the Coulomb signs frozen at the stage (Coulomb friction enters as a known
-//! torque, so no step can cross sign(θ̇) = 0 and the difference is the derivative almost
-//! everywhere): 24 forward-dynamics calls per stage. In χ̇ the forward dynamics are quadratic, so
-//! that difference is exact whatever the step; in χ the step is 10⁻⁶ (truncation ~10⁻¹²). With
-//! smoothed friction (`friction_smoothing` = ε > 0) the Coulomb torque f_c tanh(θ̇/ε) is part of
-//! the differenced function and the χ̇ step is 10⁻⁶ too. This is
-//! the dominant cost (see `benches/examples/cloe_cost.rs`); analytic state Jacobians in rss6-core
+//! (the dynamics are linear in Ξ: τ_a = Γ Ξ, eq. 5.1). With the sign or the implicit friction law
+//! one core call per stage gives all of it ([`rss6_core::forward_dynamics_jacobians_with_env`]:
+//! F_χ, F_χ̇ from central differences of the inverse dynamics with the Coulomb signs held, exact in
+//! χ̇, step 10⁻⁶ in χ; see `stages.rs`). With smoothed friction (`friction_smoothing` = ε > 0) the
+//! Coulomb torque f_c tanh(θ̇/ε) is part of central differences of the forward dynamics, the χ̇
+//! step 10⁻⁶ too. The state Jacobians are the dominant cost (`examples/cloe_cost.rs`); analytic
+//! derivatives of the leg kinematics and the Newton–Euler pass in rss6-core
 //! would remove it. Sign changes of θ̇ inside a step and torque saturation are treated as the
 //! discrete loop treats them: the derivative of sign is 0, of a saturated torque 0.
 
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
-use rss6_core::{
-    forward_dynamics_jacobians_with_env, forward_dynamics_with_env, ik, jacobian_theta,
-    mass_matrix_with_env, regressor_with_gravity, DynamicParams, ForwardJacobians, JacobianRequest,
-    Mat6, Vec6, LEGS, N_DYN,
-};
+use rss6_core::{ik, jacobian_theta, DynamicParams, ForwardJacobians, Mat6, Vec6, LEGS};
 use rss6_ctrl::{PidGains, Trajectory};
 use std::collections::VecDeque;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
-use super::friction::{self, central_jacobians, sim_err, Sens, StepSens, COULOMB};
-use super::sens_state::{mul_add, SensState};
+use super::friction::{self, sim_err, Sens, StepSens};
+use super::sens_state::{drive_pid_sensitivity, mul_add, SensState};
+
+mod stages;
+use stages::Stage;
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -105,34 +103,6 @@ struct Lean<'a> {
     sens: Option<SensState>,
     /// The stage's derivatives, written in place (≈ 4 KB: not moved per stage).
     scratch: std::cell::RefCell<ForwardJacobians>,
-}
-
-/// One RK4 stage's acceleration and (optionally) its derivatives.
-struct Stage {
-    a: Vec6,
-    jac: Option<StageJac>,
-}
-
-/// A stage's derivatives.
-struct StageJac {
-    /// F_χ = ∂χ̈/∂χ, F_χ̇ = ∂χ̈/∂χ̇.
-    fp: Mat6,
-    fv: Mat6,
-    /// M̃⁻¹J_θᵀ = ∂χ̈/∂τ.
-    ft: Mat6,
-    /// −M̃⁻¹J_θᵀΓ restricted to the active Ξ columns.
-    fxi: Sens,
-    j_theta: Mat6,
-    /// ∂(J_ad ν)/∂χ of the free rates (the implicit law's first stage only).
-    d_rates: Option<Mat6>,
-}
-
-/// A stage asked for its own state Jacobians always gets them.
-fn unreachable_state(t: f64) -> Result<(Mat6, Mat6)> {
-    Err(IdentError::Simulation {
-        time: t,
-        message: "the dynamics returned no state Jacobians".into(),
-    })
 }
 
 const EPS_CLOCK: f64 = 1e-9;
@@ -436,132 +406,6 @@ impl<'a> Lean<'a> {
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
     }
 
-    /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
-    /// implicit law `tau` is τ_a − τ_f and the model is friction-free. `frozen`: state Jacobians
-    /// to use instead of computing them; `free_rates`: also the pose derivative of the joint
-    /// rates one tick ahead (the implicit friction's first stage, see [`super::friction`]).
-    fn stage(
-        &self,
-        p: &Vec6,
-        v: &Vec6,
-        tau: &Vec6,
-        t: f64,
-        frozen: Option<(Mat6, Mat6)>,
-        free_rates: bool,
-    ) -> Result<Stage> {
-        let cfg = self.cfg;
-        let env = cfg.environment();
-        let eps = cfg.friction_smoothing;
-        let implicit = cfg.implicit_friction;
-        if eps > 0.0 && !implicit {
-            return self.smoothed_stage(p, v, tau, t, frozen);
-        }
-        // Sign law (Coulomb's sign held) or implicit (friction-free model).
-        let dp = if implicit { &self.dp_nf } else { &self.dp };
-        let Some(s) = self.sens.as_ref() else {
-            let a = forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
-                .map_err(|e| sim_err(t, e))?;
-            return Ok(Stage { a, jac: None });
-        };
-        let request = JacobianRequest {
-            state: frozen.is_none(),
-            rate_step: free_rates.then_some(cfg.dt),
-            ..JacobianRequest::default()
-        };
-        let mut fj = self.scratch.borrow_mut();
-        forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, &mut fj)
-            .map_err(|e| sim_err(t, e))?;
-        let (fp, fv) = match (frozen, fj.d_state) {
-            (Some(j), _) | (None, Some(j)) => j,
-            (None, None) => unreachable_state(t)?,
-        };
-        let mut fxi = Sens::zeros(s.columns.len());
-        for (c, &col) in s.columns.iter().enumerate() {
-            // With the implicit law friction acts through τ_f (its sensitivity is in the held
-            // torque's).
-            if col < N_DYN && !(implicit && col >= COULOMB) {
-                fxi.set_column(c, &fj.d_params.column(col));
-            }
-        }
-        Ok(Stage {
-            a: fj.pose_ddot,
-            jac: Some(StageJac {
-                fp,
-                fv,
-                ft: fj.d_torque,
-                fxi,
-                j_theta: fj.j_theta,
-                d_rates: fj.d_rates,
-            }),
-        })
-    }
-
-    /// [`Self::stage`] with the Coulomb torque f_c tanh(θ̇/ε) (smoothed) as a known joint torque on
-    /// the friction-free model, exactly as `rss6_sim::ModelSim` integrates it. Not quadratic in
-    /// χ̇: central differences of the forward dynamics with a small step there too.
-    fn smoothed_stage(
-        &self,
-        p: &Vec6,
-        v: &Vec6,
-        tau: &Vec6,
-        t: f64,
-        frozen: Option<(Mat6, Mat6)>,
-    ) -> Result<Stage> {
-        let cfg = self.cfg;
-        let env = cfg.environment();
-        let g = &cfg.gravity;
-        let eps = cfg.friction_smoothing;
-        let smooth_tau = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
-            let theta_dot = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))? * vv;
-            Ok(Vec6::from_fn(|i, _| {
-                tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh()
-            }))
-        };
-        let fd = |pp: &Vec6, vv: &Vec6| {
-            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, pp, vv, &smooth_tau(pp, vv)?, &env)
-                .map_err(|e| sim_err(t, e))
-        };
-        let a = fd(p, v)?;
-        let Some(s) = self.sens.as_ref() else {
-            return Ok(Stage { a, jac: None });
-        };
-        let j_theta = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
-        let theta_dot = j_theta * v;
-        // With the load: ∂χ̈/∂Ξ = −M̃_tot⁻¹ J_θᵀ Γ, the load's inertia in M̃_tot.
-        let m = mass_matrix_with_env(&cfg.kp, &self.dp, p, &env).map_err(|e| sim_err(t, e))?;
-        let chol = m.cholesky().ok_or_else(|| IdentError::Simulation {
-            time: t,
-            message: "the mass matrix is not positive definite".into(),
-        })?;
-        let ft = chol.solve(&j_theta.transpose());
-        let (fp, fv) = match frozen {
-            Some(j) => j,
-            None => central_jacobians(fd, p, v, 1e-6)?,
-        };
-        let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
-        let mut fxi = Sens::zeros(s.columns.len());
-        for (c, &col) in s.columns.iter().enumerate() {
-            if (COULOMB..COULOMB + LEGS).contains(&col) {
-                // ∂χ̈/∂f_c,i = −M̃⁻¹J_θᵀ e_i tanh(θ̇_i/ε).
-                let i = col - COULOMB;
-                fxi.set_column(c, &(-(ft.column(i) * (theta_dot[i] / eps).tanh())));
-            } else if col < N_DYN {
-                fxi.set_column(c, &(-(ft * gamma.column(col))));
-            }
-        }
-        Ok(Stage {
-            a,
-            jac: Some(StageJac {
-                fp,
-                fv,
-                ft,
-                fxi,
-                j_theta,
-                d_rates: None,
-            }),
-        })
-    }
-
     /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
     /// `first`: the first stage if already evaluated at the current state with `tau`.
     fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64, first: Option<Stage>) -> Result<()> {
@@ -626,50 +470,4 @@ impl<'a> Lean<'a> {
         }
         Ok(())
     }
-}
-
-/// The drive PID's sensitivity (see [`Lean::drive_pid`]) for all joints at once: ∂e, ∂D (the
-/// same recursion as D plus its explicit dependence on l_d), ∂I and ∂τ, zero on clamped joints
-/// (whose integral is frozen too). `terms[i]` = (e, ∂D/∂l_d, I) of joint i.
-fn drive_pid_sensitivity(
-    s: &mut SensState,
-    gains: PidGains,
-    primed: bool,
-    dt: f64,
-    t_f: f64,
-    unclamped: &[bool; LEGS],
-    terms: &[(f64, f64, f64); LEGS],
-) -> Sens {
-    let s_e = &s.command - &s.theta_meas;
-    let s_de = &s_e - &s.prev_error;
-    let mut s_d = match (primed, t_f > 0.0) {
-        (false, _) => Sens::zeros(s_e.ncols()),
-        (true, false) => s_de * (gains.ld / dt),
-        (true, true) => (&s.prev_derivative * t_f + s_de * gains.ld) / (t_f + dt),
-    };
-    let col = |a: usize| s.columns.iter().position(|&c| c == a);
-    let (c_lp, c_li, c_ld) = (col(N_DYN), col(N_DYN + 1), col(N_DYN + 2));
-    if let Some(c) = c_ld {
-        for (i, term) in terms.iter().enumerate() {
-            s_d[(i, c)] += term.1;
-        }
-    }
-    let s_int = &s.integral + &s_e * dt;
-    let mut s_tau = &s_e * gains.lp + &s_int * gains.li + &s_d;
-    for i in 0..LEGS {
-        if unclamped[i] {
-            if let Some(c) = c_lp {
-                s_tau[(i, c)] += terms[i].0;
-            }
-            if let Some(c) = c_li {
-                s_tau[(i, c)] += terms[i].2;
-            }
-            s.integral.set_row(i, &s_int.row(i));
-        } else {
-            s_tau.row_mut(i).fill(0.0);
-        }
-    }
-    s.prev_error = s_e;
-    s.prev_derivative = s_d;
-    s_tau
 }
