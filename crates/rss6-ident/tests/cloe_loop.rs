@@ -427,3 +427,57 @@ fn with_recorded_commands_sensitivities_match_central_differences() {
     let recs = noisy_implicit_twin_run(&realistic_truth(), 1.0);
     sensitivities_match(&recorded_loop(1.0, &recs), &realistic_truth());
 }
+
+/// Stages evaluated ahead on other threads (`LoopConfig::parallel_stages`) give the sequential run's
+/// χ_s and Jacobian bit for bit, for every friction law and both state-Jacobian modes, and take
+/// every stage from the blocks; from inside a rayon worker the loop stays sequential.
+#[test]
+fn stages_evaluated_ahead_in_parallel_give_the_sequential_result_bit_for_bit() {
+    // Two threads even on a one-core machine (this test binary's global pool).
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build_global();
+    let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
+    let base = || {
+        let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.5);
+        cfg.torque_limit = 1e4;
+        cfg
+    };
+    let mut cases = Vec::new();
+    cases.push(("sign", base(), truth()));
+    let mut c = base();
+    (c.derivative_filter, c.friction_smoothing) = (T_F, EPS);
+    cases.push(("smoothed", c, realistic_truth()));
+    let mut c = base();
+    (c.derivative_filter, c.implicit_friction) = (T_F, true);
+    cases.push(("implicit", c.clone(), realistic_truth()));
+    c.state_jacobians = rss6_ident::StateJacobians::PerTick;
+    c.load = Some(PlatformLoad::new(
+        2.0,
+        Vec3::new(0.05, 0.02, 0.03),
+        Mat3::identity() * 1e-3,
+    ));
+    cases.push(("implicit, per tick, payload", c, realistic_truth()));
+    let exc = excitation();
+    for (name, mut cfg, a) in cases {
+        cfg.parallel_stages = false;
+        let seq = simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap();
+        cfg.parallel_stages = true;
+        let par = simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap();
+        // 500 ticks, four stages each.
+        assert_eq!((seq.stages_ahead, par.stages_ahead), (0, 2000), "{name}");
+        assert!(seq.chi == par.chi, "{name}: χ_s differs");
+        assert!(seq.jacobian == par.jacobian, "{name}: the Jacobians differ");
+        assert_eq!(seq.stuck_joint_ticks, par.stuck_joint_ticks, "{name}");
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let inside = pool.install(|| simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap());
+        assert_eq!(inside.stages_ahead, 0, "{name}");
+        assert!(
+            inside.jacobian == seq.jacobian,
+            "{name}: the Jacobians differ"
+        );
+    }
+}

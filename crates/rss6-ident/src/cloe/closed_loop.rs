@@ -40,14 +40,18 @@ use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
 use rss6_core::{ik, jacobian_theta, DynamicParams, ForwardJacobians, Mat6, Vec6, LEGS};
 use rss6_ctrl::{PidGains, Trajectory};
+use std::cell::RefCell;
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use super::config::{LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 use super::friction::{self, sim_err, Sens, StepSens};
 use super::sens_state::{drive_pid_sensitivity, mul_add, SensState};
 
+mod ahead;
 mod stages;
-use stages::Stage;
+use ahead::{Ahead, StageCall, StateJac};
+use stages::{Stage, StageModel};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
 /// `columns`: indices into A (0..67) whose sensitivities to propagate, or `None` for none.
@@ -69,18 +73,44 @@ pub fn simulate<T: Trajectory + ?Sized>(
             )));
         }
     }
-    let mut sim = Lean::new(cfg, a, columns.map(<[usize]>::to_vec))?;
-    sim.run(reference)
+    let cols = columns.map(<[usize]>::to_vec);
+    // Not from a rayon worker: its pool may be busy with other loops waiting on their own
+    // producers (e.g. identifications in parallel), which would then wait on each other.
+    let parallel = cols.is_some()
+        && cfg.parallel_stages
+        && rayon::current_thread_index().is_none()
+        && rayon::current_num_threads() > 1;
+    if parallel {
+        // Record the primal run's stage calls; their derivatives are then evaluated ahead, in
+        // parallel (`ahead.rs`). If the primal run fails, the sensitivity run fails the same way
+        // in turn.
+        let mut primal = Lean::new(cfg, a, None)?;
+        primal.record = Some(RefCell::new(Vec::new()));
+        let recorded = primal.run(reference).ok().and(primal.record.take());
+        if let Some(rec) = recorded {
+            let calls: Arc<[StageCall]> = rec.into_inner().into();
+            let producer = StageModel::new(cfg, &a.dynamics, cols.clone());
+            let (tx, rx) = std::sync::mpsc::sync_channel(2);
+            let mut sim = Lean::new(cfg, a, cols)?;
+            sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&calls), rx)));
+            return std::thread::scope(|scope| {
+                scope.spawn(|| ahead::produce(&producer, &calls, &tx));
+                let out = sim.run(reference);
+                // Stops the producer at its next block.
+                drop(sim);
+                out
+            });
+        }
+    }
+    Lean::new(cfg, a, cols)?.run(reference)
 }
 
 /// The loop's state (and its sensitivities when `sens` is set).
 struct Lean<'a> {
     cfg: &'a LoopConfig,
     dp: DynamicParams,
-    /// `dp` without Coulomb friction (for the frozen-sign state Jacobians).
-    dp_nc: DynamicParams,
-    /// `dp` without any friction (the implicit law's friction-free step).
-    dp_nf: DynamicParams,
+    /// What a stage needs (parameters, active columns), shared with the threads of `ahead`.
+    model: StageModel<'a>,
     pid: PidGains,
     pot_ticks: u64,
     // Model state.
@@ -102,7 +132,11 @@ struct Lean<'a> {
     pending: VecDeque<(f64, Vec6, Option<Sens>)>,
     sens: Option<SensState>,
     /// The stage's derivatives, written in place (≈ 4 KB: not moved per stage).
-    scratch: std::cell::RefCell<ForwardJacobians>,
+    scratch: RefCell<ForwardJacobians>,
+    /// The primal run: every stage call, in order.
+    record: Option<RefCell<Vec<StageCall>>>,
+    /// The sensitivity run: stages evaluated ahead in parallel.
+    ahead: Option<RefCell<Ahead>>,
 }
 
 const EPS_CLOCK: f64 = 1e-9;
@@ -111,10 +145,6 @@ impl<'a> Lean<'a> {
     fn new(cfg: &'a LoopConfig, a: &LoopParams, columns: Option<Vec<usize>>) -> Result<Self> {
         let theta = ik(&cfg.kp, &cfg.start)?;
         cfg.check_friction_stiffness(&a.dynamics)?;
-        let mut dp_nc = a.dynamics;
-        dp_nc.coulomb = [0.0; LEGS];
-        let mut dp_nf = dp_nc;
-        dp_nf.viscous = [0.0; LEGS];
         let pot_ticks = (cfg.pot_period / cfg.dt).round().max(1.0) as u64;
         let theta_meas = cfg.pot_angle(&theta, 0.0) + cfg.dither(0, 0.0)?;
         let pot_scale = Vec6::from_fn(|i, _| cfg.drive.eta[i] / cfg.kp.eta[i]);
@@ -123,8 +153,7 @@ impl<'a> Lean<'a> {
         let s = Lean {
             cfg,
             dp: a.dynamics,
-            dp_nc,
-            dp_nf,
+            model: StageModel::new(cfg, &a.dynamics, columns.clone()),
             pid: a.pid,
             pot_ticks,
             pose: cfg.start,
@@ -142,6 +171,8 @@ impl<'a> Lean<'a> {
             pending: VecDeque::new(),
             sens: columns.map(|c| SensState::zeros(c, pot_scale)),
             scratch: Default::default(),
+            record: None,
+            ahead: None,
         };
         // Nothing is captured yet: the frame of t = 0 is taken by the first `camera_tick(0.0)`.
         Ok(s)
@@ -185,6 +216,7 @@ impl<'a> Lean<'a> {
             saturated: 0,
             inexact_friction: 0,
             stuck_joint_ticks: 0,
+            stages_ahead: 0,
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
@@ -221,7 +253,7 @@ impl<'a> Lean<'a> {
                 out.inexact_friction += usize::from(!st.exact);
                 out.stuck_joint_ticks += st.stuck;
                 // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
-                let s1 = self.stage(&p0, &v0, &st.net, t, None, true)?;
+                let s1 = self.stage(&p0, &v0, &st.net, t, StateJac::Compute, true)?;
                 let s_net = self.friction_sensitivity(&st, &tau_sens.1, &s1, t)?;
                 self.rk4(&(st.net, s_net), t, Some(s1))?;
             } else {
@@ -255,6 +287,9 @@ impl<'a> Lean<'a> {
                 j.view_mut((6 * k, 0), (6, p)).copy_from(s);
             }
             out.jacobian = Some(j);
+        }
+        if let Some(ahead) = &self.ahead {
+            out.stages_ahead = ahead.borrow().taken;
         }
         Ok(out)
     }
@@ -406,6 +441,45 @@ impl<'a> Lean<'a> {
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
     }
 
+    /// One RK4 stage at (χ, χ̇) = (`p`, `v`) under `tau` ([`StageModel::stage`]): recorded in a
+    /// primal run, taken from the stages evaluated ahead in a sensitivity run if there are any.
+    fn stage(
+        &self,
+        p: &Vec6,
+        v: &Vec6,
+        tau: &Vec6,
+        t: f64,
+        state: StateJac,
+        free_rates: bool,
+    ) -> Result<Stage> {
+        let call = StageCall {
+            p: *p,
+            v: *v,
+            tau: *tau,
+            t,
+            state: matches!(state, StateJac::Compute),
+            free_rates,
+        };
+        if let Some(rec) = &self.record {
+            rec.borrow_mut().push(call);
+        }
+        let frozen = match state {
+            StateJac::Compute => None,
+            StateJac::Frozen(j) => Some(j.unwrap_or_else(|| (Mat6::zeros(), Mat6::zeros()))),
+        };
+        if let Some(ahead) = &self.ahead {
+            if let Some(stage) = ahead.borrow_mut().take(&call) {
+                let mut stage = stage?;
+                if let (Some(jac), Some((fp, fv))) = (stage.jac.as_mut(), frozen) {
+                    (jac.fp, jac.fv) = (fp, fv);
+                }
+                return Ok(stage);
+            }
+        }
+        let mut fj = self.scratch.borrow_mut();
+        self.model.stage(&mut fj, p, v, tau, t, frozen, free_rates)
+    }
+
     /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
     /// `first`: the first stage if already evaluated at the current state with `tau`.
     fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64, first: Option<Stage>) -> Result<()> {
@@ -414,12 +488,12 @@ impl<'a> Lean<'a> {
         let (p0, v0) = (self.pose, self.pose_dot);
         let s1 = match first {
             Some(s) => s,
-            None => self.stage(&p0, &v0, tau, t, None, false)?,
+            None => self.stage(&p0, &v0, tau, t, StateJac::Compute, false)?,
         };
         // PerTick: the state Jacobians of stage 1 serve all four stages.
-        let frozen = match (&s1.jac, self.cfg.state_jacobians) {
-            (Some(j), StateJacobians::PerTick) => Some((j.fp, j.fv)),
-            _ => None,
+        let frozen = match self.cfg.state_jacobians {
+            StateJacobians::PerTick => StateJac::Frozen(s1.jac.as_ref().map(|j| (j.fp, j.fv))),
+            StateJacobians::Exact => StateJac::Compute,
         };
         let a1 = s1.a;
         let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));

@@ -61,6 +61,11 @@ pub struct LoopConfig {
     pub duration: f64,
     /// Where the sensitivities evaluate the state Jacobians F_χ, F_χ̇.
     pub state_jacobians: StateJacobians,
+    /// With sensitivities and more than one rayon thread: a primal run first, then every RK4
+    /// stage's derivatives evaluated in parallel blocks ahead of the sensitivity recursion
+    /// (bit for bit the sequential result, docs/identification.md "Forward sensitivities").
+    /// `false`: one thread, in turn.
+    pub parallel_stages: bool,
     /// The robot's own joint commands U_θ (drive convention, rad), one per camera frame the visual
     /// PID consumed, in order: the simulated loop holds these instead of closing the outer loop on
     /// its own frames (`None`: the thesis's loop, eq. 5.4 on χ_s). With stick–slip friction the
@@ -110,6 +115,7 @@ impl LoopConfig {
             start,
             duration,
             state_jacobians: StateJacobians::Exact,
+            parallel_stages: true,
             recorded_commands: None,
             pot_dither: None,
         }
@@ -332,4 +338,7 @@ pub struct LoopRun {
     pub inexact_friction: usize,
     /// Joint-ticks on which the implicit law held a joint stuck (0 for the other laws).
     pub stuck_joint_ticks: usize,
+    /// RK4 stages whose derivatives were evaluated ahead in parallel
+    /// ([`LoopConfig::parallel_stages`]; 0 when they were evaluated in turn).
+    pub stages_ahead: usize,
 }

@@ -1,12 +1,26 @@
 //! One RK4 stage of the loop's model with its derivatives (see the parent module's docs).
 
+use super::super::config::LoopConfig;
 use super::super::friction::{central_jacobians, sim_err, Sens, COULOMB};
-use super::Lean;
 use crate::error::{IdentError, Result};
 use rss6_core::{
     forward_dynamics_jacobians_with_env, forward_dynamics_with_env, jacobian_theta,
-    mass_matrix_with_env, regressor_with_gravity, JacobianRequest, Mat6, Vec6, LEGS, N_DYN,
+    mass_matrix_with_env, regressor_with_gravity, DynamicParams, ForwardJacobians, JacobianRequest,
+    Mat6, Vec6, LEGS, N_DYN,
 };
+
+/// What a stage needs of the loop: the configuration, the parameters and the active columns. It
+/// holds no loop state, so the threads that evaluate stages ahead (`ahead.rs`) share it.
+pub(super) struct StageModel<'a> {
+    pub(super) cfg: &'a LoopConfig,
+    pub(super) dp: DynamicParams,
+    /// `dp` without Coulomb friction (the smoothed law's friction-free model).
+    pub(super) dp_nc: DynamicParams,
+    /// `dp` without any friction (the implicit law's friction-free step).
+    pub(super) dp_nf: DynamicParams,
+    /// The active columns of A (`None`: no sensitivities).
+    pub(super) columns: Option<Vec<usize>>,
+}
 
 /// One RK4 stage's acceleration and (optionally) its derivatives.
 pub(super) struct Stage {
@@ -36,13 +50,34 @@ fn unreachable_state(t: f64) -> Result<(Mat6, Mat6)> {
     })
 }
 
-impl Lean<'_> {
+impl<'a> StageModel<'a> {
+    pub(super) fn new(
+        cfg: &'a LoopConfig,
+        dp: &DynamicParams,
+        columns: Option<Vec<usize>>,
+    ) -> Self {
+        let mut dp_nc = *dp;
+        dp_nc.coulomb = [0.0; LEGS];
+        let mut dp_nf = dp_nc;
+        dp_nf.viscous = [0.0; LEGS];
+        StageModel {
+            cfg,
+            dp: *dp,
+            dp_nc,
+            dp_nf,
+            columns,
+        }
+    }
+
     /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
     /// implicit law `tau` is τ_a − τ_f and the model is friction-free. `frozen`: state Jacobians
     /// to use instead of computing them; `free_rates`: also the pose derivative of the joint
     /// rates one tick ahead (the implicit friction's first stage, see [`super::friction`]).
+    /// `fj`: scratch space for the core call (≈ 4 KB, one per thread).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn stage(
         &self,
+        fj: &mut ForwardJacobians,
         p: &Vec6,
         v: &Vec6,
         tau: &Vec6,
@@ -59,7 +94,7 @@ impl Lean<'_> {
         }
         // Sign law (Coulomb's sign held) or implicit (friction-free model).
         let dp = if implicit { &self.dp_nf } else { &self.dp };
-        let Some(s) = self.sens.as_ref() else {
+        let Some(columns) = self.columns.as_deref() else {
             let a = forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
                 .map_err(|e| sim_err(t, e))?;
             return Ok(Stage { a, jac: None });
@@ -69,15 +104,14 @@ impl Lean<'_> {
             rate_step: free_rates.then_some(cfg.dt),
             ..JacobianRequest::default()
         };
-        let mut fj = self.scratch.borrow_mut();
-        forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, &mut fj)
+        forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, fj)
             .map_err(|e| sim_err(t, e))?;
         let (fp, fv) = match (frozen, fj.d_state) {
             (Some(j), _) | (None, Some(j)) => j,
             (None, None) => unreachable_state(t)?,
         };
-        let mut fxi = Sens::zeros(s.columns.len());
-        for (c, &col) in s.columns.iter().enumerate() {
+        let mut fxi = Sens::zeros(columns.len());
+        for (c, &col) in columns.iter().enumerate() {
             // With the implicit law friction acts through τ_f (its sensitivity is in the held
             // torque's).
             if col < N_DYN && !(implicit && col >= COULOMB) {
@@ -123,7 +157,7 @@ impl Lean<'_> {
                 .map_err(|e| sim_err(t, e))
         };
         let a = fd(p, v)?;
-        let Some(s) = self.sens.as_ref() else {
+        let Some(columns) = self.columns.as_deref() else {
             return Ok(Stage { a, jac: None });
         };
         let j_theta = jacobian_theta(&cfg.kp, p).map_err(|e| sim_err(t, e))?;
@@ -140,8 +174,8 @@ impl Lean<'_> {
             None => central_jacobians(fd, p, v, 1e-6)?,
         };
         let gamma = regressor_with_gravity(&cfg.kp, p, v, &a, g).map_err(|e| sim_err(t, e))?;
-        let mut fxi = Sens::zeros(s.columns.len());
-        for (c, &col) in s.columns.iter().enumerate() {
+        let mut fxi = Sens::zeros(columns.len());
+        for (c, &col) in columns.iter().enumerate() {
             if (COULOMB..COULOMB + LEGS).contains(&col) {
                 // ∂χ̈/∂f_c,i = −M̃⁻¹J_θᵀ e_i tanh(θ̇_i/ε).
                 let i = col - COULOMB;
