@@ -65,6 +65,27 @@ pub fn simulate<T: Trajectory + ?Sized>(
     reference: &T,
     columns: Option<&[usize]>,
 ) -> Result<LoopRun> {
+    simulate_recorded(cfg, a, reference, columns, None).map(|(run, _)| run)
+}
+
+/// The stage calls of a primal run ([`simulate_recorded`]), for a sensitivity run with the same
+/// configuration (but for `state_jacobians`), parameters and reference.
+#[derive(Clone)]
+pub(crate) struct Recording(Arc<[StageCall]>);
+
+/// [`simulate`], with the stages' derivatives evaluated ahead on all rayon threads when
+/// `cfg.parallel_stages` allows it (not from inside a rayon worker: its pool may be busy with other
+/// loops waiting on their own producers, which would then wait on each other). Without columns it
+/// also returns the run's stage calls; with columns it takes them from `recording` (which must
+/// come from the same configuration, parameters and reference: a call that differs is evaluated
+/// in turn) or records them with a primal run first.
+pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
+    cfg: &LoopConfig,
+    a: &LoopParams,
+    reference: &T,
+    columns: Option<&[usize]>,
+    recording: Option<Recording>,
+) -> Result<(LoopRun, Option<Recording>)> {
     cfg.validate()?;
     if let Some(c) = columns {
         if let Some(bad) = c.iter().find(|&&j| j >= N_A) {
@@ -74,35 +95,38 @@ pub fn simulate<T: Trajectory + ?Sized>(
         }
     }
     let cols = columns.map(<[usize]>::to_vec);
-    // Not from a rayon worker: its pool may be busy with other loops waiting on their own
-    // producers (e.g. identifications in parallel), which would then wait on each other.
-    let parallel = cols.is_some()
-        && cfg.parallel_stages
+    let parallel = cfg.parallel_stages
         && rayon::current_thread_index().is_none()
         && rayon::current_num_threads() > 1;
-    if parallel {
-        // Record the primal run's stage calls; their derivatives are then evaluated ahead, in
-        // parallel (`ahead.rs`). If the primal run fails, the sensitivity run fails the same way
-        // in turn.
-        let mut primal = Lean::new(cfg, a, None)?;
-        primal.record = Some(RefCell::new(Vec::new()));
-        let recorded = primal.run(reference).ok().and(primal.record.take());
-        if let Some(rec) = recorded {
-            let calls: Arc<[StageCall]> = rec.into_inner().into();
-            let producer = StageModel::new(cfg, &a.dynamics, cols.clone());
-            let (tx, rx) = std::sync::mpsc::sync_channel(2);
-            let mut sim = Lean::new(cfg, a, cols)?;
-            sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&calls), rx)));
-            return std::thread::scope(|scope| {
-                scope.spawn(|| ahead::produce(&producer, &calls, &tx));
-                let out = sim.run(reference);
-                // Stops the producer at its next block.
-                drop(sim);
-                out
-            });
-        }
+    let primal = |record: bool| -> Result<(LoopRun, Option<Recording>)> {
+        let mut sim = Lean::new(cfg, a, None)?;
+        sim.record = record.then(|| RefCell::new(Vec::new()));
+        let run = sim.run(reference)?;
+        let rec = sim.record.map(|r| Recording(r.into_inner().into()));
+        Ok((run, rec))
+    };
+    if !parallel {
+        return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
     }
-    Lean::new(cfg, a, cols)?.run(reference)
+    if cols.is_none() {
+        return primal(true);
+    }
+    // If the primal run fails, the sensitivity run fails the same way in turn.
+    let Some(Recording(calls)) = recording.or_else(|| primal(true).ok().and_then(|(_, r)| r))
+    else {
+        return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
+    };
+    let producer = StageModel::new(cfg, &a.dynamics, cols.clone());
+    let (tx, rx) = std::sync::mpsc::sync_channel(2);
+    let mut sim = Lean::new(cfg, a, cols)?;
+    sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&calls), rx)));
+    std::thread::scope(|scope| {
+        scope.spawn(|| ahead::produce(&producer, &calls, &tx));
+        let out = sim.run(reference);
+        // Stops the producer at its next block.
+        drop(sim);
+        out.map(|run| (run, None))
+    })
 }
 
 /// The loop's state (and its sensitivities when `sens` is set).
@@ -253,7 +277,7 @@ impl<'a> Lean<'a> {
                 out.inexact_friction += usize::from(!st.exact);
                 out.stuck_joint_ticks += st.stuck;
                 // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
-                let s1 = self.stage(&p0, &v0, &st.net, t, StateJac::Compute, true)?;
+                let s1 = self.stage(&p0, &v0, &st.net, t, (true, StateJac::Compute), true)?;
                 let s_net = self.friction_sensitivity(&st, &tau_sens.1, &s1, t)?;
                 self.rk4(&(st.net, s_net), t, Some(s1))?;
             } else {
@@ -441,45 +465,6 @@ impl<'a> Lean<'a> {
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
     }
 
-    /// One RK4 stage at (χ, χ̇) = (`p`, `v`) under `tau` ([`StageModel::stage`]): recorded in a
-    /// primal run, taken from the stages evaluated ahead in a sensitivity run if there are any.
-    fn stage(
-        &self,
-        p: &Vec6,
-        v: &Vec6,
-        tau: &Vec6,
-        t: f64,
-        state: StateJac,
-        free_rates: bool,
-    ) -> Result<Stage> {
-        let call = StageCall {
-            p: *p,
-            v: *v,
-            tau: *tau,
-            t,
-            state: matches!(state, StateJac::Compute),
-            free_rates,
-        };
-        if let Some(rec) = &self.record {
-            rec.borrow_mut().push(call);
-        }
-        let frozen = match state {
-            StateJac::Compute => None,
-            StateJac::Frozen(j) => Some(j.unwrap_or_else(|| (Mat6::zeros(), Mat6::zeros()))),
-        };
-        if let Some(ahead) = &self.ahead {
-            if let Some(stage) = ahead.borrow_mut().take(&call) {
-                let mut stage = stage?;
-                if let (Some(jac), Some((fp, fv))) = (stage.jac.as_mut(), frozen) {
-                    (jac.fp, jac.fv) = (fp, fv);
-                }
-                return Ok(stage);
-            }
-        }
-        let mut fj = self.scratch.borrow_mut();
-        self.model.stage(&mut fj, p, v, tau, t, frozen, free_rates)
-    }
-
     /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
     /// `first`: the first stage if already evaluated at the current state with `tau`.
     fn rk4(&mut self, tau: &(Vec6, Option<Sens>), t: f64, first: Option<Stage>) -> Result<()> {
@@ -488,7 +473,7 @@ impl<'a> Lean<'a> {
         let (p0, v0) = (self.pose, self.pose_dot);
         let s1 = match first {
             Some(s) => s,
-            None => self.stage(&p0, &v0, tau, t, StateJac::Compute, false)?,
+            None => self.stage(&p0, &v0, tau, t, (true, StateJac::Compute), false)?,
         };
         // PerTick: the state Jacobians of stage 1 serve all four stages.
         let frozen = match self.cfg.state_jacobians {
@@ -497,13 +482,13 @@ impl<'a> Lean<'a> {
         };
         let a1 = s1.a;
         let (p2, v2) = (p0 + v0 * (0.5 * dt), v0 + a1 * (0.5 * dt));
-        let s2 = self.stage(&p2, &v2, tau, t, frozen, false)?;
+        let s2 = self.stage(&p2, &v2, tau, t, (false, frozen), false)?;
         let a2 = s2.a;
         let (p3, v3) = (p0 + v2 * (0.5 * dt), v0 + a2 * (0.5 * dt));
-        let s3 = self.stage(&p3, &v3, tau, t, frozen, false)?;
+        let s3 = self.stage(&p3, &v3, tau, t, (false, frozen), false)?;
         let a3 = s3.a;
         let (p4, v4) = (p0 + v3 * dt, v0 + a3 * dt);
-        let s4 = self.stage(&p4, &v4, tau, t, frozen, false)?;
+        let s4 = self.stage(&p4, &v4, tau, t, (false, frozen), false)?;
         let a4 = s4.a;
         self.pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
         self.pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);

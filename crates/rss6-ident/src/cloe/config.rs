@@ -342,3 +342,24 @@ pub struct LoopRun {
     /// ([`LoopConfig::parallel_stages`]; 0 when they were evaluated in turn).
     pub stages_ahead: usize,
 }
+
+impl LoopRun {
+    /// Index of the model frame at each time of `t` (within half a tick of `dt`), or an error
+    /// naming the first time the model's loop has no frame at.
+    pub(crate) fn frames_at(&self, t: &[f64], dt: f64) -> Result<Vec<usize>> {
+        let mut idx = Vec::with_capacity(t.len());
+        let mut s = 0usize;
+        for &tk in t {
+            while s < self.t.len() && self.t[s] < tk - 0.5 * dt {
+                s += 1;
+            }
+            if s >= self.t.len() || (self.t[s] - tk).abs() > 0.5 * dt {
+                return Err(IdentError::NoCameraFrames(format!(
+                    "the model's loop has no frame at t = {tk:.4} s (camera timing differs?)"
+                )));
+            }
+            idx.push(s);
+        }
+        Ok(idx)
+    }
+}

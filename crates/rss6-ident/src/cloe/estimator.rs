@@ -20,8 +20,8 @@
 //! to rounding). Otherwise [`IdentError::NotConverged`]
 //! with the cost history.
 
-use super::closed_loop::simulate;
-use super::config::{LoopConfig, LoopParams, LoopRun};
+use super::closed_loop::{simulate_recorded, Recording};
+use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use crate::error::{IdentError, Result};
@@ -179,6 +179,8 @@ struct Eval {
     g: Option<DMatrix<f64>>,
     /// `LoopRun::inexact_friction` of this simulation.
     inexact: usize,
+    /// A plain run's stage calls, for the sensitivity run at the same ψ if the step is taken.
+    recording: Option<Recording>,
 }
 
 /// Closed-loop output-error identification of A from `data` collected with `cfg`'s loop following
@@ -240,45 +242,49 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
 
     let mut cfg_fast = cfg.clone();
     cfg_fast.state_jacobians = super::StateJacobians::PerTick;
-    let evaluate_with = |psi: &[f64], jac: bool, fast: bool, sims: &mut usize| -> Result<Eval> {
-        let a = cons.params(psi);
-        let c = if fast { &cfg_fast } else { cfg };
-        let run = simulate(c, &a, reference, jac.then_some(&a_cols[..]))?;
-        *sims += 1;
-        let idx = match_frames(&run, data, cfg.dt)?;
-        let n = data.t.len();
-        let mut residual = DVector::zeros(6 * n);
-        let mut sq = Vec6::zeros();
-        for (k, &s) in idx.iter().enumerate() {
-            let d = data.measured[k] - run.chi[s];
-            for i in 0..6 {
-                residual[6 * k + i] = weight[i] * d[i];
-                sq[i] += d[i] * d[i];
-            }
-        }
-        let rms = sq.map(|v| (v / n as f64).sqrt());
-        let g = match (&run.jacobian, jac) {
-            (Some(ja), true) => {
-                let dadpsi = cons.jacobian(psi);
-                let mut g = DMatrix::zeros(6 * n, N_PSI);
-                for (k, &s) in idx.iter().enumerate() {
-                    let rows = ja.rows(6 * s, 6) * &dadpsi;
-                    for i in 0..6 {
-                        g.row_mut(6 * k + i).copy_from(&(rows.row(i) * weight[i]));
-                    }
+    type Rec = Option<Recording>;
+    let evaluate_with =
+        |psi: &[f64], jac: bool, fast: bool, rec: Rec, sims: &mut usize| -> Result<Eval> {
+            let a = cons.params(psi);
+            let c = if fast { &cfg_fast } else { cfg };
+            let (run, recording) =
+                simulate_recorded(c, &a, reference, jac.then_some(&a_cols[..]), rec)?;
+            *sims += 1;
+            let idx = run.frames_at(&data.t, cfg.dt)?;
+            let n = data.t.len();
+            let mut residual = DVector::zeros(6 * n);
+            let mut sq = Vec6::zeros();
+            for (k, &s) in idx.iter().enumerate() {
+                let d = data.measured[k] - run.chi[s];
+                for i in 0..6 {
+                    residual[6 * k + i] = weight[i] * d[i];
+                    sq[i] += d[i] * d[i];
                 }
-                Some(g)
             }
-            _ => None,
+            let rms = sq.map(|v| (v / n as f64).sqrt());
+            let g = match (&run.jacobian, jac) {
+                (Some(ja), true) => {
+                    let dadpsi = cons.jacobian(psi);
+                    let mut g = DMatrix::zeros(6 * n, N_PSI);
+                    for (k, &s) in idx.iter().enumerate() {
+                        let rows = ja.rows(6 * s, 6) * &dadpsi;
+                        for i in 0..6 {
+                            g.row_mut(6 * k + i).copy_from(&(rows.row(i) * weight[i]));
+                        }
+                    }
+                    Some(g)
+                }
+                _ => None,
+            };
+            Ok(Eval {
+                cost: residual.norm_squared(),
+                residual,
+                rms,
+                g,
+                inexact: run.inexact_friction,
+                recording,
+            })
         };
-        Ok(Eval {
-            cost: residual.norm_squared(),
-            residual,
-            rms,
-            g,
-            inexact: run.inexact_friction,
-        })
-    };
 
     let mut psi: Vec<f64> = cons.psi(guess)?.to_vec();
     let psi_prior = psi.clone();
@@ -291,7 +297,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
             )))
         }
     };
-    let mut cur = evaluate_with(&psi, true, false, &mut sims)?;
+    let mut cur = evaluate_with(&psi, true, false, None, &mut sims)?;
     let rms_before = cur.rms;
     // Identifiability at the guess.
     let g0 = cur
@@ -440,10 +446,10 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                 trial[j] += step[k];
             }
             let rel_step = step.iter().map(|d| d.exp_m1().abs()).fold(0.0, f64::max);
-            let next = evaluate_with(&trial, false, false, &mut sims);
+            let next = evaluate_with(&trial, false, false, None, &mut sims);
             match next {
                 Ok(e) if e.cost + prior_cost(&trial) < cur_total => {
-                    let total = e.cost + prior_cost(&trial);
+                    let (total, rec) = (e.cost + prior_cost(&trial), e.recording.clone());
                     let rel_cost = (cur_total - total) / cur_total.max(f64::MIN_POSITIVE);
                     psi = trial;
                     history.push(total);
@@ -472,19 +478,19 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
                         || (rel_cost <= options.tol_cost
                             && (rel_step <= options.tol_step || sigma_small))
                     {
-                        cur = evaluate_with(&psi, true, false, &mut sims)?;
+                        cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
                         converged = true;
                         break 'outer;
                     }
                     iterations += 1;
                     if iterations > options.max_iterations {
-                        cur = evaluate_with(&psi, true, false, &mut sims)?;
+                        cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
                         break 'outer;
                     }
                     // Near the minimum the per-tick approximation's error (≈ 10⁻³) would make
                     // convergence linear: exact sensitivities once Φ changes by < 1 %.
                     let fast = options.per_tick_jacobians && rel_cost > 1e-2;
-                    cur = evaluate_with(&psi, true, fast, &mut sims)?;
+                    cur = evaluate_with(&psi, true, fast, rec, &mut sims)?;
                     continue 'outer;
                 }
                 _ => {
@@ -507,7 +513,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         });
     }
     if options.per_tick_jacobians {
-        cur = evaluate_with(&psi, true, false, &mut sims)?;
+        cur = evaluate_with(&psi, true, false, None, &mut sims)?;
     }
     // Relative standard deviations from the exact Jacobian and the residual variance.
     let g = cur
@@ -578,23 +584,4 @@ fn optimal(g: &DMatrix<f64>, r: &DVector<f64>, tol: f64) -> bool {
         let cn = c.norm();
         cn == 0.0 || (c.dot(r) / (cn * rn)).abs() <= tol
     })
-}
-
-/// Index of the model frame at each data time (within half a tick), or an error naming the first
-/// data time the model's loop has no frame at.
-fn match_frames(run: &LoopRun, data: &CloeData, dt: f64) -> Result<Vec<usize>> {
-    let mut idx = Vec::with_capacity(data.t.len());
-    let mut s = 0usize;
-    for &t in &data.t {
-        while s < run.t.len() && run.t[s] < t - 0.5 * dt {
-            s += 1;
-        }
-        if s >= run.t.len() || (run.t[s] - t).abs() > 0.5 * dt {
-            return Err(IdentError::NoCameraFrames(format!(
-                "the model's loop has no frame at t = {t:.4} s (camera timing differs?)"
-            )));
-        }
-        idx.push(s);
-    }
-    Ok(idx)
 }

@@ -10,6 +10,7 @@
 //! is evaluated in turn.
 
 use super::stages::{Stage, StageModel};
+use super::{Lean, StateJacobians};
 use crate::error::Result;
 use rayon::prelude::*;
 use rss6_core::{ForwardJacobians, Mat6, Vec6};
@@ -35,8 +36,9 @@ pub(super) struct StageCall {
     pub(super) v: Vec6,
     pub(super) tau: Vec6,
     pub(super) t: f64,
-    /// Whether the stage evaluates its own state Jacobians ([`StateJac::Compute`]).
-    pub(super) state: bool,
+    /// The tick's first stage (the only one with its own state Jacobians under
+    /// [`StateJacobians::PerTick`]).
+    pub(super) first: bool,
     pub(super) free_rates: bool,
 }
 
@@ -54,7 +56,8 @@ pub(super) fn produce(model: &StageModel, calls: &[StageCall], tx: &SyncSender<B
         let block: Block = chunk
             .par_iter()
             .map_init(ForwardJacobians::default, |fj, c| {
-                let frozen = (!c.state).then(|| (Mat6::zeros(), Mat6::zeros()));
+                let state = c.first || model.cfg.state_jacobians == StateJacobians::Exact;
+                let frozen = (!state).then(|| (Mat6::zeros(), Mat6::zeros()));
                 Some(model.stage(fj, &c.p, &c.v, &c.tau, c.t, frozen, c.free_rates))
             })
             .collect();
@@ -105,5 +108,91 @@ impl Ahead {
         let stage = self.ready.get_mut(idx - self.start).and_then(Option::take);
         self.taken += usize::from(stage.is_some());
         stage
+    }
+}
+
+impl Lean<'_> {
+    /// One RK4 stage at (χ, χ̇) = (`p`, `v`) under `tau` ([`StageModel::stage`]; `first`: the
+    /// tick's first stage): recorded in a primal run, taken from the stages evaluated ahead in a
+    /// sensitivity run if there are any.
+    pub(super) fn stage(
+        &self,
+        p: &Vec6,
+        v: &Vec6,
+        tau: &Vec6,
+        t: f64,
+        (first, state): (bool, StateJac),
+        free_rates: bool,
+    ) -> Result<Stage> {
+        let call = StageCall {
+            p: *p,
+            v: *v,
+            tau: *tau,
+            t,
+            first,
+            free_rates,
+        };
+        if let Some(rec) = &self.record {
+            rec.borrow_mut().push(call);
+        }
+        let frozen = match state {
+            StateJac::Compute => None,
+            StateJac::Frozen(j) => Some(j.unwrap_or_else(|| (Mat6::zeros(), Mat6::zeros()))),
+        };
+        if let Some(ahead) = &self.ahead {
+            if let Some(stage) = ahead.borrow_mut().take(&call) {
+                let mut stage = stage?;
+                if let (Some(jac), Some((fp, fv))) = (stage.jac.as_mut(), frozen) {
+                    (jac.fp, jac.fv) = (fp, fv);
+                }
+                return Ok(stage);
+            }
+        }
+        let mut fj = self.scratch.borrow_mut();
+        self.model.stage(&mut fj, p, v, tau, t, frozen, free_rates)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::super::{simulate, simulate_recorded, LoopConfig};
+    use crate::cloe::truth::table_5_2_truth;
+    use crate::excitation::Excitation;
+    use rss6_core::{home_pose, KinematicParams};
+
+    /// A plain run's recording (exact state Jacobians configured) serves the per-tick sensitivity
+    /// run at the same parameters: every stage comes from the blocks and the result is the
+    /// sequential one bit for bit. A recording from other parameters is never used wrongly.
+    #[test]
+    fn a_plain_runs_recording_serves_the_sensitivity_run_at_the_same_parameters() {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build_global();
+        let free: Vec<f64> = (0..24).map(|k| 0.004 * ((k % 5) as f64 - 2.0)).collect();
+        let exc = Excitation::at_rest(3, 0.5, &home_pose(), &free).unwrap();
+        let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.3);
+        (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
+        let a = table_5_2_truth();
+        let cols = [0usize, 3, 33, 54, 61, 65];
+        let (plain, rec) = simulate_recorded(&cfg, &a, &exc, None, None).unwrap();
+        assert!(rec.is_some());
+        let mut per_tick = cfg.clone();
+        per_tick.state_jacobians = crate::StateJacobians::PerTick;
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec).unwrap();
+        let mut in_turn = per_tick.clone();
+        in_turn.parallel_stages = false;
+        let seq = simulate(&in_turn, &a, &exc, Some(&cols)).unwrap();
+        assert_eq!((run.stages_ahead, seq.stages_ahead), (1200, 0));
+        assert!(run.chi == plain.chi && run.chi == seq.chi);
+        assert!(run.jacobian == seq.jacobian);
+        // Another viscous friction: the trajectory parts from the recording.
+        let mut other = a;
+        other.dynamics.viscous[2] *= 1.5;
+        let (_, rec) = simulate_recorded(&cfg, &other, &exc, None, None).unwrap();
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec).unwrap();
+        println!("stages taken from another run's recording: {}", run.stages_ahead);
+        assert!(run.stages_ahead < 1200);
+        assert!(run.jacobian == seq.jacobian);
     }
 }
