@@ -249,3 +249,57 @@ fn requesting_an_unidentifiable_parameter_is_a_typed_error() {
         other => panic!("expected Unidentifiable, got {other:?}"),
     }
 }
+
+/// With the other cores (`LoopConfig::parallel_stages`: stages evaluated ahead, the trial at 10λ
+/// beside the one at λ) CLOE takes exactly the sequential path: the same iterates, costs and
+/// estimate bit for bit, only more (speculative) simulations.
+#[test]
+fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build_global();
+    let truth = table_5_2_truth();
+    let exc = excitation();
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
+    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let noise = Normal::new(0.0, 0.0096e-3).unwrap();
+    // (the same σ on the angles' axes: only the path matters here)
+    let data = CloeData {
+        t: run.t.clone(),
+        measured: run
+            .chi
+            .iter()
+            .map(|c| c + Vec6::from_fn(|_, _| noise.sample(&mut rng)))
+            .collect(),
+    };
+    let names: Vec<String> = ["fv1", "fv2", "fc3", "li", "ld"].map(String::from).to_vec();
+    let guess = spread_guess(&truth, &names, 0.3, 2);
+    let opts = CloeOptions {
+        parameters: Some(names),
+        max_iterations: 20,
+        ..CloeOptions::default()
+    };
+    let mut results = Vec::new();
+    for parallel in [false, true] {
+        cfg.parallel_stages = parallel;
+        // Converged or not: the path is what is compared.
+        let r = cloe(&data, &cfg, &exc, &guess, &opts);
+        results.push(match r {
+            Ok(r) => (r.cost_history, r.psi, r.simulations),
+            Err(IdentError::NotConverged { cost_history, .. }) => (cost_history, vec![], 0),
+            Err(e) => panic!("{e}"),
+        });
+    }
+    let (seq, par) = (&results[0], &results[1]);
+    println!(
+        "{} iterations, {} simulations in turn, {} on two cores",
+        seq.0.len() - 1,
+        seq.2,
+        par.2
+    );
+    assert!(seq.0.len() > 2, "at least two iterations");
+    assert!(seq.0 == par.0 && seq.1 == par.1, "the paths differ");
+    assert!(par.2 > seq.2 || seq.2 == 0, "no speculative trial ran");
+}

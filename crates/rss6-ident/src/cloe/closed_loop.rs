@@ -65,7 +65,7 @@ pub fn simulate<T: Trajectory + ?Sized>(
     reference: &T,
     columns: Option<&[usize]>,
 ) -> Result<LoopRun> {
-    simulate_recorded(cfg, a, reference, columns, None).map(|(run, _)| run)
+    simulate_recorded(cfg, a, reference, columns, None, false).map(|(run, _)| run)
 }
 
 /// The stage calls of a primal run ([`simulate_recorded`]), for a sensitivity run with the same
@@ -76,15 +76,16 @@ pub(crate) struct Recording(Arc<[StageCall]>);
 /// [`simulate`], with the stages' derivatives evaluated ahead on all rayon threads when
 /// `cfg.parallel_stages` allows it (not from inside a rayon worker: its pool may be busy with other
 /// loops waiting on their own producers, which would then wait on each other). Without columns it
-/// also returns the run's stage calls; with columns it takes them from `recording` (which must
-/// come from the same configuration, parameters and reference: a call that differs is evaluated
-/// in turn) or records them with a primal run first.
+/// also returns the run's stage calls if `record`; with columns it takes them from `recording`
+/// (which must come from the same configuration, parameters and reference: a call that differs is
+/// evaluated in turn) or records them with a primal run first.
 pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
     cfg: &LoopConfig,
     a: &LoopParams,
     reference: &T,
     columns: Option<&[usize]>,
     recording: Option<Recording>,
+    record: bool,
 ) -> Result<(LoopRun, Option<Recording>)> {
     cfg.validate()?;
     if let Some(c) = columns {
@@ -109,7 +110,7 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
         return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
     }
     if cols.is_none() {
-        return primal(true);
+        return primal(record);
     }
     // If the primal run fails, the sensitivity run fails the same way in turn.
     let Some(Recording(calls)) = recording.or_else(|| primal(true).ok().and_then(|(_, r)| r))

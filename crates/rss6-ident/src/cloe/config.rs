@@ -61,10 +61,12 @@ pub struct LoopConfig {
     pub duration: f64,
     /// Where the sensitivities evaluate the state Jacobians F_χ, F_χ̇.
     pub state_jacobians: StateJacobians,
-    /// With sensitivities and more than one rayon thread: a primal run first, then every RK4
-    /// stage's derivatives evaluated in parallel blocks ahead of the sensitivity recursion
-    /// (bit for bit the sequential result, docs/identification.md "Forward sensitivities").
-    /// `false`: one thread, in turn.
+    /// Use the other rayon threads (when there are any and the caller is not one of them): with
+    /// sensitivities, a primal run records the stage calls (or CLOE passes the accepted trial's)
+    /// and every RK4 stage's derivatives are evaluated in parallel blocks ahead of the sensitivity
+    /// recursion; CLOE evaluates its trial step at 10λ beside the one at λ, used if that is
+    /// rejected. Bit for bit the sequential results (docs/identification.md, "Forward
+    /// sensitivities"). `false`: one thread, in turn.
     pub parallel_stages: bool,
     /// The robot's own joint commands U_θ (drive convention, rad), one per camera frame the visual
     /// PID consumed, in order: the simulated loop holds these instead of closing the outer loop on

@@ -24,6 +24,7 @@ use super::closed_loop::{simulate_recorded, Recording};
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
+use super::lm_step::{lm_step, optimal, shifted};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
 use nalgebra::{DMatrix, DVector};
@@ -189,7 +190,7 @@ struct Eval {
 /// Errors: [`IdentError::NoCameraFrames`] (empty data, or data times the model's loop never
 /// produces), [`IdentError::Unidentifiable`] (a requested quantity the data cannot see),
 /// [`IdentError::NotConverged`], [`IdentError::Simulation`] at the guess, invalid inputs.
-pub fn cloe<T: Trajectory + ?Sized>(
+pub fn cloe<T: Trajectory + Sync + ?Sized>(
     data: &CloeData,
     cfg: &LoopConfig,
     reference: &T,
@@ -203,7 +204,7 @@ pub fn cloe<T: Trajectory + ?Sized>(
 /// guess; ψ as in [`Consistent`], anchored at `guess`), so a caller can keep the last iterate of a
 /// run that does not converge. When it returns `false` the estimation stops with
 /// [`IdentError::NotConverged`] and the cost history so far (the bindings' Ctrl-C).
-pub fn cloe_observed<T: Trajectory + ?Sized>(
+pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     data: &CloeData,
     cfg: &LoopConfig,
     reference: &T,
@@ -248,7 +249,7 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
             let a = cons.params(psi);
             let c = if fast { &cfg_fast } else { cfg };
             let (run, recording) =
-                simulate_recorded(c, &a, reference, jac.then_some(&a_cols[..]), rec)?;
+                simulate_recorded(c, &a, reference, jac.then_some(&a_cols[..]), rec, !jac)?;
             *sims += 1;
             let idx = run.frames_at(&data.t, cfg.dt)?;
             let n = data.t.len();
@@ -407,6 +408,10 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         (ga, ra)
     };
     let mut lambda = options.lambda0;
+    // The trial at 10λ on another core (`LoopConfig::parallel_stages`; not from a rayon worker).
+    let speculate = cfg.parallel_stages
+        && rayon::current_thread_index().is_none()
+        && rayon::current_num_threads() > 1;
     let mut history = vec![cur.cost + prior_cost(&psi)];
     let mut iterations = 1usize;
     let mut converged = false;
@@ -421,32 +426,45 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         let cur_total = cur.cost + prior_cost(&psi);
         let gtg = ga.tr_mul(&ga);
         let gtr = ga.tr_mul(&ra);
+        // The trial at 10λ, evaluated beside the one at λ in case that is rejected.
+        let mut spare: Option<(f64, Result<Eval>)> = None;
         loop {
-            // Marquardt's scaling diag(GᵀG), floored so that nearly flat directions are damped too.
-            let top = (0..active.len()).map(|k| gtg[(k, k)]).fold(0.0, f64::max);
-            let mut lhs = gtg.clone();
-            for k in 0..active.len() {
-                lhs[(k, k)] += lambda * gtg[(k, k)].max(1e-8 * top).max(f64::MIN_POSITIVE);
-            }
-            let Some(mut step) = lhs.clone().cholesky().map(|c| c.solve(&gtr)) else {
+            let Some(step) = lm_step(&gtg, &gtr, lambda, options.max_log_step) else {
                 lambda *= 10.0;
                 if lambda > 1e12 {
                     break 'outer;
                 }
                 continue;
             };
-            // A bounded step: no quantity changes by more than a factor e^max_log_step per
-            // iteration (flat directions of a short run would otherwise throw a log-parameter
-            // towards 0 or ∞).
-            for d in step.iter_mut() {
-                *d = d.clamp(-options.max_log_step, options.max_log_step);
-            }
-            let mut trial = psi.clone();
-            for (k, &j) in active.iter().enumerate() {
-                trial[j] += step[k];
-            }
+            let trial = shifted(&psi, &active, &step);
             let rel_step = step.iter().map(|d| d.exp_m1().abs()).fold(0.0, f64::max);
-            let next = evaluate_with(&trial, false, false, None, &mut sims);
+            let next = match spare.take() {
+                Some((l, e)) if l == lambda => e,
+                _ => {
+                    // Both cores: the same path as one trial at a time, one wasted simulation
+                    // when the first is taken.
+                    let l10 = lambda * 10.0;
+                    let next = lm_step(&gtg, &gtr, l10, options.max_log_step)
+                        .filter(|_| speculate && l10 <= 1e12)
+                        .map(|s| shifted(&psi, &active, &s));
+                    let (e, e10, n10) = std::thread::scope(|scope| {
+                        let other = next.as_ref().map(|t| {
+                            scope.spawn(|| {
+                                let mut n = 0;
+                                (evaluate_with(t, false, false, None, &mut n), n)
+                            })
+                        });
+                        let e = evaluate_with(&trial, false, false, None, &mut sims);
+                        match other.map(|h| h.join()) {
+                            Some(Ok((e10, n))) => (e, Some(e10), n),
+                            _ => (e, None, 0),
+                        }
+                    });
+                    sims += n10;
+                    spare = e10.map(|e| (l10, e));
+                    e
+                }
+            };
             match next {
                 Ok(e) if e.cost + prior_cost(&trial) < cur_total => {
                     let (total, rec) = (e.cost + prior_cost(&trial), e.recording.clone());
@@ -571,17 +589,5 @@ pub fn cloe_observed<T: Trajectory + ?Sized>(
         reduced_chi2: sigma2,
         simulations: sims,
         inexact_friction_ticks: cur.inexact,
-    })
-}
-
-/// max_k |g_kᵀ r| / (‖g_k‖ ‖r‖) ≤ tol: the residual is orthogonal to every column.
-fn optimal(g: &DMatrix<f64>, r: &DVector<f64>, tol: f64) -> bool {
-    let rn = r.norm();
-    if rn == 0.0 {
-        return true;
-    }
-    g.column_iter().all(|c| {
-        let cn = c.norm();
-        cn == 0.0 || (c.dot(r) / (cn * rn)).abs() <= tol
     })
 }

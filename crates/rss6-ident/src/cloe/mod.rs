@@ -8,6 +8,7 @@ mod consistent;
 mod estimator;
 mod friction;
 mod hac;
+mod lm_step;
 mod sens_state;
 mod truth;
 

@@ -175,11 +175,11 @@ mod tests {
         (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
         let a = table_5_2_truth();
         let cols = [0usize, 3, 33, 54, 61, 65];
-        let (plain, rec) = simulate_recorded(&cfg, &a, &exc, None, None).unwrap();
+        let (plain, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
         assert!(rec.is_some());
         let mut per_tick = cfg.clone();
         per_tick.state_jacobians = crate::StateJacobians::PerTick;
-        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec).unwrap();
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
         let mut in_turn = per_tick.clone();
         in_turn.parallel_stages = false;
         let seq = simulate(&in_turn, &a, &exc, Some(&cols)).unwrap();
@@ -189,9 +189,12 @@ mod tests {
         // Another viscous friction: the trajectory parts from the recording.
         let mut other = a;
         other.dynamics.viscous[2] *= 1.5;
-        let (_, rec) = simulate_recorded(&cfg, &other, &exc, None, None).unwrap();
-        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec).unwrap();
-        println!("stages taken from another run's recording: {}", run.stages_ahead);
+        let (_, rec) = simulate_recorded(&cfg, &other, &exc, None, None, true).unwrap();
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
+        println!(
+            "stages taken from another run's recording: {}",
+            run.stages_ahead
+        );
         assert!(run.stages_ahead < 1200);
         assert!(run.jacobian == seq.jacobian);
     }
