@@ -12,12 +12,17 @@ from __future__ import annotations
 
 import argparse
 import csv
+import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from rss6.discrepancy.benchmark import benchmark_case, cases, summary
+
+
+def _one_thread() -> None:
+    os.environ["RAYON_NUM_THREADS"] = "1"
 
 
 def main() -> int:
@@ -50,7 +55,9 @@ def main() -> int:
     todo = [s for s in specs if s["spec_id"] not in done]
     print(f"{len(specs)} cases, {len(done)} already in {out}, {len(todo)} to run", flush=True)
     t0 = time.perf_counter()
-    with ProcessPoolExecutor(args.workers) as pool:
+    # One thread per worker process: the Rust side would otherwise also use every core for
+    # each process (CLOE's stages ahead and its speculative trials; docs/identification.md).
+    with ProcessPoolExecutor(args.workers, initializer=_one_thread) as pool:
         futs = [pool.submit(benchmark_case, s) for s in todo]
         for k, fut in enumerate(as_completed(futs), 1):
             try:

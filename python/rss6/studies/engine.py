@@ -9,7 +9,7 @@
 * ``retries``: a task whose worker dies is run again elsewhere (the record is written once, by the
   client). A task that raises is recorded with ``status = "error"`` and its message, not lost.
 * The default client is a ``LocalCluster`` of process workers with one thread each (the Rust work
-  releases the GIL); pass a ``Client`` or a scheduler address to use an existing cluster.
+  releases the GIL; ``RAYON_NUM_THREADS=1`` keeps Rust's own pool to that thread too); pass a ``Client`` or a scheduler address to use an existing cluster.
 """
 
 from __future__ import annotations
@@ -75,8 +75,14 @@ def _client(client: Any, workers: int) -> tuple[Any, Callable[[], None]]:
     from dask.distributed import Client, LocalCluster
 
     if client is None:
+        # One thread per worker, Rust's rayon pool included (CLOE would otherwise run its
+        # stages ahead and speculative trials on every core in every worker).
         cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            env={"RAYON_NUM_THREADS": "1"},
         )
         c = Client(cluster)
 
