@@ -4,7 +4,7 @@ discrepancy.md "The model is not the robot"): noise-free plant runs (shared stic
 by the run's recorded commands, without and with the true effect. Prints the pose residual RMS per
 axis in units of Table 4.1's camera noise.
 
-    python benches/python/plant_model_gap.py [EFFECT@SCOPE ...]
+    python benches/python/plant_model_gap.py [--solver-iterations 48] [EFFECT@SCOPE ...]
 """
 
 from __future__ import annotations
@@ -28,6 +28,12 @@ EFFECTS = sorted(
 
 
 def main() -> None:
+    args = sys.argv[1:]
+    iterations = 48
+    if "--solver-iterations" in args:
+        k = args.index("--solver-iterations")
+        iterations = int(args[k + 1])
+        del args[k : k + 2]
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
     exc = identify.random_excitation(kp, seed=1000)
@@ -41,7 +47,7 @@ def main() -> None:
             effects=hidden,
             drive_derivative_filter=5e-3,
             implicit_friction=True,
-            solver_iterations=48,
+            solver_iterations=iterations,
             pixel_noise=0.0,
             potentiometer_noise=0.0,
         )
@@ -71,7 +77,8 @@ def main() -> None:
 
     run0 = run_of(collect(plant(None)))
     print("no effect: model − plant, RMS / σ per axis", rms(run0.channels - replay(model, run0)))
-    for name in sys.argv[1:] or EFFECTS:
+    print(f"plant: {iterations} solver iterations")
+    for name in args or EFFECTS:
         e, scope = bm._split(name)
         params, got = bm.magnitude(model, run0, name, 5.0)
         params = e.check(params, scope)
