@@ -5,7 +5,7 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
 
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
-        [--commands recorded|simulated] [--out out/discrepancy_benchmark.csv]
+        [--commands recorded|simulated] [--solver-iterations 48] [--out out/discrepancy_benchmark.csv]
 """
 
 from __future__ import annotations
@@ -35,6 +35,12 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--magnitudes", type=float, nargs="+", default=[1.0, 2.0, 5.0])
+    ap.add_argument(
+        "--solver-iterations",
+        type=int,
+        default=None,
+        help="the plant's solver iterations with the implicit law (default 48)",
+    )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
     specs = cases(
@@ -45,6 +51,7 @@ def main() -> int:
         friction=args.friction,
         friction_law=args.friction_law,
         commands=args.commands,
+        solver_iterations=args.solver_iterations,
     )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -184,6 +184,8 @@ def hidden_case(
             kw["implicit_friction"] = True
             if cls is rss6.Plant:
                 kw.update(_PLANT_IMPLICIT)
+                if "solver_iterations" in spec:
+                    kw["solver_iterations"] = int(spec["solver_iterations"])
         elif cls is rss6.ModelSim:
             kw["friction_smoothing"] = _EPS
         if quiet:
@@ -372,21 +374,26 @@ def cases(
     friction: str = "table",
     friction_law: str = "tanh",
     commands: str = "recorded",
+    solver_iterations: int | None = None,
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
     out-of-library discrepancies at each magnitude, and two pairs. Spec ids start with the robot
     kind (+ "-implicit" with the implicit friction law, + "-loop" for replays that close the
-    model's loop, ``commands="simulated"``)."""
+    model's loop, ``commands="simulated"``, + "-itN" for the plant at N solver iterations instead of
+    the implicit law's 48, ``solver_iterations=N``)."""
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
         tag += "-loop"
-    common = {
+    common: dict[str, Any] = {
         "robot": robot,
         "friction": friction,
         "friction_law": friction_law,
         "commands": commands,
     }
+    if solver_iterations is not None:
+        tag += f"-it{solver_iterations}"
+        common["solver_iterations"] = solver_iterations
     effs = (
         list(effects)
         if effects is not None
