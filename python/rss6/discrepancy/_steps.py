@@ -22,9 +22,11 @@ from rss6.discrepancy.search import (
     Calibration,
     Fit,
     Screen,
+    Whitener,
     calibrate,
     fit_effects,
     hotelling,
+    robust_se,
     screen,
     signature,
 )
@@ -187,7 +189,7 @@ def _consistency(
     best: Fit,
     res_at_fit: F64,
     res_before: F64,
-) -> tuple[float, float, str]:
+) -> tuple[float, float, str, Fit | None]:
     """Refits the effects on the held-out run from the fitting run's values and tests that the
     fitting run's parameters are where the held-out run's own fit would put them: the score
     g = Jᵀr of the held-out residual at the fitting run's parameters (J the held-out fit's whitened
@@ -196,7 +198,7 @@ def _consistency(
     projection). Also the *transfer*: the share of the held-out run's own cost reduction (from
     ``res_before``, its whitened residual without the new effect, to its refit) that the fitting
     run's parameters reach (``res_at_fit``) — 1 when they are as good as its own, below 0 when they
-    make it worse. (p, transfer, text of the two estimates)."""
+    make it worse. (p, transfer, text of the two estimates, the held-out fit or None)."""
     effs = [(_def(a.name), a.scope) for a in prev] + [(s.effect, s.scope)]
 
     def simulate_h(c: Change) -> F64:
@@ -212,7 +214,7 @@ def _consistency(
             bounds=partial(_physical, base_model),
         )
     except Rss6Error as err:
-        return 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})"
+        return 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})", None
     # A parameter on a bound in either fit has a nonzero score at a constrained optimum: the test
     # is on the free ones (a benchmark effect scaled to its bound was otherwise rejected as a mimic
     # with the truth's values on both runs, e.g. Coulomb 5 vs 4.998 N·m).
@@ -226,14 +228,59 @@ def _consistency(
     transfer = (c0 - c1) / (c0 - hfit.cost) if c0 > hfit.cost else float("-inf")
     text += f"; transfer {transfer:.3f}"
     if not free.any():
-        return 1.0, transfer, text + "; every parameter on a bound: not tested"
+        return 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
     j = hfit.jacobian[:, free]
     g = j.T @ res_at_fit
     t2, p = hotelling(g / np.sqrt(2.0), hcal.replicates @ j)
     text += f"; T² {t2:.3g} on {j.shape[1]} parameters"
     if not free.all():
         text += f" ({int((~free).sum())} on a bound left out)"
-    return p, transfer, text
+    return p, transfer, text, hfit
+
+
+def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:
+    """Standard errors of ``fit`` from its own run: the larger of the Wald error scaled by the
+    misfit (reduced χ² when above 1) and :func:`robust_se`'s sandwiches."""
+    dof = max(1, len(fit.residual_w) - fit.jacobian.shape[1])
+    scale = np.sqrt(max(1.0, fit.cost / dof))
+    rob = robust_se(fit, whitener, n_frames)
+    return [
+        {k: max(float(w[k]) * scale, float(r[k])) for k in w}
+        for w, r in zip(fit.se, rob, strict=True)
+    ]
+
+
+Z95 = 1.959963984540054
+"""The two-sided 95 % normal quantile."""
+
+
+def intervals(
+    defs: Sequence[EffectDef],
+    values: Sequence[dict[str, float]],
+    se: Sequence[dict[str, float]],
+    heldout: Sequence[dict[str, tuple[float, float]]] | None = None,
+) -> list[dict[str, tuple[float, float]]]:
+    """95 % intervals of the fitting run's ``values`` (one dict per effect), inside each
+    parameter's bounds. With the held-out run's own estimates ``heldout`` {name: (value, se)}, the
+    interval also holds model error that differs between excitations: a random-effects model
+    θ_run = θ + b_run + e_run, b ~ N(0, τ²) — DerSimonian–Laird's τ² from the two runs,
+    max(0, (d² − s_f² − s_h²)/2) for d = θ_f − θ_h — and the half-width 1.96·√(s_f² + τ²). Runs
+    that agree within their noise leave the fitting run's interval as it was."""
+    out: list[dict[str, tuple[float, float]]] = []
+    for i, vals in enumerate(values):
+        ho = heldout[i] if heldout is not None else {}
+        ci: dict[str, tuple[float, float]] = {}
+        for name, v in vals.items():
+            sf = se[i][name]
+            var = sf * sf
+            if name in ho and np.isfinite(ho[name][0]) and np.isfinite(ho[name][1]):
+                d = v - ho[name][0]
+                var += max(0.0, 0.5 * (d * d - sf * sf - ho[name][1] ** 2))
+            h = Z95 * float(np.sqrt(var))
+            lo, hi = defs[i].param(name).bounds
+            ci[name] = (max(v - h, lo), min(v + h, hi))
+        out.append(ci)
+    return out
 
 
 def _physical(model: Model, e: EffectDef, scope: str) -> dict[str, tuple[float, float]]:

@@ -351,6 +351,8 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     record["truth"] = json.dumps({k: v for k, v in truth.items() if k != "joint"})
     record["estimate"] = json.dumps(mine.params if mine else {})
     record["ci"] = json.dumps({k: list(v) for k, v in mine.ci.items()} if mine else {})
+    record["se"] = json.dumps(mine.se if mine else {})
+    record["heldout"] = json.dumps({k: list(v) for k, v in mine.heldout.items()} if mine else {})
     for i, a in enumerate("xyzabg"):
         record[f"gap_before_{a}"] = float(rep.gap_before[i])
         record[f"gap_named_{a}"] = float(rep.gap_named[i])
@@ -476,19 +478,27 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
             f"library effect at {m:g}× noise: right effect and scope first {right}/{len(rs)} "
             f"({100 * right / len(rs):.0f} %)"
         )
-    cover = total = 0
+    cover = total = cover_fit = cover_held = 0
     rel5: list[float] = []
     for r in lib:
         truth, est, ci = (json.loads(r[k]) for k in ("truth", "estimate", "ci"))
+        se, held = (json.loads(r.get(k) or "{}") for k in ("se", "heldout"))
         for k, v in truth.items():
             if k in ci and k in est:
                 total += 1
                 cover += ci[k][0] <= v <= ci[k][1]
+                # The fitting run's interval alone, and the held-out run's own (bounds aside:
+                # the truth is inside them).
+                if k in se:
+                    cover_fit += abs(est[k] - v) <= 1.959963984540054 * se[k]
+                if k in held:
+                    cover_held += abs(held[k][0] - v) <= 1.959963984540054 * held[k][1]
                 if float(r["magnitude"]) == 5.0 and abs(v) > 0:
                     rel5.append(abs(est[k] - v) / abs(v))
     if total:
         lines.append(
-            f"95 % intervals containing the truth: {cover}/{total} ({100 * cover / total:.0f} %)"
+            f"95 % intervals containing the truth: {cover}/{total} ({100 * cover / total:.0f} %);"
+            f" the fitting run's alone {cover_fit}, the held-out run's own {cover_held}"
         )
     if rel5:
         lines.append(

@@ -45,6 +45,8 @@ from rss6.discrepancy._steps import (
     _Sim,
     _start,
     _tell,
+    fit_se,
+    intervals,
 )
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
@@ -65,7 +67,6 @@ from rss6.discrepancy.search import (
     fit_effects,
     heldout_test,
     mimicry,
-    robust_se,
 )
 from rss6.errors import InvalidInputError, Rss6Error
 
@@ -348,22 +349,14 @@ def _diagnose(
         _, p_held = heldout_test(delta, hres, hcal.replicates)
         rms_new = _rms((held.measured - new_held[held.rows])[:, :6])
         rms_cur = _rms((held.measured - current_held[held.rows])[:, :6])
-        dof = max(1, len(best.residual_w) - best.jacobian.shape[1])
-        scale = max(1.0, best.cost / dof)
-        # The larger of the Wald error (scaled by the misfit) and the sandwich error with the
-        # residual's own long-run covariance: model error the noise model does not hold widens it.
-        # Every effect of the joint fit (earlier ones were refitted with the new one) gets its
-        # interval from it, inside the parameter's bounds.
-        rob = robust_se(best, cal.whitener, len(fit.t))
+        # Standard errors from the fitting run (the larger of Wald, scaled by the misfit, and the
+        # sandwiches: model error the noise model does not hold widens them); every effect of the
+        # joint fit (earlier ones were refitted with the new one) gets its interval, inside the
+        # parameter's bounds. Once the held-out run has refitted them, the intervals also hold
+        # the spread between the runs (below).
+        se_fit = fit_se(best, cal.whitener, len(fit.t))
         defs = [_def(a.name) for a in prev] + [s.effect]
-        cis = []
-        for i, vals in enumerate(best.values):
-            ci_i = {}
-            for name, v in vals.items():
-                h = 1.96 * max(best.se[i][name] * np.sqrt(scale), rob[i][name])
-                lo, hi = defs[i].param(name).bounds
-                ci_i[name] = (max(v - h, lo), min(v + h, hi))
-            cis.append(ci_i)
+        cis = intervals(defs, best.values, se_fit)
         ci = cis[-1]
         dll = 0.5 * (float(rw @ rw) - best.cost)
         for i, sc in enumerate(screens):
@@ -416,9 +409,18 @@ def _diagnose(
         # A real effect has the same parameters on both runs; a library effect that only mimics
         # something outside the library fits differently on another excitation.
         res_new = hcal.whitener.vec(held.measured - new_held[held.rows])
-        p_cons, transfer, cons_text = _consistency(
+        p_cons, transfer, cons_text, hfit = _consistency(
             base_model, held, hcal, prev, s, best, res_new, hres
         )
+        heldout: list[dict[str, tuple[float, float]]] = [{} for _ in best.values]
+        if hfit is not None:
+            se_h = fit_se(hfit, hcal.whitener, len(held.t))
+            heldout = [
+                {k: (float(v[k]), float(e[k])) for k in v}
+                for v, e in zip(hfit.values, se_h, strict=True)
+            ]
+            cis = intervals(defs, best.values, se_fit, heldout)
+            ci = cis[-1]
         if p_cons < alpha and transfer >= MIN_TRANSFER:
             notes_fit.append(
                 f"{s.effect.name} ({s.scope}): the held-out run's own fit differs beyond its noise "
@@ -445,11 +447,22 @@ def _diagnose(
             )
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
-            NamedEffect(a.name, a.scope, dict(a.params), c, ne.p_value, ne.gap_after)
-            for a, ne, c in zip(new_effects[len(base_model.applied()) :], named, cis, strict=False)
+            NamedEffect(a.name, a.scope, dict(a.params), c, ne.p_value, ne.gap_after, sf, dict(ho))
+            for a, ne, c, sf, ho in zip(
+                new_effects[len(base_model.applied()) :], named, cis, se_fit, heldout, strict=False
+            )
         ]
         named.append(
-            NamedEffect(s.effect.name, s.scope, dict(best.values[-1]), ci, p_held, rms_new)
+            NamedEffect(
+                s.effect.name,
+                s.scope,
+                dict(best.values[-1]),
+                ci,
+                p_held,
+                rms_new,
+                dict(se_fit[-1]),
+                dict(heldout[-1]),
+            )
         )
         named_effects = new_effects
         current_held = new_held

@@ -44,7 +44,10 @@ class NamedEffect:
     """An effect that passed selection on the fitting run and is claimed on the held-out run:
     ``name`` and ``scope`` (e.g. "coulomb friction", "joint 3"), fitted ``params`` {name: value}
     (SI), ``ci`` {name: (low, high)} (95 %), Holm-adjusted bootstrap ``p_value``, ``gap_after``
-    (6,): held-out residual RMS per axis with the effects named so far (m, rad)."""
+    (6,): held-out residual RMS per axis with the effects named so far (m, rad); ``se`` {name:
+    standard error} of ``params`` from the fitting run alone (the larger of Wald and the
+    sandwiches); ``heldout`` {name: (value, standard error)}: the held-out run's own refit, empty
+    when it could not run (``ci`` combines the two runs: docs/discrepancy.md, "Intervals")."""
 
     name: str
     scope: str
@@ -52,6 +55,8 @@ class NamedEffect:
     ci: dict[str, tuple[float, float]]
     p_value: float
     gap_after: F64
+    se: dict[str, float] = field(default_factory=dict)
+    heldout: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
