@@ -67,7 +67,7 @@ def main() -> None:
     try:
         res = identify_sim.estimate_from_initial(
             data, kp, friction_law="implicit", lp=pid[0], max_iterations=40,
-            parameters=params, progress=trace,
+            parameters=params, progress=trace, pot_noise="none",
         )  # fmt: skip
     except rss6.IdentificationError as e:
         wall = time.perf_counter() - t0

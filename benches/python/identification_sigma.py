@@ -40,9 +40,7 @@ def run(
         rss6.ModelSim = twin  # type: ignore[misc]  # the task builds rss6.ModelSim for "twin"
     if cutoff is not None:
         identify.cloe = partial(identify.cloe, measured_cutoff=cutoff)  # type: ignore[assignment]
-    if replay == "recorded":
-        identify.cloe = partial(identify.cloe, pot_noise="recorded")  # type: ignore[assignment]
-    elif replay == "exact" and not getattr(identify.cloe, "exact_noise", False):
+    if replay == "exact" and not getattr(identify.cloe, "exact_noise", False):
         # The twin's true noise: its reading minus the true angle (a simulation only).
         inner = identify.cloe
 
@@ -51,11 +49,19 @@ def run(
             theta = np.array([rss6.ik(kp, p) for p in np.asarray(data.true_pose)])
             kappa = np.asarray(data.kappa)
             read = np.array([kp.theta_from_reading(r) for r in kappa])
+            k.pop("pot_noise", None)
             return inner(data, *a, pot_noise=read - theta, **k)
 
         exact.exact_noise = True  # type: ignore[attr-defined]  # a worker runs several tasks
         identify.cloe = exact  # type: ignore[assignment]
-    return tasks.identification_task({"seed": seed, "robot": robot, "friction_law": "implicit"})
+    return tasks.identification_task(
+        {
+            "seed": seed,
+            "robot": robot,
+            "friction_law": "implicit",
+            "pot_noise": "none" if replay == "none" else "recorded",
+        }
+    )
 
 
 def estimate_error() -> None:

@@ -69,19 +69,22 @@ def estimate_from_initial(
     friction_smoothing: float = FRICTION_SMOOTHING,
     parameters: str | list[str] = "base",
     progress: Callable[[int, float], Any] | None = None,
+    pot_noise: str = "recorded",
 ) -> identify.IdentificationResult:
     """CLOE on ``d`` from :func:`initial_model`. ``friction_law="tanh"``: CLOE from the initial
     model with tanh friction (ε = ``friction_smoothing``). ``"implicit"``: the stick–slip law, a
     :func:`rss6.identify.linear_guess` with the drive's known ``lp`` first, then CLOE holding l_p on
     the recorded commands; the result's ``guess`` and ``rms_before`` are the initial model's.
-    Raises what :func:`rss6.identify.cloe` raises."""
+    ``pot_noise``: passed to :func:`rss6.identify.cloe` — by default the model's drive replays the
+    potentiometer noise estimated from the recorded readings (docs/identification.md, "Replaying
+    the potentiometer noise"). Raises what :func:`rss6.identify.cloe` raises."""
     dp0, pid0 = initial_model()
     t_f = derivative_filter
     if friction_law == "tanh":
         return identify.cloe(
             d, kp, dp0, pid0, parameters=parameters, max_iterations=max_iterations,
             per_tick_jacobians=True, progress=progress, derivative_filter=t_f,
-            friction_smoothing=friction_smoothing,
+            friction_smoothing=friction_smoothing, pot_noise=pot_noise,
         )  # fmt: skip
     if friction_law != "implicit":
         raise rss6.InvalidInputError(
@@ -94,7 +97,7 @@ def estimate_from_initial(
         d, kp, g.dynamics, g.pid, parameters=parameters, max_iterations=max_iterations,
         per_tick_jacobians=True, progress=progress, commands="recorded",
         hold=[] if parameters != "base" else ["lp"], derivative_filter=t_f,
-        implicit_friction=True,
+        implicit_friction=True, pot_noise=pot_noise,
     )  # fmt: skip
     chi0 = identify.simulate(
         kp, dp0, pid0, d.reference, times=d.t, dt=d.dt, commands=d.frame_commands(),

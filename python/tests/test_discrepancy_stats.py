@@ -273,7 +273,14 @@ def test_report_saves_markdown_and_figures(
     det = discrepancy.detect(t, r, sig, noise_floor=SIGMA)
     after = ar1(rng, 0.0)
     named = discrepancy.NamedEffect(
-        "coulomb friction", "joint 1", {"f_c": 0.02}, {"f_c": (0.018, 0.022)}, 1e-4, after.std(0)
+        "coulomb friction",
+        "joint 1",
+        {"f_c": 0.02},
+        {"f_c": (0.018, 0.022)},
+        1e-4,
+        after.std(0),
+        {"f_c": 0.001},
+        {"f_c": (0.0215, 0.001)},
     )
     rep = discrepancy.DiscrepancyReport(
         detected=det,
@@ -302,6 +309,8 @@ def test_report_saves_markdown_and_figures(
     assert rep.verdict == "named: coulomb friction (joint 1); ambiguous: {latency, pid gain}"
     assert rep.verdict in rep.table()
     assert "f_c=0.02 [0.018, 0.022]" in rep.table()
+    # The named effect with its interval and the held-out run's own estimate.
+    assert "coulomb friction (joint 1): f_c=0.02 [0.018, 0.022] (held-out 0.0215)" in rep.table()
     files = rep.save(tmp_path / "report")
     names = {f.name for f in files}
     assert {"report.md", "residuals.png", "binned.png", "acf.png", "xcorr.png"} <= names
@@ -408,3 +417,36 @@ def test_robust_errors_keep_a_short_window_and_see_correlated_residuals() -> Non
     rng = np.random.default_rng(12)
     ar = [_short_window_fit(rng, 0.8)[0] for _ in range(20)]
     assert float(np.median(ar)) > 1.5, ar
+
+
+def test_intervals_hold_model_error_that_differs_between_the_two_runs() -> None:
+    # Two runs estimate θ = 0 with noise σ = 1 and a per-run model error b ~ N(0, τ²) that the
+    # noise model does not see. The fitting run's own interval covers 95 % at τ = 0 and 47 % at
+    # τ = 3σ (measured 0.465 on 2·10⁵ draws); with the held-out run's estimate (DerSimonian–Laird's
+    # τ² from the two runs) 98.7 % and 82.7 %. Bounds: ≥ 0.95 and ≤ 0.995 at τ = 0, ≥ 0.78 at
+    # τ = 3σ (the fitting run's alone would fail it), 3× the sampling error of 4000 draws inside.
+    from rss6.discrepancy._steps import intervals
+    from rss6.discrepancy.effects import EFFECTS
+
+    eff = EFFECTS["base_tilt"]
+    name = eff.params[0].name  # roll, bounds ±0.3 rad: far from the draws
+    lo, hi = eff.params[0].bounds
+    mid = 0.5 * (lo + hi)
+    rng = np.random.default_rng(3)
+    for tau, low, high in ((0.0, 0.95, 0.995), (3.0, 0.78, 1.0)):
+        hits = alone = 0
+        n = 4000
+        for _ in range(n):
+            f = mid + 1e-4 * (rng.normal(0.0, tau) + rng.normal())
+            h = mid + 1e-4 * (rng.normal(0.0, tau) + rng.normal())
+            ci = intervals([eff], [{name: f}], [{name: 1e-4}], [{name: (h, 1e-4)}])[0][name]
+            hits += ci[0] <= mid <= ci[1]
+            c0 = intervals([eff], [{name: f}], [{name: 1e-4}])[0][name]
+            alone += c0[0] <= mid <= c0[1]
+        assert low <= hits / n <= high, (tau, hits / n)
+        if tau > 0:
+            assert alone / n < 0.6, alone / n
+    # Runs that agree within their noise leave the fitting run's interval as it was.
+    a = intervals([eff], [{name: mid}], [{name: 1e-4}], [{name: (mid + 1e-4, 1e-4)}])[0][name]
+    b = intervals([eff], [{name: mid}], [{name: 1e-4}])[0][name]
+    assert a == b

@@ -225,6 +225,23 @@ class DiscrepancyReport:
                 lines.append(
                     f"  {c.effect:22s} {c.scope:12s} {c.delta_loglik:9.3g} {c.p_adjusted:9.3g} {best:24.3g}  {est}{flag}"
                 )
+        if self.named:
+            lines += [
+                "",
+                (
+                    "named (estimate on the fitting run, 95 % interval from both runs; the "
+                    "held-out run's own refit in brackets):"
+                ),
+            ]
+            for e in self.named:
+                est = ", ".join(
+                    f"{k}={v:.4g} [{e.ci[k][0]:.4g}, {e.ci[k][1]:.4g}]"
+                    + (f" (held-out {e.heldout[k][0]:.4g})" if k in e.heldout else "")
+                    if k in e.ci
+                    else f"{k}={v:.4g}"
+                    for k, v in e.params.items()
+                )
+                lines.append(f"  {e.name} ({e.scope}): {est}; held-out p = {e.p_value:.3g}")
         if self.notes:
             lines += ["", "notes:", *(f"  {n}" for n in self.notes)]
         for amb in self.ambiguous:

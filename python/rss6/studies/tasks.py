@@ -97,6 +97,7 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         ),
         derivative_filter=t_f,
         friction_smoothing=eps,
+        pot_noise=str(spec.get("pot_noise", "recorded")),
     )
     phi = np.exp(np.asarray(rss6._rss6.cloe_psi(res.dynamics, res.pid)[0]))
     for name, v in zip(identify.parameter_names(), phi, strict=True):
