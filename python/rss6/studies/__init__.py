@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from rss6.errors import InvalidInputError
 from rss6.studies.engine import probe_task, read_records, run_study
 from rss6.studies.tasks import calibration_task, discrepancy_task, identification_task
 
@@ -123,19 +124,24 @@ def identification_variation(
     parameters: Any = "base",
     progress: Any = True,
     friction_law: str = "implicit",
+    pot_noise: str = "recorded",
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
     Table 5.2 (``robot``: "plant" or "twin"); ``quick``: 2 s trajectories, 10 iterations;
     ``friction_law``: "tanh" or "implicit" (stick–slip in robot and model, linear start, l_p
-    known; :func:`rss6.identify_sim.estimate_from_initial`)."""
+    known; :func:`rss6.identify_sim.estimate_from_initial`); ``pot_noise``: "recorded" (the
+    model's drive replays the potentiometer noise estimated from the readings) or "none"."""
     from rss6 import identify
 
+    if pot_noise not in ("recorded", "none"):
+        raise InvalidInputError(f"pot_noise must be 'recorded' or 'none', got {pot_noise!r}")
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
-            f"{seed + k}",
+            f"pot-{pot_noise}:{seed + k}",
             "friction_law": friction_law,
+            "pot_noise": pot_noise,
             "seed": seed + k,
             "robot": robot,
             "quick": quick,

@@ -51,6 +51,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "follows the model to ≈ 1.5 µm — and tanh on the twin)",
     )
 
+    p.add_argument(
+        "--pot-noise",
+        choices=("recorded", "none"),
+        default="recorded",
+        help="identification: the model's drive replays the potentiometer noise estimated from "
+        "the recorded readings (recorded, the default) or reads clean angles (none)",
+    )
+
 
 def run(args: argparse.Namespace) -> int:
     """Runs the study and prints its summary."""
@@ -72,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
             quick=args.quick,
             parameters=["lp", "li", "ld"] if args.quick else "base",
             friction_law=args.friction_law or "implicit",
+            pot_noise=args.pot_noise,
             **common,
         )
         print(studies.summary_identification(df))
