@@ -222,19 +222,37 @@ def summary_calibration(df: Any) -> str:
 
 def summary_identification(df: Any) -> str:
     """Table 5.5 (std/|mean| of each estimate) and Table 5.4 (RMS after per trajectory)."""
+    import rss6
+    from rss6 import identify
+
     ok = df[df["status"] == "ok"]
     est = [c for c in ok.columns if c.startswith("est_")]
     lines = [f"{len(df)} trajectories: {len(ok)} identified"]
+    # Every robot of the study has Table 5.2 as its truth (identification_task).
+    truth = dict(
+        zip(
+            identify.parameter_names(),
+            np.exp(np.asarray(rss6._rss6.cloe_psi(*identify.table_5_2_truth())[0])),
+            strict=True,
+        )
+    )
     if len(ok) >= 2:
         lines.append(
             "Table 5.5 (variation = std / |mean| over the trajectories; predicted: median relative "
             "σ CLOE reported, where it estimated the quantity — the larger of Wald and sandwich; "
-            "Wald: white-residual σ alone):"
+            "Wald: white-residual σ alone; error: mean and RMS of log(estimate / Table 5.2 truth)):"
         )
         for c in est:
             v = ok[c].astype(float)
             line = f"  {c[4:]:12s} {float(v.std(ddof=1) / abs(v.mean())):.3g}"
             spread = float(v.std(ddof=1) / abs(v.mean()))
+            t = truth.get(c[4:], 0.0)
+            if t > 0 and bool((v > 0).all()):
+                e = np.log(v.to_numpy() / t)
+                line += (
+                    f"   error {100 * float(e.mean()):+.2f} % (RMS "
+                    f"{100 * float(np.sqrt(np.mean(e * e))):.2f} %)"
+                )
             for col, label in ((f"std_{c[4:]}", "predicted"), (f"wald_{c[4:]}", "Wald")):
                 if col in ok.columns:
                     p = ok[col].replace("", np.nan).astype(float).dropna()
