@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 import rss6
 from rss6 import identify
+from rss6.discrepancy._steps import Z95
 from rss6.discrepancy.diagnose import diagnose
 from rss6.discrepancy.effects import Change, EffectDef, get
 from rss6.discrepancy.model import Model, Run, replay, run_of
@@ -346,17 +347,11 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         and bool(library)
         and (f"{rep.named[0].name} ({rep.named[0].scope})" in applied_names)
     )
-    truth = case.params.get(_split(library[0])[0].name, {}) if library else {}
+    first = (_split(library[0])[0].name, _split(library[0])[1]) if library else None
+    truth = case.params.get(first[0], {}) if first else {}
     # The estimate of the hidden effect in its own scope (a drift named on joint 0 for one on
     # joint 3 is a wrong name, not an estimate of the truth).
-    mine = next(
-        (
-            e
-            for e in rep.named
-            if library and (e.name, e.scope) == (_split(library[0])[0].name, _split(library[0])[1])
-        ),
-        None,
-    )
+    mine = next((e for e in rep.named if (e.name, e.scope) == first), None)
     record["truth"] = json.dumps({k: v for k, v in truth.items() if k != "joint"})
     record["estimate"] = json.dumps(mine.params if mine else {})
     record["ci"] = json.dumps({k: list(v) for k, v in mine.ci.items()} if mine else {})
@@ -501,9 +496,9 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
                 # The fitting run's interval alone, and the held-out run's own (bounds aside:
                 # the truth is inside them).
                 if k in se:
-                    cover_fit += abs(est[k] - v) <= 1.959963984540054 * se[k]
+                    cover_fit += abs(est[k] - v) <= Z95 * se[k]
                 if k in held:
-                    cover_held += abs(held[k][0] - v) <= 1.959963984540054 * held[k][1]
+                    cover_held += abs(held[k][0] - v) <= Z95 * held[k][1]
                 if float(r["magnitude"]) == 5.0 and abs(v) > 0:
                     rel5.append(abs(est[k] - v) / abs(v))
     if total:
