@@ -16,7 +16,12 @@ import numpy as np
 
 from rss6.errors import InvalidInputError
 from rss6.studies.engine import probe_task, read_records, run_study
-from rss6.studies.tasks import calibration_task, discrepancy_task, identification_task
+from rss6.studies.tasks import (
+    calibration_task,
+    discrepancy_task,
+    identification_task,
+    quantities,
+)
 
 __all__ = [
     "calibration_study",
@@ -222,20 +227,13 @@ def summary_calibration(df: Any) -> str:
 
 def summary_identification(df: Any) -> str:
     """Table 5.5 (std/|mean| of each estimate) and Table 5.4 (RMS after per trajectory)."""
-    import rss6
     from rss6 import identify
 
     ok = df[df["status"] == "ok"]
     est = [c for c in ok.columns if c.startswith("est_")]
     lines = [f"{len(df)} trajectories: {len(ok)} identified"]
     # Every robot of the study has Table 5.2 as its truth (identification_task).
-    truth = dict(
-        zip(
-            identify.parameter_names(),
-            np.exp(np.asarray(rss6._rss6.cloe_psi(*identify.table_5_2_truth())[0])),
-            strict=True,
-        )
-    )
+    truth = quantities(*identify.table_5_2_truth())
     if len(ok) >= 2:
         lines.append(
             "Table 5.5 (variation = std / |mean| over the trajectories; predicted: median relative "

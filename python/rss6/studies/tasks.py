@@ -49,6 +49,16 @@ def calibration_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     return rec
 
 
+def quantities(dynamics: Any, pid: Any) -> dict[str, float]:
+    """CLOE's positive quantities (exp ψ) by name (``rss6.identify.parameter_names``): what the
+    study records for each estimate and compares with the Table 5.2 truth."""
+    import rss6
+    from rss6 import identify
+
+    phi = np.exp(np.asarray(rss6._rss6.cloe_psi(dynamics, pid)[0]))
+    return {n: float(v) for n, v in zip(identify.parameter_names(), phi, strict=True)}
+
+
 def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     """One identification on a random trajectory (seed ``seed``) of the robot whose truth is
     Table 5.2 (``robot``: "plant" or "twin"): CLOE from Table 5.1 and the nominal gains
@@ -99,9 +109,8 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         friction_smoothing=eps,
         pot_noise=str(spec.get("pot_noise", "recorded")),
     )
-    phi = np.exp(np.asarray(rss6._rss6.cloe_psi(res.dynamics, res.pid)[0]))
-    for name, v in zip(identify.parameter_names(), phi, strict=True):
-        rec[f"est_{name}"] = float(v)
+    for name, v in quantities(res.dynamics, res.pid).items():
+        rec[f"est_{name}"] = v
     for name, sd in zip(res.identified, res.relative_std, strict=True):
         rec[f"std_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std_wald, strict=True):
