@@ -568,6 +568,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Rss6Error as e:
         print(f"rss6: error: {type(e).__name__}: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        # Ctrl-C: one line instead of a traceback, and where the work done so far is.
+        print(f"rss6: interrupted{_kept(args)}", file=sys.stderr)
+        return 130
+
+
+def _kept(args: argparse.Namespace) -> str:
+    """Where an interrupted command left what it had written (files are written as the work goes)."""
+    out = getattr(args, "out", None) or getattr(args, "mcap", None)
+    if not out:
+        return ""
+    if args.command == "study":
+        return f"; the records finished so far are in {out}: rerun the same command to resume"
+    return f"; what was written before it is in {out}"
 
 
 if __name__ == "__main__":

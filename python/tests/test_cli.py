@@ -1,8 +1,10 @@
 """The rss6 command line: --help for every subcommand, demo --quick writes its files."""
 
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -89,6 +91,30 @@ def test_track_subcommand(tmp_path):
     assert rss6.logs.read_log(tmp_path / "l.mcap", strict=True).metadata["tuning"] == "low_noise"
     bad = run("track", "--controller", "kjsc", "--tuning", "low_noise", *quick_model)
     assert bad.returncode != 0 and "DSMC only" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_ctrl_c_stops_a_run_with_one_line_and_keeps_its_log(tmp_path):
+    """SIGINT (Ctrl-C) mid-run: exit 130, one line saying where the work is, no traceback, and the
+    MCAP written so far readable with the run marked as interrupted."""
+    log_path = tmp_path / "long.mcap"
+    cmd = [sys.executable, "-m", "rss6.cli", "track", "--duration", "3000", "--plant", "model"]
+    p = subprocess.Popen(
+        [*cmd, "--mcap", str(log_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and p.poll() is None:
+        if log_path.exists() and log_path.stat().st_size > 200_000:  # a few seconds on disk
+            break
+        time.sleep(0.2)
+    assert p.poll() is None, "the run ended before it could be interrupted"
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err[-2000:]
+    assert "rss6: interrupted" in err and str(log_path) in err and "Traceback" not in err
+    log = rss6.logs.read_log(log_path, strict=True)
+    assert log.metadata["status"].startswith("failed: KeyboardInterrupt")
+    n = len(log.streams["true_pose"][0])
+    assert 0 < n < 3_000_000 and n % 1000 == 0  # whole simulated seconds, flushed as it went
 
 
 def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():
