@@ -362,6 +362,10 @@ class IdentificationResult:
     ``poorly_identified``: those above 10 %; ``unidentifiable``: quantities the data cannot see;
     ``rms_before``/``rms_after`` (6,): RMS of χ_m − χ_s per axis (m, rad) at the guess and at the
     estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
+    ``converged_by``: the stopping rule that ended it — ``"tolerances"`` (eq. 5.9),
+    ``"invisible"`` (Φ fell by < 10⁻² residual variances twice), ``"settled"`` (over the last five
+    steps Φ fell by < 1 residual variance and no quantity moved by half its σ: creeping along the
+    kinks of a stick–slip cost) or ``"stationary"`` (no step lowers Φ at a first-order optimum);
     ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
     ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
     stopped at its sweep bound (0 expected; otherwise χ_s is approximate there); ``aliases``: for
@@ -388,6 +392,7 @@ class IdentificationResult:
     inexact_friction_ticks: int = 0
     aliases: dict[str, tuple[dict[str, float], float]] = field(default_factory=dict)
     relative_std_wald: F64 = field(default_factory=lambda: np.zeros(0))
+    converged_by: str = "tolerances"
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -454,6 +459,7 @@ def cloe(
     offset_drift: ArrayLike | None = None,
     measured_cutoff: float | None = None,
     pot_noise: str | ArrayLike = "none",
+    settle_steps: int = 5,
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
@@ -487,6 +493,9 @@ def cloe(
     the noise dithers the drive torque and breaks sticking joints free earlier; ``"none"``
     (default): noise-free readings; an array (T, 6) rad: that noise, one row per tick (this run
     only: the result's model replays none on other runs) (docs/identification.md, "Replaying the potentiometer noise").
+    ``settle_steps``: the *settled* stopping rule looks back over this many accepted steps
+    (``converged_by == "settled"``: Φ fell by < 1 residual variance over them and no quantity moved
+    by half its σ — creeping along a stick–slip cost's kinks); 0 turns it off.
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
@@ -548,6 +557,7 @@ def cloe(
         progress=progress,
         outer_gains=data.outer_gains,
         pot_dither=dither,
+        settle_steps=settle_steps,
         **_effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]
@@ -567,6 +577,7 @@ def cloe(
         rms_after=np.asarray(r["rms_after"]),
         cost_history=np.asarray(r["cost_history"]),
         iterations=int(r["iterations"]),
+        converged_by=str(r["converged_by"]),
         reduced_chi2=float(r["reduced_chi2"]),
         inexact_friction_ticks=int(r["inexact_friction_ticks"]),
         simulations=int(r["simulations"]),

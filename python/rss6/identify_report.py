@@ -83,6 +83,7 @@ class IdentifyReport:
     rms_after: np.ndarray
     validation: identify.Validation | None
     error: str = ""
+    converged_by: str = ""
     run_failed: str = ""
     loop: str = ""
     variation: dict[str, float] | None = None
@@ -224,7 +225,8 @@ class IdentifyReport:
                 ]
             )
         status = (
-            f"converged in {self.iterations} iterations, reduced χ² {self.reduced_chi2:.3g}"
+            f"converged in {self.iterations} iterations ({self.converged_by or 'tolerances'}), "
+            f"reduced χ² {self.reduced_chi2:.3g}"
             if self.converged
             else f"DID NOT CONVERGE ({self.error}); tables show the last accepted iterate"
         )

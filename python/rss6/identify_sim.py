@@ -288,13 +288,14 @@ def run(
             b.update(k - last[0])
             last[0] = k
 
-    error = ""
+    error, converged_by = "", ""
     try:
         res = estimate(data, step)
         converged = True
         est_dp, est_pid = res.dynamics, res.pid
         identified, rel, unid = res.identified, res.relative_std, res.unidentifiable
         hist, its, chi2 = res.cost_history, res.iterations, res.reduced_chi2
+        converged_by = res.converged_by
         rms_b, rms_a = res.rms_before, res.rms_after
         result = res
     except IdentificationError as e:
@@ -433,6 +434,7 @@ def run(
         validation=val,
         validation_other_gains=other,
         error=error,
+        converged_by=converged_by,
         files=files,
         elapsed=elapsed,
         variation=var,

@@ -144,6 +144,11 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     li = next(line for line in text.splitlines() if line.strip().startswith("li "))
     rms = float(li.split("(RMS ")[1].split(" %")[0])
     assert 0.0 < rms < 12.0, li
+    # Each run's own 95 % interval against the truth, and the range σ / spread falls in were σ right.
+    inside, runs = map(int, li.split("covers ")[1].split()[0].split("/"))
+    assert runs == 2 and inside >= 1, li
+    lo, hi = map(float, text.split("would lie in [")[1].split("]")[0].split(", "))
+    assert lo < 1.0 < hi, text
     cases = [
         {"spec_id": "none", "effect": None, "seed": 3, "replicates": 8},
         {

@@ -365,7 +365,7 @@ pub(crate) fn simulate_identification<'py>(
 /// `simulate_identification` (re-identification with named effects); `pot_dither` as there. Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=5))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -401,6 +401,7 @@ pub(crate) fn cloe_identify<'py>(
     offset_drift: Option<&Bound<'py, PyAny>>,
     outer_gains: Option<(f64, f64, f64)>,
     pot_dither: Option<&Bound<'py, PyAny>>,
+    settle_steps: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -443,6 +444,7 @@ pub(crate) fn cloe_identify<'py>(
         poor_std,
         per_tick_jacobians,
         prior_log_std: (prior_log_std != 0.0).then_some(prior_log_std),
+        settle_steps,
         ..CloeOptions::default()
     };
     if let Some((p, a)) = noise {
@@ -512,6 +514,7 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("rms_after", out1(py, r.rms_after.as_slice()))?;
     d.set_item("cost_history", out1(py, &r.cost_history))?;
     d.set_item("iterations", r.iterations)?;
+    d.set_item("converged_by", r.converged_by.as_str())?;
     d.set_item("reduced_chi2", r.reduced_chi2)?;
     d.set_item("inexact_friction_ticks", r.inexact_friction_ticks)?;
     d.set_item("simulations", r.simulations)?;

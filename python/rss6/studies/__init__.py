@@ -159,6 +159,7 @@ def identification_variation(
     fields += [f"std_{n}" for n in identify.parameter_names()]
     fields += [f"wald_{n}" for n in identify.parameter_names()]
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
+    fields += ["converged_by"]
     return _study(identification_task, specs, fields, out, client, workers, progress)
 
 
@@ -232,13 +233,27 @@ def summary_identification(df: Any) -> str:
     ok = df[df["status"] == "ok"]
     est = [c for c in ok.columns if c.startswith("est_")]
     lines = [f"{len(df)} trajectories: {len(ok)} identified"]
+    if "converged_by" in ok.columns and len(ok):
+        rules = ok["converged_by"].astype(str).value_counts()
+        lines[0] += " (stopping rule: " + ", ".join(f"{k} {v}" for k, v in rules.items()) + ")"
     # Every robot of the study has Table 5.2 as its truth (identification_task).
     truth = quantities(*identify.table_5_2_truth())
     if len(ok) >= 2:
+        import pandas as pd
+        from scipy.stats import chi2
+
+        # With a right σ, (n − 1)·spread²/σ² is χ²(n − 1): the range the ratio σ/spread falls in.
+        dof = len(ok) - 1
+        lo, hi = (float(np.sqrt(dof / chi2.ppf(q, dof))) for q in (0.975, 0.025))
         lines.append(
             "Table 5.5 (variation = std / |mean| over the trajectories; predicted: median relative "
             "σ CLOE reported, where it estimated the quantity — the larger of Wald and sandwich; "
-            "Wald: white-residual σ alone; error: mean and RMS of log(estimate / Table 5.2 truth)):"
+            "Wald: white-residual σ alone; error: mean and RMS of log(estimate / Table 5.2 truth); "
+            "covers: runs whose own 95 % interval holds the truth):"
+        )
+        lines.append(
+            f"  (were every σ right, predicted / spread would lie in [{lo:.2f}, {hi:.2f}] for 95 % "
+            f"of studies of {len(ok)} trajectories)"
         )
         for c in est:
             v = ok[c].astype(float)
@@ -258,6 +273,10 @@ def summary_identification(df: Any) -> str:
                         line += f"   {label} {float(p.median()):.3g}"
                         if label == "predicted" and spread > 0:
                             line += f" ({float(p.median()) / spread:.2f}× the spread)"
+                        if label == "predicted" and t > 0 and bool((v > 0).all()):
+                            both = pd.concat([np.log(v / t), p], axis=1, join="inner").to_numpy()
+                            inside = np.abs(both[:, 0]) <= 1.96 * both[:, 1]
+                            line += f" covers {int(inside.sum())}/{len(inside)}"
             lines.append(line)
     lines.append("Table 5.4 (RMS after, mm / mrad):")
     for _, r in ok.iterrows():

@@ -116,6 +116,7 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     for name, sd in zip(res.identified, res.relative_std_wald, strict=True):
         rec[f"wald_{name}"] = float(sd)
     rec["iterations"] = int(res.iterations)
+    rec["converged_by"] = res.converged_by
     for i, a in enumerate(_AXES):
         rec[f"rms_before_{a}"] = float(res.rms_before[i])
         rec[f"rms_after_{a}"] = float(res.rms_after[i])

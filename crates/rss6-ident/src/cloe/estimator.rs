@@ -17,14 +17,18 @@
 //! drift along flat directions without changing Φ); also
 //! converged when no damping (up to λ = 10¹²) lowers Φ and the residual is orthogonal to every
 //! Jacobian column within `tol_gradient` (or Φ is below 10⁻²⁰ per residual: noise-free data fitted
-//! to rounding). Otherwise [`IdentError::NotConverged`]
-//! with the cost history.
+//! to rounding); also **settled** when, over the last [`SETTLE_STEPS`] accepted steps, Φ fell by
+//! less than one residual variance in all and no quantity moved by more than half its Wald σ — LM
+//! creeping along the kinks of a stick–slip cost (a likelihood ratio below e^0.5 over five steps,
+//! every move inside its own error). [`CloeResult::converged_by`] says which rule ended the run.
+//! Otherwise [`IdentError::NotConverged`] with the cost history.
 
 use super::closed_loop::{simulate_recorded, Recording};
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
-use super::lm_step::{lm_step, optimal, shifted};
+use super::lm_step::{lm_step, optimal, shifted, Settle};
+use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
 use nalgebra::{DMatrix, DVector};
@@ -86,6 +90,9 @@ pub struct CloeOptions {
     /// (σ/σ_prior)² of its distance to the guess. `None`: the pure output error of eq. 5.7
     /// (noise-free checks).
     pub prior_log_std: Option<f64>,
+    /// Accepted steps over which the *settled* stopping rule looks back ([`CloeStop::Settled`]);
+    /// 0 turns the rule off. Default [`SETTLE_STEPS`].
+    pub settle_steps: usize,
     /// Lags (camera frames) of the residual autocovariance behind the sandwich standard deviations
     /// (see [`CloeResult::relative_std`]); 0: residual frames uncorrelated in time.
     pub hac_lags: usize,
@@ -108,68 +115,9 @@ impl Default for CloeOptions {
             per_tick_jacobians: false,
             prior_log_std: Some(1.0),
             hac_lags: HAC_LAGS,
+            settle_steps: SETTLE_STEPS,
         }
     }
-}
-
-/// How an unidentifiable quantity shows in the output: as a combination of estimated ones.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Alias {
-    /// The unidentifiable quantity.
-    pub name: String,
-    /// (estimated quantity, relative coefficient), largest |coefficient| first.
-    pub like: Vec<(String, f64)>,
-    /// ‖h_u − Σ c h‖ / ‖h_u‖ of the combination.
-    pub residual: f64,
-}
-
-/// What [`cloe`] returns.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CloeResult {
-    /// The estimate (unidentifiable entries at the guess).
-    pub params: LoopParams,
-    /// ψ of the estimate.
-    pub psi: Vec<f64>,
-    /// Names of the estimated quantities, in pivot order.
-    pub identified: Vec<String>,
-    /// Names of the quantities the data cannot identify (kept at the guess).
-    pub unidentifiable: Vec<String>,
-    /// For each unidentifiable quantity, in the order of `unidentifiable`: the estimated quantities
-    /// that absorb it — (name, c) with a relative change δ of it moving the output at the guess as
-    /// relative changes c·δ of those do (|c| ≥ 0.05, largest first, at most 4) — and the relative
-    /// residual of that combination (≈ 0: a base combination; near 1: the output hardly sees it).
-    pub aliases: Vec<Alias>,
-    /// Relative standard deviation of every estimated quantity (same order as `identified`): the
-    /// largest of [`relative_std_wald`](Self::relative_std_wald) and two sandwiches A⁻¹ S A⁻¹,
-    /// A = GᵀG (prior rows included), over [`CloeOptions::hac_lags`] frames with Bartlett weights:
-    /// *stationary*, S = Σ_l w_l Σ_k G_kᵀ γ(l) G_{k−l} with γ(l) the residual's autocovariance
-    /// between frames l apart, and *local*, Newey–West on the per-frame scores G_kᵀ r_k (it sees
-    /// model error where it happens, a start transient; alone it cancels the variance of a quantity
-    /// seen in a short window). The Wald value assumes white residuals of the weighted size; the
-    /// sandwiches also see residuals correlated in time (the loop's own model error), which the
-    /// spread over trajectories shows.
-    pub relative_std: Vec<f64>,
-    /// The Wald relative standard deviation alone: sqrt(Φ/(N − p) · (GᵀG)⁻¹_kk).
-    pub relative_std_wald: Vec<f64>,
-    /// Estimated quantities whose relative standard deviation exceeds `poor_std`.
-    pub poorly_identified: Vec<String>,
-    /// RMS of χ_m − χ_s per axis at the guess (m, rad).
-    pub rms_before: Vec6,
-    /// RMS of χ_m − χ_s per axis at the estimate (m, rad).
-    pub rms_after: Vec6,
-    /// Φ (with the prior's term, if any) at the start and after every accepted step.
-    pub cost_history: Vec<f64>,
-    /// Jacobian evaluations (LM iterations).
-    pub iterations: usize,
-    /// Φ/(N − p) at the estimate (the output error alone, without the prior's term): ≈ 1 when the residual is the camera noise of `noise`; well
-    /// above 1 means a model discrepancy (or a minimum the non-smooth loop kept LM from leaving).
-    pub reduced_chi2: f64,
-    /// Simulations without sensitivities (rejected trial steps included).
-    pub simulations: usize,
-    /// Ticks of the loop at the estimate whose implicit friction solve stopped at its sweep bound
-    /// (`LoopConfig::implicit_friction`): χ_s there is the last Gauss–Seidel iterate, not the exact
-    /// law. 0 expected (and always 0 for the other laws); anything else is reported, not hidden.
-    pub inexact_friction_ticks: usize,
 }
 
 struct Eval {
@@ -414,8 +362,9 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         && rayon::current_num_threads() > 1;
     let mut history = vec![cur.cost + prior_cost(&psi)];
     let mut iterations = 1usize;
-    let mut converged = false;
+    let mut converged_by = None;
     let mut previous_invisible = false;
+    let mut settle = Settle::new(options.settle_steps, history[0], &psi);
     let mut stopped = !progress(0, history[0], &psi);
     'outer: while iterations <= options.max_iterations && !stopped {
         let g = cur
@@ -482,22 +431,35 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     // Φ's drop in units of the residual variance: below 10⁻² it is statistically
                     // invisible (a likelihood ratio of e^0.005), whatever Φ's size.
                     let chi2_drop = (cur_total - total) / (e.cost / dof).max(f64::MIN_POSITIVE);
-                    let sigma_small = {
-                        gtg.clone().cholesky().is_some_and(|c| {
-                            let inv = c.inverse();
-                            (0..active.len())
-                                .all(|k| step[k].abs() <= 0.1 * (e.cost / dof * inv[(k, k)]).sqrt())
-                        })
-                    };
+                    // Wald σ of each active ψ at the current iterate.
+                    let sigma: Option<Vec<f64>> = gtg.clone().cholesky().map(|c| {
+                        let inv = c.inverse();
+                        (0..active.len())
+                            .map(|k| (e.cost / dof * inv[(k, k)]).sqrt())
+                            .collect()
+                    });
+                    let sigma_small = sigma
+                        .as_ref()
+                        .is_some_and(|s| (0..active.len()).all(|k| step[k].abs() <= 0.1 * s[k]));
                     let invisible = chi2_drop <= 1e-2;
-                    let settled = invisible && previous_invisible;
+                    let both_invisible = invisible && previous_invisible;
                     previous_invisible = invisible;
-                    if settled
-                        || (rel_cost <= options.tol_cost
-                            && (rel_step <= options.tol_step || sigma_small))
+                    let settled =
+                        settle.push_and_check(total, &psi, e.cost / dof, &active, sigma.as_deref());
+                    let rule = if both_invisible {
+                        Some(CloeStop::Invisible)
+                    } else if rel_cost <= options.tol_cost
+                        && (rel_step <= options.tol_step || sigma_small)
                     {
+                        Some(CloeStop::Tolerances)
+                    } else if settled {
+                        Some(CloeStop::Settled)
+                    } else {
+                        None
+                    };
+                    if let Some(r) = rule {
                         cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
-                        converged = true;
+                        converged_by = Some(r);
                         break 'outer;
                     }
                     iterations += 1;
@@ -516,20 +478,21 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     if lambda > 1e12 {
                         // No step lowers Φ: a minimum to the precision of Φ if the residual is
                         // orthogonal to every column (first-order optimality), else a failure.
-                        converged = optimal(&ga, &ra, options.tol_gradient)
-                            || cur.cost <= 1e-20 * cur.residual.len() as f64;
+                        converged_by = (optimal(&ga, &ra, options.tol_gradient)
+                            || cur.cost <= 1e-20 * cur.residual.len() as f64)
+                            .then_some(CloeStop::Stationary);
                         break 'outer;
                     }
                 }
             }
         }
     }
-    if !converged || stopped {
+    let Some(converged_by) = converged_by.filter(|_| !stopped) else {
         return Err(IdentError::NotConverged {
             iterations: iterations.min(options.max_iterations),
             cost_history: history,
         });
-    }
+    };
     if options.per_tick_jacobians {
         cur = evaluate_with(&psi, true, false, None, &mut sims)?;
     }
@@ -589,5 +552,6 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         reduced_chi2: sigma2,
         simulations: sims,
         inexact_friction_ticks: cur.inexact,
+        converged_by,
     })
 }

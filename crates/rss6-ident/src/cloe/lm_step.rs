@@ -1,7 +1,8 @@
-//! One Levenberg–Marquardt step of CLOE ([`super::estimator`]): the damped Gauss–Newton solve
-//! and the first-order optimality test.
+//! One Levenberg–Marquardt step of CLOE ([`super::estimator`]): the damped Gauss–Newton solve,
+//! the first-order optimality test and the *settled* stopping rule.
 
 use nalgebra::{DMatrix, DVector};
+use std::collections::VecDeque;
 
 /// The step δ of (GᵀG + λD) δ = Gᵀr, D = Marquardt's scaling diag(GᵀG) floored at 10⁻⁸ of its
 /// largest entry (so that nearly flat directions are damped too), each component clipped to
@@ -46,4 +47,93 @@ pub(super) fn optimal(g: &DMatrix<f64>, r: &DVector<f64>, tol: f64) -> bool {
         let cn = c.norm();
         cn == 0.0 || (c.dot(r) / (cn * rn)).abs() <= tol
     })
+}
+
+/// The *settled* rule ([`super::CloeStop::Settled`]): over the last `steps` accepted steps Φ fell
+/// by less than one residual variance in all (a likelihood ratio below e^0.5) and no estimated
+/// quantity moved by more than half its σ — LM creeping along the kinks of a piecewise-smooth
+/// (stick–slip) cost, with nothing a test on the data could see.
+pub(super) struct Settle {
+    steps: usize,
+    /// (Φ, ψ) of the last `steps` + 1 accepted iterates, oldest first.
+    window: VecDeque<(f64, Vec<f64>)>,
+}
+
+impl Settle {
+    /// The rule looking back over `steps` accepted steps (0: never settled), from the start (Φ, ψ).
+    pub(super) fn new(steps: usize, cost: f64, psi: &[f64]) -> Self {
+        Settle {
+            steps,
+            window: VecDeque::from([(cost, psi.to_vec())]),
+        }
+    }
+
+    /// Records an accepted iterate (Φ, ψ) and says whether the estimation has settled, with the
+    /// residual variance Φ/(N − p) and `sigma[k]` the σ of ψ[`active[k]`] (`None`, no σ: not settled).
+    pub(super) fn push_and_check(
+        &mut self,
+        cost: f64,
+        psi: &[f64],
+        variance: f64,
+        active: &[usize],
+        sigma: Option<&[f64]>,
+    ) -> bool {
+        if self.steps == 0 {
+            return false;
+        }
+        self.window.push_back((cost, psi.to_vec()));
+        if self.window.len() > self.steps + 1 {
+            self.window.pop_front();
+        }
+        let (then, psi_then) = &self.window[0];
+        let Some(sigma) = sigma else { return false };
+        self.window.len() == self.steps + 1
+            && then - cost < variance
+            && active
+                .iter()
+                .zip(sigma)
+                .all(|(&j, s)| (psi[j] - psi_then[j]).abs() <= 0.5 * s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Settle;
+
+    /// Five accepted steps of `drop` each (Φ in units of a residual variance of 1), ψ[0] moving by
+    /// `move_` per step with σ = 1: whether the rule says settled after each.
+    fn run(drop: f64, move_: f64, steps: usize) -> Vec<bool> {
+        let mut s = Settle::new(steps, 100.0, &[0.0, 0.0]);
+        (1..=7)
+            .map(|k| {
+                let psi = [move_ * k as f64, 0.0];
+                s.push_and_check(
+                    100.0 - drop * k as f64,
+                    &psi,
+                    1.0,
+                    &[0, 1],
+                    Some(&[1.0, 1.0]),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn creeping_settles_once_the_window_is_full_and_only_then() {
+        // 0.15 variance and 0.05 σ per step: 0.75 and 0.25 over five steps.
+        assert_eq!(
+            run(0.15, 0.05, 5),
+            [false, false, false, false, true, true, true]
+        );
+    }
+
+    #[test]
+    fn a_visible_drop_or_a_move_of_half_a_sigma_is_not_settled() {
+        // 0.25 variance per step: 1.25 over five steps, a drop a test could see.
+        assert!(run(0.25, 0.0, 5).iter().all(|s| !s));
+        // 0.11 σ per step: 0.55 σ over five steps.
+        assert!(run(0.0, 0.11, 5).iter().all(|s| !s));
+        // The rule turned off.
+        assert!(run(0.0, 0.0, 0).iter().all(|s| !s));
+    }
 }

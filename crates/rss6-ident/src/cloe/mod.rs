@@ -9,11 +9,13 @@ mod estimator;
 mod friction;
 mod hac;
 mod lm_step;
+mod result;
 mod sens_state;
 mod truth;
 
 pub use closed_loop::simulate;
 pub use config::{parameter_names, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 pub use consistent::{Consistent, N_PSI};
-pub use estimator::{cloe, cloe_observed, Alias, CloeData, CloeOptions, CloeResult, HAC_LAGS};
+pub use estimator::{cloe, cloe_observed, CloeData, CloeOptions, HAC_LAGS};
+pub use result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 pub use truth::{table_5_2_truth, DRIVE_UNIT_TO_NM};
