@@ -52,7 +52,9 @@ _DEFAULT_NAMES = (*(f"f{k}{i}" for k in "cv" for i in range(1, 7)), "li", "ld")
 class LinearGuess:
     """What :func:`linear_guess` returns: the estimate (``dynamics``, ``pid``), the number of torque
     equations used (``rows``) and left out because the joint was near rest (``excluded``), the RMS
-    drive torque over the rows and the RMS residual of the fit (N·m)."""
+    drive torque over the rows and the RMS residual of the fit (N·m); ``at_bound``: quantities the
+    fit pushed onto its lower bound (10⁻³ of the prior: the data asked for ≤ 0), returned at the
+    prior instead and the rest refitted with them held there."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -60,6 +62,7 @@ class LinearGuess:
     excluded: int
     torque_rms: float
     residual_rms: float
+    at_bound: tuple[str, ...] = ()
 
 
 def _affine_map(
@@ -178,22 +181,32 @@ def linear_guess(
         if unknown or not names:
             raise InvalidInputError(f"names must be quantities other than lp, got {unknown}")
         free = sorted({all_names.index(n) for n in names})
-    fixed = [j for j in range(_N_Q) if j not in free]
-    y = y - a_mat[:, fixed] @ q0[fixed]
-    scaled = a_mat[:, free] * q0[free]  # unknowns u = q / q0
-    reg = np.eye(len(free)) * ridge * float(np.linalg.norm(scaled, axis=0).mean())
-    fit = optimize.lsq_linear(
-        np.vstack([scaled, reg]),
-        np.concatenate([y, reg @ np.ones(len(free))]),
-        bounds=(1e-3, np.inf),
-        method="bvls",
-    )
-    if fit.status < 1:
-        raise IdentificationError(f"the bounded least squares did not converge: {fit.message}")
+    # A quantity on the lower bound is one the data want ≤ 0: hold it at the prior and refit the
+    # rest. Left at 10⁻³ of the prior, CLOE's log-prior would centre there, and a viscous term that
+    # small hardly moves the output, so CLOE could not leave it (3 of 40 plant runs did that).
+    at_bound: list[int] = []
+    for _ in range(len(free)):
+        fixed = [j for j in range(_N_Q) if j not in free]
+        y_free = y - a_mat[:, fixed] @ q0[fixed]
+        scaled = a_mat[:, free] * q0[free]  # unknowns u = q / q0
+        reg = np.eye(len(free)) * ridge * float(np.linalg.norm(scaled, axis=0).mean())
+        fit = optimize.lsq_linear(
+            np.vstack([scaled, reg]),
+            np.concatenate([y_free, reg @ np.ones(len(free))]),
+            bounds=(1e-3, np.inf),
+            method="bvls",
+        )
+        if fit.status < 1:
+            raise IdentificationError(f"the bounded least squares did not converge: {fit.message}")
+        low = [free[k] for k in np.flatnonzero(fit.active_mask < 0)]
+        if not low or len(low) == len(free):
+            break
+        at_bound += low
+        free = [j for j in free if j not in low]
     q = q0.copy()
     q[free] = fit.x * q0[free]
     q[_LP] = lp
-    residual = float(np.sqrt(np.mean((scaled @ fit.x - y) ** 2)))
+    residual = float(np.sqrt(np.mean((scaled @ fit.x - y_free) ** 2)))
     torque = float(np.sqrt(np.mean((np.array(terms) @ q[[_LP, _LI, _LD]]) ** 2)))
     if residual >= torque:
         raise IdentificationError(
@@ -207,6 +220,7 @@ def linear_guess(
         excluded=excluded,
         torque_rms=torque,
         residual_rms=residual,
+        at_bound=tuple(all_names[j] for j in at_bound),
     )
 
 
