@@ -61,6 +61,16 @@ def loop_text(t_f: float, eps: float, implicit: bool = False) -> str:
     return f"drive derivative filter {1e3 * t_f:g} ms, model friction tanh(θ̇/{eps:g} rad/s)"
 
 
+#: What each CLOE stopping rule (``IdentificationResult.converged_by``) means, for the report.
+_STOP_RULES = {
+    "tolerances": "eq. 5.9: Φ and every quantity changed by less than the tolerances",
+    "invisible": "Φ fell by < 1 % of a residual variance twice",
+    "settled": "settled: over the last 5 steps Φ fell by < 1 residual variance and no quantity "
+    "moved by half its σ",
+    "stationary": "no step lowers Φ and the gradient vanishes",
+}
+
+
 @dataclass
 class IdentifyReport:
     """Everything ``rss6 identify --simulate`` found and wrote."""
@@ -225,7 +235,8 @@ class IdentifyReport:
                 ]
             )
         status = (
-            f"converged in {self.iterations} iterations ({self.converged_by or 'tolerances'}), "
+            f"converged in {self.iterations} iterations "
+            f"({_STOP_RULES.get(self.converged_by, self.converged_by or 'eq. 5.9')}), "
             f"reduced χ² {self.reduced_chi2:.3g}"
             if self.converged
             else f"DID NOT CONVERGE ({self.error}); tables show the last accepted iterate"

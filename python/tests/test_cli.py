@@ -231,6 +231,10 @@ def test_identify_simulate_quick_with_stick_slip_identifies_on_the_plant(identif
     assert r.returncode == 0, r.stderr[-2000:]
     text = (out / "tables.txt").read_text(encoding="utf-8")
     assert "converged in" in text and "stick–slip" in text
+    # The report says which stopping rule ended CLOE, in words.
+    from rss6.identify_report import _STOP_RULES
+
+    assert any(f"iterations ({why})" in text for why in _STOP_RULES.values()), text[:600]
     rows = {
         w[0]: (float(w[2]), float(w[3]))
         for w in (line.split() for line in text.splitlines())
