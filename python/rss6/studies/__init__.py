@@ -278,6 +278,24 @@ def summary_identification(df: Any) -> str:
                             inside = np.abs(both[:, 0]) <= 1.96 * both[:, 1]
                             line += f" covers {int(inside.sum())}/{len(inside)}"
             lines.append(line)
+        # Issue 13: every estimate with a relative σ below 5 % within 10 % of the truth.
+        well, misses = 0, []
+        for name, t in truth.items():
+            col = f"std_{name}"
+            if col not in ok.columns or t <= 0:
+                continue
+            sd = ok[col].replace("", np.nan).astype(float)
+            for seed, est, s in zip(ok["seed"], ok[f"est_{name}"].astype(float), sd, strict=True):
+                if s < 0.05:
+                    well += 1
+                    if abs(est / t - 1) >= 0.10:
+                        misses.append(
+                            f"{name} seed {seed} {100 * (est / t - 1):+.1f} % (σ {100 * s:.1f} %)"
+                        )
+        lines.append(
+            f"  estimates with σ < 5 %: {well - len(misses)} of {well} within 10 % of the truth"
+            + (f"; the others: {', '.join(misses)}" if misses else "")
+        )
     lines.append("Table 5.4 (RMS after, mm / mrad):")
     for _, r in ok.iterrows():
         lines.append(
