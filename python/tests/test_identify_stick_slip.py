@@ -200,6 +200,8 @@ def test_the_linear_start_refuses_what_it_cannot_use() -> None:
         identify.linear_guess(data, kp, dp, pid, lp=pid[0], names=["lp", "li"])
     with pytest.raises(rss6.InvalidInputError, match="both requested and held"):
         identify.cloe(data, kp, dp, pid, parameters=["lp", "li"], hold=["lp"], **LAW)
+    with pytest.raises(rss6.InvalidInputError, match="settle_steps"):
+        identify.cloe(data, kp, dp, pid, settle_steps=-1, **LAW)
 
 
 def test_the_potentiometer_noise_is_estimated_and_replayed() -> None:
