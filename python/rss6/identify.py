@@ -509,7 +509,7 @@ def cloe(
         raise InvalidInputError(
             "consistent=False is not implemented: CLOE estimates logs of physical quantities"
         )
-    if isinstance(settle_steps, bool) or not isinstance(settle_steps, int) or settle_steps < 0:
+    if int(settle_steps) != settle_steps or settle_steps < 0:
         raise InvalidInputError(f"settle_steps must be an int ≥ 0, got {settle_steps!r}")
     if isinstance(parameters, str):
         if parameters != "base":
