@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 from rss6 import studies
+from rss6.errors import InvalidInputError
 from rss6.studies import read_records, run_study
 from rss6.studies.engine import probe_task
 
@@ -56,6 +57,28 @@ def test_records_are_written_once_and_a_rerun_skips_them(client: Any, tmp_path: 
         probe_task, _probe_specs(6, 0.05), out=out, fields=["value"], client=client, progress=False
     )
     assert ran2 == 0 and len(recs2) == 6
+    # A later version of the study that adds a field at the end resumes the same file ...
+    recs3, ran3 = run_study(
+        probe_task,
+        _probe_specs(8, 0.05),
+        out=out,
+        fields=["value", "added"],
+        client=client,
+        progress=False,
+    )
+    assert ran3 == 2 and len(recs3) == 8 and all("added" in r for r in read_records(out))
+    # ... another study's fields are refused, the file untouched.
+    before = out.read_text(encoding="utf-8")
+    with pytest.raises(InvalidInputError, match="another study"):
+        run_study(
+            probe_task,
+            _probe_specs(8, 0.05),
+            out=out,
+            fields=["other"],
+            client=client,
+            progress=False,
+        )
+    assert out.read_text(encoding="utf-8") == before
 
 
 def test_a_worker_killed_mid_study_costs_only_a_retry(client: Any, tmp_path: Path) -> None:

@@ -71,6 +71,25 @@ def read_records(out: str | Path) -> list[dict[str, str]]:
     return [r for r in rows if r.get("spec_id")]
 
 
+def _widen(path: Path, have: list[dict[str, str]], columns: list[str]) -> bool:
+    """Rewrites a records file written by an earlier version of the same study — its columns are
+    the first ones of ``columns`` (a later version added fields at the end) — with the new header,
+    the added fields empty, so a rerun resumes it. Atomic (a temporary file, then a rename);
+    ``False`` (nothing written) if the columns differ otherwise."""
+    old = list(have[0])
+    if len(old) >= len(columns) or columns[: len(old)] != old:
+        return False
+    tmp = path.with_name(path.name + ".widen")
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=columns, restval="")
+        w.writeheader()
+        w.writerows(have)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    return True
+
+
 def _client(client: Any, workers: int) -> tuple[Any, Callable[[], None]]:
     from dask.distributed import Client, LocalCluster
 
@@ -123,7 +142,7 @@ def run_study(
     path = Path(out)
     path.parent.mkdir(parents=True, exist_ok=True)
     have = read_records(path)
-    if have and list(have[0]) != columns:
+    if have and list(have[0]) != columns and not _widen(path, have, columns):
         raise InvalidInputError(
             f"{path} holds another study's records (columns {list(have[0])[:6]}…)"
         )
