@@ -398,11 +398,15 @@ def test_reidentification_with_a_named_payload_recovers_the_dynamics(
     # Measured: worst relative error 6.5e-8 in 11 iterations, RMS 2.3e-14; bounds ≈ 3×.
     assert worst < 2e-7, worst
     assert named.rms_after.max() < 1e-13
-    # Without the load the model cannot fit the frames: LM stalls on a plateau (measured Φ ≈ 11.9 in
-    # noise units, i.e. the payload's signature) and says so.
-    with pytest.raises(rss6.IdentificationError) as blind:
-        identify.cloe(data, kp, *guess, **kw)  # type: ignore[arg-type]
-    assert blind.value.cost_history[-1] > 4.0  # type: ignore[attr-defined]
+    # Without the load the model cannot fit the frames: LM settles on a plateau (measured: Φ ≈ 10.6
+    # in noise units, the payload's signature, after 19 iterations — before the settled rule it crept
+    # to the iteration limit), and the platform's second moments, which absorb the payload (−99 %,
+    # −86 %, ×607), are flagged as poorly identified (relative σ 1.3–283) rather than reported as
+    # estimates.
+    blind = identify.cloe(data, kp, *guess, max_iterations=40, **kw)  # type: ignore[arg-type]
+    assert blind.converged_by == "settled" and blind.cost_history[-1] > 4.0
+    assert blind.rms_after.max() > 1e6 * named.rms_after.max()
+    assert {"platform.Sxx", "platform.Syy", "platform.Szz"} <= set(blind.poorly_identified)
 
 
 def test_unidentifiable_quantities_say_what_they_combine_into(kp: rss6.KinematicParams) -> None:
