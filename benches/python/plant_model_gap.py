@@ -4,12 +4,12 @@ discrepancy.md "The model is not the robot"): noise-free plant runs (shared stic
 by the run's recorded commands, without and with the true effect. Prints the pose residual RMS per
 axis in units of Table 4.1's camera noise.
 
-    python benches/python/plant_model_gap.py [--solver-iterations 48] [EFFECT@SCOPE ...]
+    python benches/python/plant_model_gap.py [--solver-iterations 48] [--magnitude 5] [EFFECT@SCOPE ...]
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
 
 import numpy as np
 import rss6
@@ -28,12 +28,12 @@ EFFECTS = sorted(
 
 
 def main() -> None:
-    args = sys.argv[1:]
-    iterations = 48
-    if "--solver-iterations" in args:
-        k = args.index("--solver-iterations")
-        iterations = int(args[k + 1])
-        del args[k : k + 2]
+    ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
+    ap.add_argument("--solver-iterations", type=int, default=48)
+    ap.add_argument("--magnitude", type=float, default=5.0, help="effect size, × camera noise")
+    ap.add_argument("effects", nargs="*", help=f"EFFECT or EFFECT@SCOPE (default: {EFFECTS})")
+    a = ap.parse_args()
+    iterations, args = a.solver_iterations, a.effects
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
     exc = identify.random_excitation(kp, seed=1000)
@@ -80,7 +80,7 @@ def main() -> None:
     print(f"plant: {iterations} solver iterations")
     for name in args or EFFECTS:
         e, scope = bm._split(name)
-        params, got = bm.magnitude(model, run0, name, 5.0)
+        params, got = bm.magnitude(model, run0, name, a.magnitude)
         params = e.check(params, scope)
         c = e.apply(params, scope)
         hidden = {k: dict(v) for k, v in c.twin.items()}
