@@ -417,18 +417,14 @@ def _effect_kwargs(
     offset_drift: ArrayLike | None,
 ) -> dict[str, Any]:
     """The model effects as the bindings take them (arrays of float64; None: absent)."""
+
+    def f64(a: ArrayLike | None) -> F64 | None:
+        return None if a is None else np.asarray(a, dtype=np.float64)
+
     return {
-        "gravity": None if gravity is None else np.asarray(gravity, dtype=np.float64),
-        "load": None
-        if load is None
-        else (
-            float(load[0]),
-            np.asarray(load[1], dtype=np.float64),
-            np.asarray(load[2], dtype=np.float64),
-        ),
-        "offset_drift": None
-        if offset_drift is None
-        else np.asarray(offset_drift, dtype=np.float64),
+        "gravity": f64(gravity),
+        "load": None if load is None else (float(load[0]), f64(load[1]), f64(load[2])),
+        "offset_drift": f64(offset_drift),
     }
 
 

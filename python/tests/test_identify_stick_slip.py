@@ -16,14 +16,22 @@ SUBSET += [f"fc{i}" for i in range(1, 7)] + [f"fv{i}" for i in range(1, 7)]
 LAW = {"derivative_filter": T_F, "implicit_friction": True}
 
 
-def _data(noisy: bool) -> tuple[identify.IdentificationData, identify.Excitation]:
+def _data(
+    noisy: bool, *, seed: int = 3, exc_seed: int = 1, thesis_size: bool = False
+) -> tuple[identify.IdentificationData, identify.Excitation]:
+    """The twin (Table 5.2 truth, stick–slip) run on a random excitation: 3 harmonics of 0.5 Hz
+    (2 s), or with ``thesis_size`` 5 of 0.1 Hz (10 s) at the study's amplitudes."""
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
     quiet = {} if noisy else {"pixel_noise": 0.0, "potentiometer_noise": 0.0}
     robot = rss6.ModelSim(
-        kp, dp, pid=pid, seed=3, drive_derivative_filter=T_F, implicit_friction=True, **quiet
+        kp, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True, **quiet
     )
-    exc = identify.random_excitation(kp, harmonics=3, f0=0.5, seed=1, amplitude=(0.01, 0.05))
+    shape = ((5, 0.1), (0.001, 0.005)) if thesis_size else ((3, 0.5), (0.01, 0.05))
+    (harmonics, f0), amplitude = shape
+    exc = identify.random_excitation(
+        kp, harmonics=harmonics, f0=f0, seed=exc_seed, amplitude=amplitude
+    )
     truth = robot.truth()
     data = identify.collect(
         robot,
@@ -165,18 +173,7 @@ def test_a_quantity_the_linear_fit_pushes_onto_its_bound_starts_cloe_at_the_prio
 
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
-    robot = rss6.ModelSim(
-        kp, dp, pid=pid, seed=22, drive_derivative_filter=T_F, implicit_friction=True
-    )
-    exc = identify.random_excitation(kp, harmonics=5, f0=0.1, seed=22, amplitude=(0.001, 0.005))
-    truth = robot.truth()
-    data = identify.collect(
-        robot,
-        exc,
-        kp_model=kp,
-        sensor_in_base=truth["sensor_in_base"],
-        target_in_effector=truth["target_in_effector"],
-    )
+    data, _ = _data(noisy=True, seed=22, exc_seed=22, thesis_size=True)
     dp0, pid0 = identify_sim.initial_model()
     start = identify.linear_guess(data, kp, dp0, pid0, lp=pid[0], derivative_filter=T_F)
     assert start.at_bound == ("fv6",)
