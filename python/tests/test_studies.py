@@ -191,4 +191,7 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     assert list(disc["status"]) == ["ok", "ok"], disc["error"].tolist()
     by = disc.set_index("spec_id")
     assert by.loc["latency", "named"].startswith("camera_latency")
-    assert "confusion" in studies.summary_discrepancy(disc)
+    text = studies.summary_discrepancy(disc)
+    assert "confusion" in text
+    # The study keeps both runs' errors, so the summary can say how their own intervals did.
+    assert "the fitting run's alone 1/1, the held-out run's own 1/1" in text, text

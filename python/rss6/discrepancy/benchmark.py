@@ -482,7 +482,7 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
             f"library effect at {m:g}× noise: right effect and scope first {right}/{len(rs)} "
             f"({100 * right / len(rs):.0f} %)"
         )
-    cover = total = cover_fit = cover_held = 0
+    cover = total = cover_fit = cover_held = n_fit = n_held = 0
     rel5: list[float] = []
     for r in lib:
         if r["hidden"] not in str(r["named"]).split("+"):
@@ -496,15 +496,22 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
                 # The fitting run's interval alone, and the held-out run's own (bounds aside:
                 # the truth is inside them).
                 if k in se:
+                    n_fit += 1
                     cover_fit += abs(est[k] - v) <= Z95 * se[k]
                 if k in held:
+                    n_held += 1
                     cover_held += abs(held[k][0] - v) <= Z95 * held[k][1]
                 if float(r["magnitude"]) == 5.0 and abs(v) > 0:
                     rel5.append(abs(est[k] - v) / abs(v))
     if total:
+        # The two runs' own intervals only where the records carry their errors (records
+        # written before the sixth session, or by a study that did not keep them, do not).
+        alone = f"; the fitting run's alone {cover_fit}/{n_fit}" if n_fit else ""
+        own = f", the held-out run's own {cover_held}/{n_held}" if n_held else ""
         lines.append(
-            f"95 % intervals containing the truth: {cover}/{total} ({100 * cover / total:.0f} %);"
-            f" the fitting run's alone {cover_fit}, the held-out run's own {cover_held}"
+            f"95 % intervals containing the truth: {cover}/{total} ({100 * cover / total:.0f} %)"
+            + alone
+            + own
         )
     if rel5:
         lines.append(

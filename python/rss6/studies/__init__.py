@@ -202,6 +202,7 @@ def discrepancy_benchmark(
     ]
     for p in ("gap_before", "gap_named", "gap_after", "noise"):
         fields += [f"{p}_{a}" for a in _AXES]
+    fields += ["se", "heldout"]  # the two runs' errors behind the intervals (sixth session)
     return _study(discrepancy_task, specs, fields, out, client, workers, progress)
 
 
