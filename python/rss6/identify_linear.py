@@ -181,32 +181,9 @@ def linear_guess(
         if unknown or not names:
             raise InvalidInputError(f"names must be quantities other than lp, got {unknown}")
         free = sorted({all_names.index(n) for n in names})
-    # A quantity on the lower bound is one the data want ≤ 0: hold it at the prior and refit the
-    # rest. Left at 10⁻³ of the prior, CLOE's log-prior would centre there, and a viscous term that
-    # small hardly moves the output, so CLOE could not leave it (3 of 40 plant runs did that).
-    at_bound: list[int] = []
-    for _ in range(len(free)):
-        fixed = [j for j in range(_N_Q) if j not in free]
-        y_free = y - a_mat[:, fixed] @ q0[fixed]
-        scaled = a_mat[:, free] * q0[free]  # unknowns u = q / q0
-        reg = np.eye(len(free)) * ridge * float(np.linalg.norm(scaled, axis=0).mean())
-        fit = optimize.lsq_linear(
-            np.vstack([scaled, reg]),
-            np.concatenate([y_free, reg @ np.ones(len(free))]),
-            bounds=(1e-3, np.inf),
-            method="bvls",
-        )
-        if fit.status < 1:
-            raise IdentificationError(f"the bounded least squares did not converge: {fit.message}")
-        low = [free[k] for k in np.flatnonzero(fit.active_mask < 0)]
-        if not low or len(low) == len(free):
-            break
-        at_bound += low
-        free = [j for j in free if j not in low]
-    q = q0.copy()
-    q[free] = fit.x * q0[free]
+    q, at_bound = _bounded_fit(a_mat, y, q0, free, ridge)
     q[_LP] = lp
-    residual = float(np.sqrt(np.mean((scaled @ fit.x - y_free) ** 2)))
+    residual = float(np.sqrt(np.mean((a_mat @ q - y) ** 2)))
     torque = float(np.sqrt(np.mean((np.array(terms) @ q[[_LP, _LI, _LD]]) ** 2)))
     if residual >= torque:
         raise IdentificationError(
@@ -222,6 +199,42 @@ def linear_guess(
         residual_rms=residual,
         at_bound=tuple(all_names[j] for j in at_bound),
     )
+
+
+def _bounded_fit(
+    a_mat: np.ndarray, y: np.ndarray, q0: np.ndarray, free: list[int], ridge: float
+) -> tuple[np.ndarray, list[int]]:
+    """q with the ``free`` entries fitted to a_mat q ≈ y by BVLS in units of the prior ``q0``
+    (bounds [10⁻³, ∞) of it, a ridge towards it), the rest at ``q0``; and the indices held at the
+    prior because the fit put them on the lower bound.
+
+    A quantity on the lower bound is one the data want ≤ 0: it is held at the prior and the rest is
+    refitted. Left at 10⁻³ of the prior, CLOE's log-prior would centre there, and a viscous term that
+    small hardly moves the output, so CLOE could not leave it (3 of 40 plant runs did that). When
+    every quantity ends on its bound the start is the prior itself, all of it named."""
+    free = list(free)
+    at_bound: list[int] = []
+    q = q0.copy()
+    while free:
+        fixed = [j for j in range(len(q0)) if j not in free]
+        y_free = y - a_mat[:, fixed] @ q0[fixed]
+        scaled = a_mat[:, free] * q0[free]  # unknowns u = q / q0
+        reg = np.eye(len(free)) * ridge * float(np.linalg.norm(scaled, axis=0).mean())
+        fit = optimize.lsq_linear(
+            np.vstack([scaled, reg]),
+            np.concatenate([y_free, reg @ np.ones(len(free))]),
+            bounds=(1e-3, np.inf),
+            method="bvls",
+        )
+        if fit.status < 1:
+            raise IdentificationError(f"the bounded least squares did not converge: {fit.message}")
+        low = [free[k] for k in np.flatnonzero(fit.active_mask < 0)]
+        if not low:
+            q[free] = fit.x * q0[free]
+            break
+        at_bound += low
+        free = [j for j in free if j not in low]
+    return q, at_bound
 
 
 def potentiometer_noise(

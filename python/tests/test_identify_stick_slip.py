@@ -184,6 +184,27 @@ def test_a_quantity_the_linear_fit_pushes_onto_its_bound_starts_cloe_at_the_prio
     assert 0.65 < fv6 < 1.35, fv6
 
 
+def test_the_linear_starts_bound_rule_holds_what_the_data_want_below_zero() -> None:
+    """The rule behind ``LinearGuess.at_bound`` on a known linear system: a quantity the data want
+    negative is held at its prior and the others are refitted; when the data want every one
+    negative, the start is the prior itself with all of them named."""
+    from rss6.identify_linear import _bounded_fit
+
+    rng = np.random.default_rng(3)
+    a_mat = rng.normal(size=(200, 5))
+    q0 = np.array([1.0, 2.0, 0.5, 3.0, 1.5])
+    truth = np.array([1.2, -0.4, 0.7, 2.5, 1.0])  # the second wants ≤ 0
+    q, held = _bounded_fit(a_mat, a_mat @ truth, q0, [0, 1, 2, 3], 1e-9)
+    assert held == [1]
+    assert q[1] == q0[1] and q[4] == q0[4]
+    # the others: the least squares with q_1 at its prior, to the ridge's precision
+    refit = np.linalg.lstsq(a_mat[:, [0, 2, 3]], a_mat @ truth - a_mat[:, [1, 4]] @ q0[[1, 4]])[0]
+    assert np.allclose(q[[0, 2, 3]], refit, rtol=1e-6)
+    q, held = _bounded_fit(a_mat, a_mat @ -q0, q0, [0, 1, 2, 3, 4], 1e-9)
+    assert sorted(held) == [0, 1, 2, 3, 4]
+    assert np.array_equal(q, q0)
+
+
 def test_the_linear_start_refuses_what_it_cannot_use() -> None:
     kp = rss6.KinematicParams.nominal()
     data, _ = _data(noisy=False)
