@@ -46,6 +46,7 @@ __all__ = [
     "invert_pose",
     "jacobian_ad",
     "jacobian_theta",
+    "loop_observability",
     "mass_matrix",
     "mean_pose",
     "read_log",
@@ -641,4 +642,22 @@ def table_5_2_truth_params() -> tuple[DynamicParams, tuple[float, float, float]]
 def cloe_psi(
     dp: DynamicParams, pid: tuple[float, float, float], psi: list[float] | None = None
 ) -> tuple[_F64, DynamicParams, tuple[float, float, float]]: ...
+def loop_observability(
+    kp: KinematicParams,
+    dp: DynamicParams,
+    pid: tuple[float, float, float],
+    f0: float,
+    coefficients: ArrayLike,
+    *,
+    start: ArrayLike,
+    duration: float,
+    torque_limit: float = 30.0,
+    dt: float = 1e-3,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+    implicit_friction: bool = False,
+    noise: tuple[float, float] | None = None,
+    hold: list[str] | None = None,
+    identifiability_threshold: float = 1e-3,
+) -> tuple[float, float, list[str], int]: ...
 def thesis_tables() -> dict[str, dict[str, Any]]: ...

@@ -20,7 +20,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -30,7 +30,13 @@ from numpy.typing import ArrayLike, NDArray
 from rss6 import _rss6
 from rss6.errors import IdentificationError, InvalidInputError
 
-__all__ = ["Excitation", "excitation", "random_excitation"]
+__all__ = [
+    "Excitation",
+    "LoopObservability",
+    "excitation",
+    "loop_observability",
+    "random_excitation",
+]
 
 F64 = NDArray[np.float64]
 
@@ -70,6 +76,65 @@ class Excitation:
         n = (c.shape[1] - 1) // 2
         problem = _rss6.ExcitationProblem(kp, harmonics=n, f0=f0, **limits)
         return _finish(problem, c, f0)
+
+
+@dataclass(frozen=True)
+class LoopObservability:
+    """What the camera sees of A through the closed loop on one trajectory
+    (:func:`loop_observability`): ``o_in`` (eq. 5.13 on the noise-weighted output sensitivity
+    ∂(χ_s/σ)/∂log q: dimensionless, so masses, inertias, friction and gains count alike) and
+    ``condition`` of its identifiable columns, the ``identifiable`` quantities' names and the
+    camera ``frames`` simulated. Not comparable in value with :attr:`Excitation.observability`,
+    which is in the torque regressor's units: compare rankings of trajectories."""
+
+    o_in: float
+    condition: float
+    identifiable: tuple[str, ...]
+    frames: int
+
+
+def loop_observability(
+    exc: Excitation,
+    kp: _rss6.KinematicParams,
+    dynamics: _rss6.DynamicParams,
+    pid: tuple[float, float, float],
+    *,
+    torque_limit: float = 30.0,
+    derivative_filter: float = 0.0,
+    friction_smoothing: float = 0.0,
+    implicit_friction: bool = False,
+    hold: Sequence[str] = ("lp",),
+    noise: tuple[float, float] | None = None,
+    threshold: float = 1e-3,
+    periods: int = 1,
+) -> LoopObservability:
+    """The closed loop's observability of A on ``exc`` (``periods`` periods from rest at its start)
+    at the model (``kp``, ``dynamics``, drive gains ``pid``) — what CLOE works with, where
+    :attr:`Excitation.observability` is the torque regressor's that :func:`excitation` maximises
+    (issue 13 asks for both). One simulation of the loop with its sensitivities (≈ 0.7 s for 10 s
+    on two cores). ``hold``: quantities left out (default l_p: the loop sees Ξ and the gains only up
+    to a common factor, docs/identification.md); ``noise`` (position m, angle rad): the weights
+    (default Table 4.1); ``threshold``: the pivoted QR's relative |R_ii|; the loop settings as for
+    :func:`rss6.identify.simulate`."""
+    if int(periods) < 1:
+        raise InvalidInputError(f"periods must be >= 1, got {periods}")
+    o_in, cond, names, frames = _rss6.loop_observability(
+        kp,
+        dynamics,
+        (float(pid[0]), float(pid[1]), float(pid[2])),
+        exc.f0,
+        exc.coefficients,
+        start=exc.sample(0.0)[0],
+        duration=int(periods) * exc.duration,
+        torque_limit=torque_limit,
+        derivative_filter=derivative_filter,
+        friction_smoothing=friction_smoothing,
+        implicit_friction=implicit_friction,
+        noise=noise,
+        hold=list(hold),
+        identifiability_threshold=threshold,
+    )
+    return LoopObservability(float(o_in), float(cond), tuple(names), int(frames))
 
 
 def _finish(problem: _rss6.ExcitationProblem, c: F64, f0: float) -> Excitation:

@@ -10,6 +10,7 @@ import numpy as np
 
 import rss6
 from rss6 import _rss6, identify, thesis
+from rss6.excitation import LoopObservability
 
 __all__ = ["IdentifyReport", "loop_text", "quantities"]
 
@@ -105,6 +106,8 @@ class IdentifyReport:
     validation_other_gains: identify.Validation | None = None
     #: What each unidentifiable quantity combines into (IdentificationResult.alias_text()).
     aliases: list[str] = field(default_factory=list)
+    #: O_in and cond of the loop's output sensitivity at the estimate (None: not converged).
+    loop_observability: LoopObservability | None = None
 
     def table_5_2(self) -> str:
         """Table 5.2 analog: per estimated quantity the initial, identified and true value, the
@@ -255,7 +258,14 @@ class IdentifyReport:
                 (
                     f"1. exciting trajectory: {e.coefficients.shape[1] // 2} harmonics of "
                     f"{e.f0} Hz, {e.duration:.1f} s, O_in {e.observability:.4g}, "
-                    f"cond {e.condition:.4g}"
+                    f"cond {e.condition:.4g} (torque regressor)"
+                    + (
+                        ""
+                        if self.loop_observability is None
+                        else f"; through the loop at the estimate O_in "
+                        f"{self.loop_observability.o_in:.4g}, cond "
+                        f"{self.loop_observability.condition:.4g} (camera poses / noise)"
+                    )
                 ),
                 f"2. identification loop: {self.data.frames} camera frames"
                 + (f", visual-PID fault {self.data.fault}" if self.data.fault else ""),

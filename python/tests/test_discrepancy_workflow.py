@@ -359,6 +359,10 @@ def test_confounded_candidates_are_reported_as_ambiguous_not_named(
     assert [e.name for e in rec.named] == ["payload"], rec.table()
     lo, hi = rec.named[0].ci["mass"]
     assert lo < 20.0 < hi, rec.table()
+    # Named, so the pair was below the ambiguity threshold: the note says how close it came.
+    pair = ("closest mimic", "payload (payload)", "pid_gains (drive)")
+    mimic = [n for n in rec.notes if all(p in n for p in pair)]
+    assert mimic and float(mimic[0].split("|ρ| ")[1].split(" ")[0]) <= 0.9, rec.notes
 
 
 def test_the_identification_loop_takes_the_named_effects_as_the_replay_does(

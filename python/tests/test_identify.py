@@ -452,6 +452,30 @@ def test_unidentifiable_quantities_say_what_they_combine_into(kp: rss6.Kinematic
     assert all(isinstance(line, str) and " into " in line for line in res.alias_text()[:1])
 
 
+def test_the_loops_observability_picks_what_cloe_identifies(kp: rss6.KinematicParams) -> None:
+    """rss6.excitation.loop_observability is CLOE's identifiability analysis without data: on the
+    same loop and guess it keeps the same quantities, and its O_in (eq. 5.13 on the noise-weighted
+    sensitivity) halves when both noise σ double while cond stays."""
+    from rss6.excitation import loop_observability
+
+    dp, pid = _smooth_truth()
+    exc = _short_excitation(kp)
+    data = _collect(_twin(dp, pid), exc)
+    res = identify.cloe(
+        data, kp, dp, pid, hold=["lp"], torque_limit=1e4, tol_cost=1e-2, tol_step=1e-2
+    )
+    o = loop_observability(exc, kp, dp, pid, torque_limit=1e4)
+    assert set(o.identifiable) == set(res.identified) and "lp" not in o.identifiable
+    assert o.frames == len(data.t)
+    sigma = (2 * 9.6e-6, 2 * float(np.deg2rad(0.0261)))
+    o2 = loop_observability(exc, kp, dp, pid, torque_limit=1e4, noise=sigma)
+    assert o2.identifiable == o.identifiable
+    assert o2.o_in == pytest.approx(o.o_in / 2, rel=1e-9)
+    assert o2.condition == pytest.approx(o.condition, rel=1e-9)
+    with pytest.raises(rss6.InvalidInputError, match="hold"):
+        loop_observability(exc, kp, dp, pid, hold=("nothing",))
+
+
 def test_measured_poses_are_low_passed_below_nyquist_only() -> None:
     # χ_m through the zero-phase Butterworth of `cloe(measured_cutoff=...)`: the thesis's 60 Hz is
     # above a 30 Hz camera's Nyquist frequency and is refused; 10 Hz keeps a 0.5 Hz motion (zero

@@ -34,9 +34,10 @@ pub use crate::calibrate::{
     RejectedConfiguration,
 };
 pub use crate::cloe::{
-    cloe, cloe_observed, parameter_names as loop_parameter_names, simulate as simulate_loop,
-    table_5_2_truth, Alias, CloeData, CloeOptions, CloeResult, CloeStop, Consistent, LoopConfig,
-    LoopParams, LoopRun, StateJacobians, DRIVE_UNIT_TO_NM, HAC_LAGS, N_A, N_PSI, SETTLE_STEPS,
+    cloe, cloe_observed, output_observability, parameter_names as loop_parameter_names,
+    simulate as simulate_loop, table_5_2_truth, Alias, CloeData, CloeOptions, CloeResult, CloeStop,
+    Consistent, LoopConfig, LoopParams, LoopRun, OutputObservability, StateJacobians,
+    DRIVE_UNIT_TO_NM, HAC_LAGS, N_A, N_PSI, SETTLE_STEPS,
 };
 pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,

@@ -26,7 +26,7 @@ use crate::plant::with_robot;
 /// Maps the identification errors of rss6-ident onto `rss6.IdentificationError` (attributes: `names`
 /// for a parameter that is not identifiable, `iterations` and `cost_history` for no convergence) or
 /// `rss6.SimulationError`; the others as for calibration.
-fn cloe_err(e: IdentError) -> PyErr {
+pub(crate) fn cloe_err(e: IdentError) -> PyErr {
     let msg = e.to_string();
     match e {
         IdentError::Unidentifiable { names } => {
@@ -199,7 +199,7 @@ type AliasTuple = (String, Vec<(String, f64)>, f64);
 /// (ψ (43,), dynamics, (l_p, l_i, l_d)).
 type PsiAndParams<'py> = (Bound<'py, PyArray1<f64>>, PyDynamicParams, (f64, f64, f64));
 
-fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
+pub(crate) fn pid_gains((lp, li, ld): (f64, f64, f64)) -> PidGains {
     PidGains { lp, li, ld }
 }
 
@@ -228,7 +228,7 @@ pub(crate) fn outer_gains(g: Option<(f64, f64, f64)>) -> PyResult<CartesianPidGa
 
 /// The loop's configuration: `LoopConfig::new` with the given fields set.
 #[allow(clippy::too_many_arguments)]
-fn loop_config(
+pub(crate) fn loop_config(
     kp: &PyKinematicParams,
     start: &Bound<'_, PyAny>,
     duration: f64,

@@ -3,11 +3,15 @@
 
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use rss6_ident::{base_columns, Excitation, ExcitationLimits, ExcitationProblem};
+use rss6_ident::{
+    base_columns, output_observability, CloeOptions, Excitation, ExcitationLimits,
+    ExcitationProblem, LoopParams,
+};
 
+use crate::cloe::{cloe_err, loop_config, pid_gains};
 use crate::convert::{out1, out6, vec6};
 use crate::errors::{invalid, shape};
-use crate::params::PyKinematicParams;
+use crate::params::{PyDynamicParams, PyKinematicParams};
 
 fn coefficients(obj: &Bound<'_, PyAny>) -> PyResult<[Vec<f64>; 6]> {
     let (dims, data) = crate::convert::array(obj, "coefficients")?;
@@ -218,4 +222,62 @@ impl PyExcitationProblem {
             self.inner.columns.len()
         )
     }
+}
+
+/// (O_in, cond, identifiable names, frames) of the closed loop's output sensitivity on the Fourier
+/// trajectory (`f0`, `coefficients`) from rest at `start` for `duration` s, at the model (`kp`, `dp`,
+/// drive gains `pid`): eq. 5.13 on the camera poses' sensitivity to CLOE's log-parameters, weighted
+/// by `noise` = (position m, angle rad; default Table 4.1), the quantities in `hold` left out and
+/// the identifiable ones chosen by the pivoted QR at `identifiability_threshold`
+/// (`rss6_ident::output_observability`). The loop's settings as for `simulate_identification`.
+/// One simulation with sensitivities. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, noise=None, hold=None, identifiability_threshold=1e-3))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn loop_observability(
+    py: Python<'_>,
+    kp: &PyKinematicParams,
+    dp: &PyDynamicParams,
+    pid: (f64, f64, f64),
+    f0: f64,
+    coefficients: &Bound<'_, PyAny>,
+    start: &Bound<'_, PyAny>,
+    duration: f64,
+    torque_limit: f64,
+    dt: f64,
+    derivative_filter: f64,
+    friction_smoothing: f64,
+    implicit_friction: bool,
+    noise: Option<(f64, f64)>,
+    hold: Option<Vec<String>>,
+    identifiability_threshold: f64,
+) -> PyResult<(f64, f64, Vec<String>, usize)> {
+    let exc = excitation(f0, coefficients)?;
+    let cfg = loop_config(
+        kp,
+        start,
+        duration,
+        torque_limit,
+        0.0,
+        dt,
+        derivative_filter,
+        (friction_smoothing, implicit_friction),
+        (None, None, None),
+    )?;
+    let at = LoopParams {
+        dynamics: dp.inner,
+        pid: pid_gains(pid),
+    };
+    let mut options = CloeOptions {
+        hold: hold.unwrap_or_default(),
+        identifiability_threshold,
+        ..CloeOptions::default()
+    };
+    if let Some((p, a)) = noise {
+        options.noise = [p, a];
+    }
+    let o = py
+        .detach(|| output_observability(&cfg, &at, &exc, &options))
+        .map_err(cloe_err)?;
+    Ok((o.o_in, o.condition, o.identifiable, o.frames))
 }

@@ -76,6 +76,7 @@ fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloe::cloe_parameter_names, m)?)?;
     m.add_function(wrap_pyfunction!(cloe::table_5_2_truth_params, m)?)?;
     m.add_function(wrap_pyfunction!(cloe::cloe_psi, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::loop_observability, m)?)?;
     m.add_function(wrap_pyfunction!(thesis::thesis_tables, m)?)?;
     Ok(())
 }

@@ -16,7 +16,9 @@ friction); ``friction_law``: "tanh" (default: robot twin and model with f_c tanh
 the plant keeps its sticking motor, 35–160 µm from the model open loop) or "implicit" (robot and
 model with the shared stick–slip law, the plant at 48 solver iterations: ≈ 1.5 µm from the model);
 ``commands``: "recorded" (default: replays driven by the robot's per-tick commands; an effect's
-magnitude is then its size with the commands held) or "simulated" (replays close the model's loop).
+magnitude is then its size with the commands held) or "simulated" (replays close the model's loop);
+``excitation``: the seed of one random excitation both runs follow (default: seeds 1000 + seed and
+2000 + seed, two excitations).
 """
 
 from __future__ import annotations
@@ -171,7 +173,8 @@ def hidden_case(
         d = dp.to_dict()
         d["coulomb"], d["viscous"] = np.zeros(6), np.zeros(6)
         dp = rss6.DynamicParams.from_dict(d)
-    exc = identify.random_excitation(kp, seed=1000 + seed)
+    same = spec.get("excitation")
+    exc = identify.random_excitation(kp, seed=1000 + seed if same is None else int(same))
 
     def make(
         hidden: Mapping[str, Mapping[str, float]] | None,
@@ -261,7 +264,10 @@ def hidden_case(
     fit = collect(robot(2 * seed + 1))
     # The held-out run follows another excitation: a library effect that only mimics something
     # else fits it differently.
-    val = collect(robot(2 * seed + 2), identify.random_excitation(kp, seed=2000 + seed))
+    val = collect(
+        robot(2 * seed + 2),
+        exc if same is not None else identify.random_excitation(kp, seed=2000 + seed),
+    )
     for kind in extra:
         fit = _with_camera(fit, _camera_additive(kind, fit.t, multiple))
         val = _with_camera(val, _camera_additive(kind, val.t, multiple))
@@ -274,7 +280,8 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     with the hidden effect, runs :func:`~rss6.discrepancy.diagnose` with the truth model without
     it, and returns a flat record: spec_id, robot, seed, hidden, magnitude (the multiple asked)
     and reached, named ("+"-joined, "none"), verdict, correct (the hidden library effects named
-    and nothing else; for no effect: nothing named), ambiguous, unexplained, gap_before_<axis>,
+    and nothing else; for no effect: nothing named), ambiguous, ambiguous_sets (each set's
+    candidates and largest |ρ|, "; "-joined), unexplained, gap_before_<axis>,
     gap_named_<axis>, noise_<axis> (axes x y z a b g), seconds, notes."""
     t0 = time.perf_counter()
     seed = int(spec.get("seed", 0))
@@ -336,6 +343,9 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "verdict": rep.verdict,
         "correct": named_effects == hidden_effects,
         "ambiguous": bool(rep.ambiguous),
+        "ambiguous_sets": "; ".join(
+            f"{' + '.join(a.candidates)} (rho {a.correlation:.2f})" for a in rep.ambiguous
+        ),
         "unexplained": rep.unexplained is not None,
         "seconds": time.perf_counter() - t0,
         "notes": " | ".join(rep.notes),

@@ -288,6 +288,13 @@ def _diagnose(
             # What is left may be partly the ambiguous effect's signature: naming anything else
             # from it could name a mimic. Stop here.
             break
+        if len(order) > 1:
+            # How close the round came to an ambiguity: the best candidate's closest mimic.
+            k = max(range(1, len(order)), key=lambda j: abs(corr[0, j]))
+            notes_fit.append(
+                f"round {round_ + 1}: {best_label}'s closest mimic {names_c[k]}, "
+                f"|ρ| {abs(corr[0, k]):.2f} (ambiguous above 0.9)"
+            )
         top = [i for i in order if label(i) not in in_group][: max(1, refit)]
         _tell(progress, f"fit round {round_ + 1}", 0, len(top))
         fits: list[tuple[int, Fit]] = []

@@ -203,6 +203,7 @@ def discrepancy_benchmark(
     for p in ("gap_before", "gap_named", "gap_after", "noise"):
         fields += [f"{p}_{a}" for a in _AXES]
     fields += ["se", "heldout"]  # the two runs' errors behind the intervals (sixth session)
+    fields += ["ambiguous_sets"]  # which candidates were ambiguous, with their |ρ| (eighth session)
     return _study(discrepancy_task, specs, fields, out, client, workers, progress)
 
 

@@ -28,6 +28,7 @@ use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use super::lm_step::{lm_step, optimal, shifted, Settle};
+use super::observability::weighted_sensitivity;
 use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
@@ -212,17 +213,12 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             }
             let rms = sq.map(|v| (v / n as f64).sqrt());
             let g = match (&run.jacobian, jac) {
-                (Some(ja), true) => {
-                    let dadpsi = cons.jacobian(psi);
-                    let mut g = DMatrix::zeros(6 * n, N_PSI);
-                    for (k, &s) in idx.iter().enumerate() {
-                        let rows = ja.rows(6 * s, 6) * &dadpsi;
-                        for i in 0..6 {
-                            g.row_mut(6 * k + i).copy_from(&(rows.row(i) * weight[i]));
-                        }
-                    }
-                    Some(g)
-                }
+                (Some(ja), true) => Some(weighted_sensitivity(
+                    ja,
+                    &idx,
+                    &cons.jacobian(psi),
+                    &weight.into(),
+                )),
                 _ => None,
             };
             Ok(Eval {
