@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 
 import numpy as np
 import rss6
@@ -43,19 +44,44 @@ def main() -> None:
             e, kp, dp, pid, derivative_filter=identify_sim.DRIVE_DERIVATIVE_FILTER,
             implicit_friction=True,
         )  # fmt: skip
-        rows.append((e.observability, e.condition, o.o_in, o.condition, len(o.identifiable)))
+        std = o.relative_std
+
+        def med(keep: Callable[[str], bool], std: dict[str, float] = std) -> float:
+            v = [s for n, s in std.items() if keep(n)]
+            return float(np.median(v)) if v else float("nan")
+
+        rows.append(
+            (
+                e.observability, e.condition, o.o_in, o.condition, len(o.identifiable),
+                med(lambda n: n.startswith("fc")), med(lambda n: n.startswith("fv")),
+                med(lambda n: n in ("li", "ld")), med(lambda n: "." in n),
+            )
+        )  # fmt: skip
     t_loop = (time.perf_counter() - t0) / len(excs)
     print(
         f"model: {args.at}; designed by differential evolution in {t_design:.1f} s; "
         f"{t_loop:.2f} s per loop sensitivity\n"
+        f"predicted relative σ (Cramér–Rao at Table 4.1 noise, medians over f_c, f_v, l_i and l_d, "
+        f"the masses and inertias)\n"
         f"{'trajectory':>12s} {'regressor O_in':>15s} {'cond':>9s} {'loop O_in':>10s} "
-        f"{'cond':>9s} {'identifiable':>12s}"
+        f"{'cond':>9s} {'identif.':>8s} {'σ f_c':>7s} {'σ f_v':>7s} {'σ gains':>7s} {'σ Ξ':>7s}"
     )
-    for k, (ro, rc, lo, lc, n) in enumerate(rows):
+    for k, (ro, rc, lo, lc, n, sc, sv, sg, sm) in enumerate(rows):
         name = "designed" if k == 0 else f"random {k - 1}"
-        print(f"{name:>12s} {ro:15.4g} {rc:9.3g} {lo:10.4g} {lc:9.3g} {n:12d}")
+        print(
+            f"{name:>12s} {ro:15.4g} {rc:9.3g} {lo:10.4g} {lc:9.3g} {n:8d} {100 * sc:6.2f}% "
+            f"{100 * sv:6.2f}% {100 * sg:6.2f}% {100 * sm:6.1f}%"
+        )
     r = np.array(rows)
+    counts = sorted({int(n) for n in r[:, 4]})
+    if len(counts) > 1:
+        print(
+            f"\nthe identifiable sets differ ({counts[0]}–{counts[-1]} quantities): O_in over "
+            "different columns is not comparable — evaluate at a model near the robot (the truth "
+            "here, or a first identification's estimate)"
+        )
     rho, p = spearmanr(r[1:, 0], r[1:, 2])
+    best = 1 + int(np.argmax(r[1:, 2]))
     rank_reg = int(np.sum(r[1:, 0] > r[0, 0])) + 1
     rank_loop = int(np.sum(r[1:, 2] > r[0, 2])) + 1
     print(
@@ -64,7 +90,11 @@ def main() -> None:
         f"the designed trajectory ranks {rank_reg} of {args.n + 1} by the regressor's O_in, "
         f"{rank_loop} of {args.n + 1} by the loop's; cond: regressor {r[0, 1]:.3g} "
         f"(random median {np.median(r[1:, 1]):.3g}), loop {r[0, 3]:.3g} "
-        f"(random median {np.median(r[1:, 3]):.3g})"
+        f"(random median {np.median(r[1:, 3]):.3g})\n"
+        f"predicted σ, designed vs the best random by the loop's O_in (random {best - 1}): "
+        f"f_c {100 * r[0, 5]:.2f} vs {100 * r[best, 5]:.2f} %, f_v {100 * r[0, 6]:.2f} vs "
+        f"{100 * r[best, 6]:.2f} %, gains {100 * r[0, 7]:.2f} vs {100 * r[best, 7]:.2f} %, "
+        f"masses and inertias {100 * r[0, 8]:.1f} vs {100 * r[best, 8]:.1f} %"
     )
 
 

@@ -83,14 +83,18 @@ class LoopObservability:
     """What the camera sees of A through the closed loop on one trajectory
     (:func:`loop_observability`): ``o_in`` (eq. 5.13 on the noise-weighted output sensitivity
     ∂(χ_s/σ)/∂log q: dimensionless, so masses, inertias, friction and gains count alike) and
-    ``condition`` of its identifiable columns, the ``identifiable`` quantities' names and the
-    camera ``frames`` simulated. Not comparable in value with :attr:`Excitation.observability`,
-    which is in the torque regressor's units: compare rankings of trajectories."""
+    ``condition`` of its identifiable columns, the ``identifiable`` quantities' names, the
+    camera ``frames`` simulated and ``relative_std`` {name: σ}: the relative standard deviation
+    each estimate would have from these frames with white noise of the given σ (the Cramér–Rao
+    bound, √diag((GᵀG)⁻¹) of the log; CLOE's Wald σ at this point). ``o_in`` is not comparable in
+    value with :attr:`Excitation.observability`, which is in the torque regressor's units:
+    compare rankings of trajectories."""
 
     o_in: float
     condition: float
     identifiable: tuple[str, ...]
     frames: int
+    relative_std: dict[str, float]
 
 
 def loop_observability(
@@ -118,7 +122,7 @@ def loop_observability(
     :func:`rss6.identify.simulate`."""
     if int(periods) < 1:
         raise InvalidInputError(f"periods must be >= 1, got {periods}")
-    o_in, cond, names, frames = _rss6.loop_observability(
+    o_in, cond, names, frames, std = _rss6.loop_observability(
         kp,
         dynamics,
         (float(pid[0]), float(pid[1]), float(pid[2])),
@@ -134,7 +138,13 @@ def loop_observability(
         hold=list(hold),
         identifiability_threshold=threshold,
     )
-    return LoopObservability(float(o_in), float(cond), tuple(names), int(frames))
+    return LoopObservability(
+        float(o_in),
+        float(cond),
+        tuple(names),
+        int(frames),
+        {str(n): float(v) for n, v in zip(names, std, strict=True)},
+    )
 
 
 def _finish(problem: _rss6.ExcitationProblem, c: F64, f0: float) -> Excitation:

@@ -454,19 +454,26 @@ def test_unidentifiable_quantities_say_what_they_combine_into(kp: rss6.Kinematic
 
 def test_the_loops_observability_picks_what_cloe_identifies(kp: rss6.KinematicParams) -> None:
     """rss6.excitation.loop_observability is CLOE's identifiability analysis without data: on the
-    same loop and guess it keeps the same quantities, and its O_in (eq. 5.13 on the noise-weighted
-    sensitivity) halves when both noise σ double while cond stays."""
+    same loop and guess it keeps the same quantities with CLOE's Wald σ (up to the residual's
+    variance), and its O_in (eq. 5.13 on the noise-weighted sensitivity) halves when both noise σ
+    double while cond stays."""
     from rss6.excitation import loop_observability
 
     dp, pid = _smooth_truth()
     exc = _short_excitation(kp)
     data = _collect(_twin(dp, pid), exc)
     res = identify.cloe(
-        data, kp, dp, pid, hold=["lp"], torque_limit=1e4, tol_cost=1e-2, tol_step=1e-2
-    )
+        data, kp, dp, pid, hold=["lp"], torque_limit=1e4, tol_cost=1e-2, tol_step=1e-2,
+        prior_log_std=None,
+    )  # fmt: skip
     o = loop_observability(exc, kp, dp, pid, torque_limit=1e4)
     assert set(o.identifiable) == set(res.identified) and "lp" not in o.identifiable
     assert o.frames == len(data.t)
+    # Its σ is CLOE's Wald σ at the same point without the residual's own variance.
+    scale, worst = np.sqrt(res.reduced_chi2), 0.0
+    for name, s in zip(res.identified, res.relative_std_wald, strict=True):
+        worst = max(worst, abs(s / scale / o.relative_std[name] - 1))
+    assert worst < 2e-5, worst  # measured 5.8e-6: CLOE ends a hair off the truth
     sigma = (2 * 9.6e-6, 2 * float(np.deg2rad(0.0261)))
     o2 = loop_observability(exc, kp, dp, pid, torque_limit=1e4, noise=sigma)
     assert o2.identifiable == o.identifiable

@@ -224,7 +224,7 @@ impl PyExcitationProblem {
     }
 }
 
-/// (O_in, cond, identifiable names, frames) of the closed loop's output sensitivity on the Fourier
+/// (O_in, cond, identifiable names, frames, relative σ of each) of the closed loop's output sensitivity on the Fourier
 /// trajectory (`f0`, `coefficients`) from rest at `start` for `duration` s, at the model (`kp`, `dp`,
 /// drive gains `pid`): eq. 5.13 on the camera poses' sensitivity to CLOE's log-parameters, weighted
 /// by `noise` = (position m, angle rad; default Table 4.1), the quantities in `hold` left out and
@@ -251,7 +251,7 @@ pub(crate) fn loop_observability(
     noise: Option<(f64, f64)>,
     hold: Option<Vec<String>>,
     identifiability_threshold: f64,
-) -> PyResult<(f64, f64, Vec<String>, usize)> {
+) -> PyResult<(f64, f64, Vec<String>, usize, Vec<f64>)> {
     let exc = excitation(f0, coefficients)?;
     let cfg = loop_config(
         kp,
@@ -279,5 +279,5 @@ pub(crate) fn loop_observability(
     let o = py
         .detach(|| output_observability(&cfg, &at, &exc, &options))
         .map_err(cloe_err)?;
-    Ok((o.o_in, o.condition, o.identifiable, o.frames))
+    Ok((o.o_in, o.condition, o.identifiable, o.frames, o.relative_std))
 }

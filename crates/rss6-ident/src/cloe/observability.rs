@@ -25,6 +25,10 @@ pub struct OutputObservability {
     pub identifiable: Vec<String>,
     /// Camera frames of the simulated run (the rows are 6 per frame).
     pub frames: usize,
+    /// Per identifiable quantity (same order), the relative standard deviation its estimate would
+    /// have from these frames with white noise of the given σ: √diag((GᵀG)⁻¹) of its log — the
+    /// Cramér–Rao bound CLOE's Wald σ reaches at this point; `f64::INFINITY` if GᵀG is singular.
+    pub relative_std: Vec<f64>,
 }
 
 /// The noise-weighted sensitivity G (6 × frames rows, [`N_PSI`] columns) of the loop's camera
@@ -100,10 +104,16 @@ pub fn output_observability<T: Trajectory + Sync + ?Sized>(
         ));
     }
     let (o_in, condition) = observability_of(&g, &base, frames.len())?;
+    let gb = g.select_columns(&base);
+    let relative_std = match gb.tr_mul(&gb).cholesky() {
+        Some(c) => c.inverse().diagonal().iter().map(|v| v.sqrt()).collect(),
+        None => vec![f64::INFINITY; base.len()],
+    };
     Ok(OutputObservability {
         o_in,
         condition,
         identifiable: base.iter().map(|&k| names[k].clone()).collect(),
         frames: frames.len(),
+        relative_std,
     })
 }
