@@ -279,5 +279,11 @@ pub(crate) fn loop_observability(
     let o = py
         .detach(|| output_observability(&cfg, &at, &exc, &options))
         .map_err(cloe_err)?;
-    Ok((o.o_in, o.condition, o.identifiable, o.frames, o.relative_std))
+    Ok((
+        o.o_in,
+        o.condition,
+        o.identifiable,
+        o.frames,
+        o.relative_std,
+    ))
 }
