@@ -224,6 +224,9 @@ impl PyExcitationProblem {
     }
 }
 
+/// (O_in, cond, identifiable names, frames, relative σ of each): what [`loop_observability`] returns.
+type LoopObservabilityTuple = (f64, f64, Vec<String>, usize, Vec<f64>);
+
 /// (O_in, cond, identifiable names, frames, relative σ of each) of the closed loop's output sensitivity on the Fourier
 /// trajectory (`f0`, `coefficients`) from rest at `start` for `duration` s, at the model (`kp`, `dp`,
 /// drive gains `pid`): eq. 5.13 on the camera poses' sensitivity to CLOE's log-parameters, weighted
@@ -251,7 +254,7 @@ pub(crate) fn loop_observability(
     noise: Option<(f64, f64)>,
     hold: Option<Vec<String>>,
     identifiability_threshold: f64,
-) -> PyResult<(f64, f64, Vec<String>, usize, Vec<f64>)> {
+) -> PyResult<LoopObservabilityTuple> {
     let exc = excitation(f0, coefficients)?;
     let cfg = loop_config(
         kp,
