@@ -28,7 +28,7 @@ use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use super::lm_step::{lm_step, optimal, shifted, Settle};
-use super::observability::weighted_sensitivity;
+use super::observability::{identifiable_columns, noise_weight, weighted_sensitivity};
 use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
@@ -178,13 +178,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             "measured frames and times must be finite".into(),
         ));
     }
-    let [sp, sa] = options.noise;
-    if !(sp > 0.0 && sa > 0.0 && sp.is_finite() && sa.is_finite()) {
-        return Err(IdentError::InvalidInput(
-            "noise std must be finite and > 0".into(),
-        ));
-    }
-    let weight = Vec6::new(1.0 / sp, 1.0 / sp, 1.0 / sp, 1.0 / sa, 1.0 / sa, 1.0 / sa);
+    let weight = noise_weight(options.noise)?;
     let cons = Consistent::new(guess)?;
     let names = Consistent::names();
     let a_cols = Consistent::a_columns();
@@ -213,12 +207,9 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             }
             let rms = sq.map(|v| (v / n as f64).sqrt());
             let g = match (&run.jacobian, jac) {
-                (Some(ja), true) => Some(weighted_sensitivity(
-                    ja,
-                    &idx,
-                    &cons.jacobian(psi),
-                    &weight.into(),
-                )),
+                (Some(ja), true) => {
+                    Some(weighted_sensitivity(ja, &idx, &cons.jacobian(psi), &weight))
+                }
                 _ => None,
             };
             Ok(Eval {
@@ -249,24 +240,8 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         .g
         .as_ref()
         .ok_or_else(|| IdentError::InvalidInput("the loop returned no sensitivities".into()))?;
-    let mut held = Vec::new();
-    for h in &options.hold {
-        match names.iter().position(|n| n == h) {
-            Some(k) => held.push(k),
-            None => {
-                return Err(IdentError::InvalidInput(format!(
-                    "unknown parameter {h:?} to hold; known: {}",
-                    names.join(", ")
-                )))
-            }
-        }
-    }
-    let free: Vec<usize> = (0..N_PSI).filter(|k| !held.contains(k)).collect();
-    let base: Vec<usize> =
-        base_columns(&g0.select_columns(&free), options.identifiability_threshold)
-            .into_iter()
-            .map(|k| free[k])
-            .collect();
+    let (free, base) = identifiable_columns(g0, &options.hold, options.identifiability_threshold)?;
+    let held: Vec<usize> = (0..N_PSI).filter(|k| !free.contains(k)).collect();
     let active: Vec<usize> = match &options.parameters {
         None => base.clone(),
         Some(req) => {

@@ -50,6 +50,44 @@ pub(super) fn weighted_sensitivity(
     g
 }
 
+/// The residual weights 1/σ of the pose axes from `noise` = [position (m), angle (rad)].
+pub(super) fn noise_weight(noise: [f64; 2]) -> Result<[f64; 6]> {
+    let [sp, sa] = noise;
+    if !(sp > 0.0 && sa > 0.0 && sp.is_finite() && sa.is_finite()) {
+        return Err(IdentError::InvalidInput(
+            "noise std must be finite and > 0".into(),
+        ));
+    }
+    Ok([1.0 / sp, 1.0 / sp, 1.0 / sp, 1.0 / sa, 1.0 / sa, 1.0 / sa])
+}
+
+/// The quantities not held (indices into [`Consistent::names`]) and, among them, the identifiable
+/// ones by the pivoted QR of their columns of `g` at `threshold`, in pivot order.
+pub(super) fn identifiable_columns(
+    g: &DMatrix<f64>,
+    hold: &[String],
+    threshold: f64,
+) -> Result<(Vec<usize>, Vec<usize>)> {
+    let names = Consistent::names();
+    let held: Vec<usize> = hold
+        .iter()
+        .map(|h| {
+            names.iter().position(|n| n == h).ok_or_else(|| {
+                IdentError::InvalidInput(format!(
+                    "unknown parameter {h:?} to hold; known: {}",
+                    names.join(", ")
+                ))
+            })
+        })
+        .collect::<Result<_>>()?;
+    let free: Vec<usize> = (0..N_PSI).filter(|k| !held.contains(k)).collect();
+    let base = base_columns(&g.select_columns(&free), threshold)
+        .into_iter()
+        .map(|k| free[k])
+        .collect();
+    Ok((free, base))
+}
+
 /// The observability of A through the closed loop `cfg` on `reference` at the parameters `at`:
 /// the loop is simulated with sensitivities (no data needed), weighted by `options.noise`, the
 /// quantities named in `options.hold` left out, the identifiable ones chosen by the pivoted QR at
@@ -64,23 +102,7 @@ pub fn output_observability<T: Trajectory + Sync + ?Sized>(
     reference: &T,
     options: &CloeOptions,
 ) -> Result<OutputObservability> {
-    let [sp, sa] = options.noise;
-    if !(sp > 0.0 && sa > 0.0 && sp.is_finite() && sa.is_finite()) {
-        return Err(IdentError::InvalidInput(
-            "noise std must be finite and > 0".into(),
-        ));
-    }
-    let names = Consistent::names();
-    let held: Vec<usize> = options
-        .hold
-        .iter()
-        .map(|h| {
-            names
-                .iter()
-                .position(|n| n == h)
-                .ok_or_else(|| IdentError::InvalidInput(format!("unknown parameter {h:?} to hold")))
-        })
-        .collect::<Result<_>>()?;
+    let weight = noise_weight(options.noise)?;
     let cons = Consistent::new(at)?;
     let psi = cons.psi(at)?;
     let a = cons.params(&psi);
@@ -90,14 +112,8 @@ pub fn output_observability<T: Trajectory + Sync + ?Sized>(
         .as_ref()
         .ok_or_else(|| IdentError::InvalidInput("the loop returned no sensitivities".into()))?;
     let frames: Vec<usize> = (0..run.chi.len()).collect();
-    let weight = [1.0 / sp, 1.0 / sp, 1.0 / sp, 1.0 / sa, 1.0 / sa, 1.0 / sa];
     let g = weighted_sensitivity(jacobian, &frames, &cons.jacobian(&psi), &weight);
-    let free: Vec<usize> = (0..N_PSI).filter(|k| !held.contains(k)).collect();
-    let base: Vec<usize> =
-        base_columns(&g.select_columns(&free), options.identifiability_threshold)
-            .into_iter()
-            .map(|k| free[k])
-            .collect();
+    let (_, base) = identifiable_columns(&g, &options.hold, options.identifiability_threshold)?;
     if base.is_empty() {
         return Err(IdentError::InvalidInput(
             "the loop shows none of the quantities on this trajectory".into(),
@@ -112,7 +128,10 @@ pub fn output_observability<T: Trajectory + Sync + ?Sized>(
     Ok(OutputObservability {
         o_in,
         condition,
-        identifiable: base.iter().map(|&k| names[k].clone()).collect(),
+        identifiable: {
+            let names = Consistent::names();
+            base.iter().map(|&k| names[k].clone()).collect()
+        },
         frames: frames.len(),
         relative_std,
     })
