@@ -39,6 +39,14 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2, help="worker processes")
     ap.add_argument("--mass", type=float, default=20.0, help="the hidden payload (kg)")
     ap.add_argument(
+        "--hidden",
+        choices=("payload", "gains"),
+        default="payload",
+        help="hide the payload, or its mimic: a drive-gain change whose output is --magnitude ×\n"
+        "the camera noise (the mimic must not be named a payload either)",
+    )
+    ap.add_argument("--magnitude", type=float, default=5.0, help="with --hidden gains")
+    ap.add_argument(
         "--excitation",
         type=int,
         default=None,
@@ -51,8 +59,11 @@ def main() -> None:
     specs = [
         {
             "spec_id": f"confounded-{s}",
-            "effect": "payload",
-            "params": {"mass": args.mass, "x": 0.0, "y": 0.0, "z": 0.0},
+            **(
+                {"effect": "payload", "params": {"mass": args.mass, "x": 0.0, "y": 0.0, "z": 0.0}}
+                if args.hidden == "payload"
+                else {"effect": "pid_gains", "magnitude": args.magnitude}
+            ),
             "commands": "simulated",
             "seed": s,
             **({} if args.excitation is None else {"excitation": args.excitation}),
@@ -62,6 +73,7 @@ def main() -> None:
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:
         records = list(pool.map(_case, specs))
+    truth = PAYLOAD if args.hidden == "payload" else GAINS
     flagged = named_payload = named_other = faulted = 0
     for r in records:
         if r.get("kind") == "faulted":
@@ -72,8 +84,8 @@ def main() -> None:
         both = any(PAYLOAD in s and GAINS in s for s in sets.split("; "))
         flagged += both
         named = r["named"]
-        named_payload += named.startswith(PAYLOAD)
-        named_other += named != "none" and not named.startswith(PAYLOAD)
+        named_payload += named.startswith(truth)
+        named_other += named != "none" and not named.startswith(truth)
         mimic = re.search(r"round 1: (.+?)'s closest mimic (.+?), \|ρ\| ([0-9.]+)", r["notes"])
         closest = f"{mimic[1]} ~ {mimic[2]} |ρ| {mimic[3]}" if mimic else "—"
         print(
@@ -81,8 +93,13 @@ def main() -> None:
             f"  closest mimic (round 1): {closest}"
         )
     n = len(records) - faulted
+    what = (
+        f"{args.mass:g} kg payload at the origin"
+        if args.hidden == "payload"
+        else f"drive gains at {args.magnitude:g}× the camera noise"
+    )
     print(
-        f"\n{args.mass:g} kg payload at the origin, own-loop replays, {n} cases "
+        f"\nhidden: {what}, own-loop replays, {n} cases "
         + (
             "(two excitations each) "
             if args.excitation is None
@@ -90,7 +107,7 @@ def main() -> None:
         )
         + f"({faulted} faulted), {time.perf_counter() - t0:.0f} s on {args.workers} workers:\n"
         f"  payload and drive gains flagged ambiguous (|ρ| > 0.9): {flagged}/{n}\n"
-        f"  payload named first: {named_payload}/{n}; another effect named: {named_other}/{n}"
+        f"  {truth} named first: {named_payload}/{n}; another effect named: {named_other}/{n}"
     )
 
 
