@@ -33,6 +33,7 @@ from rss6.errors import IdentificationError, InvalidInputError
 __all__ = [
     "Excitation",
     "LoopObservability",
+    "best_for_loop",
     "excitation",
     "loop_observability",
     "random_excitation",
@@ -145,6 +146,52 @@ def loop_observability(
         int(frames),
         {str(n): float(v) for n, v in zip(names, std, strict=True)},
     )
+
+
+def best_for_loop(
+    kp: _rss6.KinematicParams,
+    dynamics: _rss6.DynamicParams,
+    pid: tuple[float, float, float],
+    *,
+    candidates: int = 20,
+    seed: int = 0,
+    include: Sequence[Excitation] = (),
+    harmonics: int = 5,
+    f0: float = 0.1,
+    amplitude: tuple[float, float] = (0.001, 0.005),
+    progress: Callable[[int, float], Any] | None = None,
+    **loop: Any,
+) -> tuple[Excitation, LoopObservability]:
+    """The trajectory the closed loop shows A best through, at the model (``kp``, ``dynamics``,
+    drive gains ``pid``): of ``include`` and ``candidates`` random feasible trajectories (seeds
+    ``seed``·1000 + k, :func:`random_excitation` with ``harmonics``, ``f0``, ``amplitude``), the
+    one with the most identifiable quantities and, among those, the largest O_in of
+    :func:`loop_observability` (keywords ``loop`` go there). A random search on the loop's own
+    objective: each candidate costs one simulation with sensitivities (≈ 0.6 s for 10 s on two
+    cores), so no population optimiser. The loop's O_in depends on the model it is evaluated at
+    (docs/identification.md): use a model near the robot, e.g. a first identification's estimate,
+    then collect and identify again on the result. ``progress(done, best O_in)`` after each."""
+    if int(candidates) < 0 or (int(candidates) == 0 and not include):
+        raise InvalidInputError("candidates must be >= 0, with at least one trajectory in all")
+    best: tuple[tuple[int, float], Excitation, LoopObservability] | None = None
+    pool = list(include)
+    for k in range(int(candidates) + len(pool)):
+        exc = (
+            pool[k]
+            if k < len(pool)
+            else random_excitation(
+                kp, harmonics=harmonics, f0=f0, seed=int(seed) * 1000 + k - len(pool),
+                amplitude=amplitude,
+            )
+        )  # fmt: skip
+        seen = loop_observability(exc, kp, dynamics, pid, **loop)
+        key = (len(seen.identifiable), seen.o_in)
+        if best is None or key > best[0]:
+            best = (key, exc, seen)
+        if progress is not None:
+            progress(k + 1, best[2].o_in)
+    assert best is not None
+    return best[1], best[2]
 
 
 def _finish(problem: _rss6.ExcitationProblem, c: F64, f0: float) -> Excitation:

@@ -483,6 +483,30 @@ def test_the_loops_observability_picks_what_cloe_identifies(kp: rss6.KinematicPa
         loop_observability(exc, kp, dp, pid, hold=("nothing",))
 
 
+def test_the_best_trajectory_for_the_loop_is_the_one_it_sees_best(kp: rss6.KinematicParams) -> None:
+    """best_for_loop searches the given and random feasible trajectories for the one the loop shows
+    the most quantities through, then the largest O_in; ``progress`` sees every candidate."""
+    from rss6.excitation import best_for_loop, loop_observability
+
+    dp, pid = _smooth_truth()
+    short = {"harmonics": 3, "f0": 0.5, "amplitude": (0.01, 0.05)}
+    given = _short_excitation(kp)
+    seen: list[tuple[int, float]] = []
+    exc, obs = best_for_loop(
+        kp, dp, pid, candidates=3, seed=4, include=(given,), torque_limit=1e4,
+        progress=lambda k, o: seen.append((k, o)), **short,
+    )  # fmt: skip
+    pool = [given] + [identify.random_excitation(kp, seed=4000 + k, **short) for k in range(3)]
+    each = [loop_observability(e, kp, dp, pid, torque_limit=1e4) for e in pool]
+    top = max(range(4), key=lambda k: (len(each[k].identifiable), each[k].o_in))
+    assert np.array_equal(exc.coefficients, pool[top].coefficients)
+    assert obs == each[top]
+    assert [k for k, _ in seen] == [1, 2, 3, 4] and seen[-1][1] == obs.o_in
+    assert len({round(o.o_in, 12) for o in each}) == 4  # four different trajectories
+    with pytest.raises(rss6.InvalidInputError):
+        best_for_loop(kp, dp, pid, candidates=0)
+
+
 def test_measured_poses_are_low_passed_below_nyquist_only() -> None:
     # χ_m through the zero-phase Butterworth of `cloe(measured_cutoff=...)`: the thesis's 60 Hz is
     # above a 30 Hz camera's Nyquist frequency and is refused; 10 Hz keeps a 0.5 Hz motion (zero
