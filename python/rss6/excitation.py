@@ -35,6 +35,7 @@ __all__ = [
     "LoopObservability",
     "best_for_loop",
     "excitation",
+    "focus_rms",
     "loop_observability",
     "random_excitation",
 ]
@@ -159,6 +160,7 @@ def best_for_loop(
     harmonics: int = 5,
     f0: float = 0.1,
     amplitude: tuple[float, float] = (0.001, 0.005),
+    focus: Sequence[str] = (),
     progress: Callable[[int, float], Any] | None = None,
     **loop: Any,
 ) -> tuple[Excitation, LoopObservability]:
@@ -170,9 +172,17 @@ def best_for_loop(
     objective: each candidate costs one simulation with sensitivities (≈ 0.6 s for 10 s on two
     cores), so no population optimiser. The loop's O_in depends on the model it is evaluated at
     (docs/identification.md): use a model near the robot, e.g. a first identification's estimate,
-    then collect and identify again on the result. ``progress(done, best O_in)`` after each."""
+    then collect and identify again on the result. ``progress(done, best O_in)`` after each.
+
+    ``focus``: quantity names or name prefixes (``"fc"`` is fc1 … fc6) to choose for instead of
+    O_in — the trajectory on which the most of them are identifiable and, among those, their
+    relative σ (:attr:`LoopObservability.relative_std`) has the smallest root mean square (an
+    A-criterion on their logs). O_in, a D-criterion over every identifiable quantity, is dominated
+    by the poorly seen masses and can trade the friction terms against each other
+    (docs/identification.md)."""
     if int(candidates) < 0 or (int(candidates) == 0 and not include):
         raise InvalidInputError("candidates must be >= 0, with at least one trajectory in all")
+    focused = _focused(focus, loop.get("hold", ("lp",)))
     best: tuple[tuple[int, float], Excitation, LoopObservability] | None = None
     pool = list(include)
     for k in range(int(candidates) + len(pool)):
@@ -185,13 +195,42 @@ def best_for_loop(
             )
         )  # fmt: skip
         seen = loop_observability(exc, kp, dynamics, pid, **loop)
-        key = (len(seen.identifiable), seen.o_in)
+        key = (len(seen.identifiable), seen.o_in) if not focused else _focus_key(seen, focused)
         if best is None or key > best[0]:
             best = (key, exc, seen)
         if progress is not None:
             progress(k + 1, best[2].o_in)
     assert best is not None
     return best[1], best[2]
+
+
+def _focused(focus: Sequence[str], hold: Sequence[str]) -> tuple[str, ...]:
+    """The quantity names ``focus`` (names or prefixes) stands for, ``hold`` left out."""
+    if isinstance(focus, str):
+        focus = (focus,)
+    names = [n for n in _rss6.cloe_parameter_names() if n not in set(hold)]
+    out: list[str] = []
+    for f in focus:
+        hit = [n for n in names if n == f or (n.startswith(f) and n[len(f) :].isdigit())]
+        if not hit:
+            raise InvalidInputError(
+                f"focus {f!r} names no quantity the loop estimates (held: {list(hold)})"
+            )
+        out += [n for n in hit if n not in out]
+    return tuple(out)
+
+
+def focus_rms(seen: LoopObservability, focus: Sequence[str]) -> float:
+    """Root mean square of the relative σ of the identifiable quantities among ``focus`` (names or
+    prefixes, as :func:`best_for_loop`'s; ``inf`` if none is identifiable)."""
+    focused = _focused(focus, ())
+    s = [seen.relative_std[n] for n in focused if n in seen.relative_std]
+    return float(np.sqrt(np.mean(np.square(s)))) if s else float("inf")
+
+
+def _focus_key(seen: LoopObservability, focused: tuple[str, ...]) -> tuple[int, float]:
+    n = sum(1 for q in focused if q in seen.relative_std)
+    return n, -focus_rms(seen, focused)
 
 
 def _finish(problem: _rss6.ExcitationProblem, c: F64, f0: float) -> Excitation:

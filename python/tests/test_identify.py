@@ -486,7 +486,7 @@ def test_the_loops_observability_picks_what_cloe_identifies(kp: rss6.KinematicPa
 def test_the_best_trajectory_for_the_loop_is_the_one_it_sees_best(kp: rss6.KinematicParams) -> None:
     """best_for_loop searches the given and random feasible trajectories for the one the loop shows
     the most quantities through, then the largest O_in; ``progress`` sees every candidate."""
-    from rss6.excitation import best_for_loop, loop_observability
+    from rss6.excitation import best_for_loop, focus_rms, loop_observability
 
     dp, pid = _smooth_truth()
     short = {"harmonics": 3, "f0": 0.5, "amplitude": (0.01, 0.05)}
@@ -505,6 +505,23 @@ def test_the_best_trajectory_for_the_loop_is_the_one_it_sees_best(kp: rss6.Kinem
     assert len({round(o.o_in, 12) for o in each}) == 4  # four different trajectories
     with pytest.raises(rss6.InvalidInputError):
         best_for_loop(kp, dp, pid, candidates=0)
+    # focused on the friction and the gains: the smallest RMS relative σ of those among the
+    # trajectories that identify the most of them, wherever O_in ranks it
+    focus = ("fc", "fv", "li", "ld")
+    exc_f, obs_f = best_for_loop(
+        kp, dp, pid, candidates=3, seed=4, include=(given,), torque_limit=1e4, focus=focus, **short
+    )  # fmt: skip
+    names = [n for n in identify.parameter_names() if n[:2] in ("fc", "fv") or n in ("li", "ld")]
+    rms = [
+        np.sqrt(np.mean([o.relative_std[n] ** 2 for n in names if n in o.relative_std]))
+        for o in each
+    ]
+    count = [sum(n in o.relative_std for n in names) for o in each]
+    top_f = max(range(4), key=lambda k: (count[k], -rms[k]))
+    assert obs_f == each[top_f] and np.array_equal(exc_f.coefficients, pool[top_f].coefficients)
+    assert focus_rms(obs_f, focus) == pytest.approx(rms[top_f], rel=1e-12)
+    with pytest.raises(rss6.InvalidInputError, match="focus 'lp'"):
+        best_for_loop(kp, dp, pid, candidates=1, focus=("lp",))  # l_p is held by default
 
 
 def test_measured_poses_are_low_passed_below_nyquist_only() -> None:
