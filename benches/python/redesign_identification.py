@@ -15,6 +15,7 @@ l_i, l_d and the masses and inertias, the median reported relative σ and the me
 the truth. One plant and one seed: a comparison of two trajectories, not a study.
 
     python benches/python/redesign_identification.py [--seed 0] [--candidates 20] [--focus fc fv li ld]
+        [--amplitude 0.001 0.005]
 """
 
 from __future__ import annotations
@@ -35,6 +36,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--candidates", type=int, default=20)
     ap.add_argument("--focus", nargs="*", default=[], help="choose by these quantities' σ")
+    ap.add_argument(
+        "--amplitude", nargs=2, type=float, default=(0.001, 0.005), metavar=("POS", "ANG"),
+        help="bounds of the free coefficients (m/s, rad/s) of the design and the candidates",
+    )  # fmt: skip
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
@@ -81,12 +86,14 @@ def main() -> None:
         )
 
     t0 = time.perf_counter()
-    designed = identify.excitation(kp, seed=args.seed)
+    amplitude = (float(args.amplitude[0]), float(args.amplitude[1]))
+    designed = identify.excitation(kp, seed=args.seed, amplitude=amplitude)
     first = run(designed)
     report("1. designed (regressor O_in)", designed, first)
     chosen, obs = best_for_loop(
         kp, first.dynamics, first.pid, candidates=args.candidates, seed=args.seed,
         include=(designed,), derivative_filter=t_f, implicit_friction=True, focus=args.focus,
+        amplitude=amplitude,
     )  # fmt: skip
     which = "the designed one" if chosen is designed else "a random one"
     by = f"RMS σ of {' '.join(args.focus)}" if args.focus else "loop O_in"

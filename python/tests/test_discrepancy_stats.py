@@ -3,6 +3,7 @@ physical signatures, score tests and ambiguity, bootstrap size, the report direc
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -307,6 +308,16 @@ def test_report_saves_markdown_and_figures(
         ],
     )
     assert rep.verdict == "named: coulomb friction (joint 1); ambiguous: {latency, pid gain}"
+    # A named effect whose closest mimic came within reach of the ambiguity threshold says so.
+    near = dataclasses.replace(named, closest_mimic=("backlash (joint 1)", 0.87))
+    far = dataclasses.replace(named, closest_mimic=("backlash (joint 1)", 0.84))
+    assert near.nearly_ambiguous and not far.nearly_ambiguous and not named.nearly_ambiguous
+    assert dataclasses.replace(rep, named=[near], ambiguous=[]).verdict == (
+        "named: coulomb friction (joint 1) (nearly ambiguous with backlash (joint 1), |ρ| 0.87)"
+    )
+    assert dataclasses.replace(rep, named=[far], ambiguous=[]).verdict == (
+        "named: coulomb friction (joint 1)"
+    )
     assert rep.verdict in rep.table()
     assert "f_c=0.02 [0.018, 0.022]" in rep.table()
     # The named effect with its interval and the held-out run's own estimate.

@@ -363,6 +363,11 @@ def test_confounded_candidates_are_reported_as_ambiguous_not_named(
     pair = ("closest mimic", "payload (payload)", "pid_gains (drive)")
     mimic = [n for n in rec.notes if all(p in n for p in pair)]
     assert mimic and float(mimic[0].split("|ρ| ")[1].split(" ")[0]) <= 0.9, rec.notes
+    # ... and the named payload carries it (the verdict mentions it only from 0.85).
+    other, rho = rec.named[0].closest_mimic or ("", 0.0)
+    assert other == "pid_gains (drive)"
+    assert abs(rho - float(mimic[0].split("|ρ| ")[1].split(" ")[0])) <= 0.005
+    assert ("nearly ambiguous" in rec.verdict) == (rho >= discrepancy.NEARLY_AMBIGUOUS)
 
 
 def test_the_identification_loop_takes_the_named_effects_as_the_replay_does(

@@ -41,6 +41,8 @@ from rss6.discrepancy.noise import (
     noise_from_repeats,
 )
 from rss6.discrepancy.report import (
+    AMBIGUOUS,
+    NEARLY_AMBIGUOUS,
     Ambiguity,
     CandidateRow,
     DiscrepancyReport,
@@ -53,9 +55,11 @@ from rss6.discrepancy.report import (
 )
 
 __all__ = [
+    "AMBIGUOUS",
     "AXES",
     "CANDIDATES",
     "EFFECTS",
+    "NEARLY_AMBIGUOUS",
     "Ambiguity",
     "AppliedEffect",
     "CandidateRow",

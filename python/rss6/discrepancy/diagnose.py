@@ -54,6 +54,7 @@ from rss6.discrepancy.effects import candidates as library
 from rss6.discrepancy.model import AppliedEffect, Model, replay, run_of
 from rss6.discrepancy.reidentify import _reidentify
 from rss6.discrepancy.report import (
+    AMBIGUOUS,
     Ambiguity,
     CandidateRow,
     DiscrepancyReport,
@@ -268,7 +269,7 @@ def _diagnose(
         cols = {f"{screens[i].effect.name} ({screens[i].scope})": screens[i].columns for i in order}
         names_c = list(cols)
         corr = mimicry([screens[i] for i in order])
-        groups = stats.ambiguous_groups(names_c, corr, names_c, 0.9)
+        groups = stats.ambiguous_groups(names_c, corr, names_c, AMBIGUOUS)
 
         def label(i: int, screens: list[Screen] = screens) -> str:
             return f"{screens[i].effect.name} ({screens[i].scope})"
@@ -293,7 +294,7 @@ def _diagnose(
             k = max(range(1, len(order)), key=lambda j: abs(corr[0, j]))
             notes_fit.append(
                 f"round {round_ + 1}: {best_label}'s closest mimic {names_c[k]}, "
-                f"|ρ| {abs(corr[0, k]):.2f} (ambiguous above 0.9)"
+                f"|ρ| {abs(corr[0, k]):.2f} (ambiguous above {AMBIGUOUS:g})"
             )
         top = [i for i in order if label(i) not in in_group][: max(1, refit)]
         _tell(progress, f"fit round {round_ + 1}", 0, len(top))
@@ -341,6 +342,10 @@ def _diagnose(
             break
         i_best, best = min(fits, key=lambda f: f[1].cost)
         s = screens[i_best]
+        j_best = order.index(i_best)
+        rivals = [j for j in range(len(order)) if j != j_best]
+        k_mimic = max(rivals, key=lambda j: abs(corr[j_best, j])) if rivals else None
+        mimic = None if k_mimic is None else (names_c[k_mimic], float(abs(corr[j_best, k_mimic])))
         new_effects = list(base_model.applied()) + [
             AppliedEffect(e.name, sc, v)
             for (e, sc), v in zip(
@@ -454,7 +459,17 @@ def _diagnose(
             )
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
-            NamedEffect(a.name, a.scope, dict(a.params), c, ne.p_value, ne.gap_after, sf, dict(ho))
+            NamedEffect(
+                a.name,
+                a.scope,
+                dict(a.params),
+                c,
+                ne.p_value,
+                ne.gap_after,
+                sf,
+                dict(ho),
+                ne.closest_mimic,
+            )
             for a, ne, c, sf, ho in zip(
                 new_effects[len(base_model.applied()) :], named, cis, se_fit, heldout, strict=False
             )
@@ -469,6 +484,7 @@ def _diagnose(
                 rms_new,
                 dict(se_fit[-1]),
                 dict(heldout[-1]),
+                mimic,
             )
         )
         named_effects = new_effects

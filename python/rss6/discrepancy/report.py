@@ -24,6 +24,8 @@ from rss6.discrepancy import figures, stats
 from rss6.discrepancy.detect import AXES, Detection
 
 __all__ = [
+    "AMBIGUOUS",
+    "NEARLY_AMBIGUOUS",
     "Ambiguity",
     "CandidateRow",
     "DiscrepancyReport",
@@ -36,6 +38,11 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
+#: |ρ| above which two candidates that both pass a round's screen are reported as ambiguous.
+AMBIGUOUS = 0.9
+#: |ρ| from which a named effect's closest mimic is mentioned in the verdict (docs/discrepancy.md,
+#: "Confounded pairs": at the threshold the noise decides between "named" and "ambiguous").
+NEARLY_AMBIGUOUS = 0.85
 _UNITS = (1e3, 1e3, 1e3, 1e3, 1e3, 1e3)  # m → mm, rad → mrad
 
 
@@ -47,7 +54,10 @@ class NamedEffect:
     (6,): held-out residual RMS per axis with the effects named so far (m, rad); ``se`` {name:
     standard error} of ``params`` from the fitting run alone (the larger of Wald and the
     sandwiches); ``heldout`` {name: (value, standard error)}: the held-out run's own refit, empty
-    when it could not run (``ci`` combines the two runs: docs/discrepancy.md, "Intervals")."""
+    when it could not run (``ci`` combines the two runs: docs/discrepancy.md, "Intervals");
+    ``closest_mimic`` (label, |ρ|): of the candidates that also passed the round's screen, the one
+    whose signature it shares most (None when it passed alone) — at |ρ| ≥
+    :data:`NEARLY_AMBIGUOUS` the verdict says so: a second excitation would confirm the name."""
 
     name: str
     scope: str
@@ -57,6 +67,14 @@ class NamedEffect:
     gap_after: F64
     se: dict[str, float] = field(default_factory=dict)
     heldout: dict[str, tuple[float, float]] = field(default_factory=dict)
+    closest_mimic: tuple[str, float] | None = None
+
+    @property
+    def nearly_ambiguous(self) -> bool:
+        """Named, but its closest mimic's |ρ| is within reach of :data:`AMBIGUOUS` (≥
+        :data:`NEARLY_AMBIGUOUS`): on another excitation or noise draw the pair may be reported
+        ambiguous instead."""
+        return self.closest_mimic is not None and self.closest_mimic[1] >= NEARLY_AMBIGUOUS
 
 
 @dataclass(frozen=True)
@@ -135,6 +153,14 @@ def unexplained(detection: Detection, top: int = 3) -> Unexplained | None:
     return Unexplained(detection.axes, peak, tuple(names))
 
 
+def _named_text(e: NamedEffect) -> str:
+    text = f"{e.name} ({e.scope})"
+    if e.nearly_ambiguous and e.closest_mimic is not None:
+        other, rho = e.closest_mimic
+        text += f" (nearly ambiguous with {other}, |ρ| {rho:.2f})"
+    return text
+
+
 def _rms(r: F64) -> F64:
     return np.asarray(np.sqrt(np.mean(r * r, axis=0)), dtype=np.float64)
 
@@ -169,7 +195,7 @@ class DiscrepancyReport:
         """One line: "no missing effect", "named: …", "ambiguous: …", "unexplained discrepancy: …"."""
         parts = []
         if self.named:
-            parts.append("named: " + ", ".join(f"{e.name} ({e.scope})" for e in self.named))
+            parts.append("named: " + ", ".join(_named_text(e) for e in self.named))
         if self.ambiguous:
             parts.append(
                 "ambiguous: "
@@ -350,7 +376,7 @@ def ambiguities(
     sigma: ArrayLike | None = None,
     nuisance: ArrayLike | None = None,
     describe: Callable[[int], str] | None = None,
-    threshold: float = 0.9,
+    threshold: float = AMBIGUOUS,
 ) -> list[Ambiguity]:
     """The ambiguous sets among the candidates ``among`` (:func:`stats.ambiguous_groups`), each with
     the largest |ρ| inside it (the Fisher correlations ``corr`` of ``names``) and where the first two
