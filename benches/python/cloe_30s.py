@@ -5,12 +5,14 @@ commands, per-tick Jacobians while iterating). Prints the wall time of CLOE alon
 and simulations, and the per-iteration cost. Run on an idle machine.
 
     python benches/python/cloe_30s.py [--seed 0] [--periods 3] [--prior-log-std 1.0] [--trace]
-        [--parameters fc1,fc2,...]
+        [--parameters fc1,fc2,...] [--designed]
 
 ``--prior-log-std``: σ of CLOE's log-prior around the linear start (default 1.0, CLOE's own); a
 failure to converge prints the cost history instead of raising. ``--trace``: Φ and the wall time
 after every accepted iteration. ``--parameters``: estimate only these quantities (the others stay
 at the linear start; l_p stays at the drive's value), e.g. the friction and gains alone.
+``--designed``: three periods of the designed exciting trajectory instead of a random feasible one
+(the default, thesis-size box 10⁻³ m/s, 5·10⁻³ rad/s).
 """
 
 from __future__ import annotations
@@ -30,6 +32,10 @@ def main() -> None:
     ap.add_argument("--prior-log-std", type=float, default=1.0)
     ap.add_argument("--trace", action="store_true", help="print Φ after every iteration")
     ap.add_argument("--parameters", default="base", help="comma-separated names, or base")
+    ap.add_argument(
+        "--designed", action="store_true",
+        help="the exciting trajectory rss6 identify --simulate designs (30 generations)",
+    )  # fmt: skip
     args = ap.parse_args()
     params: str | list[str] = (
         "base" if args.parameters == "base" else [p.strip() for p in args.parameters.split(",")]
@@ -47,8 +53,12 @@ def main() -> None:
         implicit_friction=True,
     )
     tr = robot.truth()
-    exc = identify.random_excitation(
-        kp, harmonics=5, f0=0.1, seed=args.seed, amplitude=(0.001, 0.005)
+    exc = (
+        identify.excitation(kp, seed=args.seed, maxiter=30)
+        if args.designed
+        else identify.random_excitation(
+            kp, harmonics=5, f0=0.1, seed=args.seed, amplitude=(0.001, 0.005)
+        )
     )
     data = identify.collect(
         robot,

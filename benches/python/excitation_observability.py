@@ -34,7 +34,9 @@ def main() -> None:
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth() if args.at == "truth" else identify_sim.initial_model()
     t0 = time.perf_counter()
-    designed = identify.excitation(kp, seed=args.seed)
+    # the design in the random trajectories' box (the default before the ninth session): a
+    # comparison of shapes of one size
+    designed = identify.excitation(kp, seed=args.seed, amplitude=(0.001, 0.005))
     t_design = time.perf_counter() - t0
     excs = [designed] + [identify.random_excitation(kp, seed=100 + k) for k in range(args.n)]
     rows = []

@@ -65,7 +65,7 @@ def estimate_from_initial(
     *,
     friction_law: str = "implicit",
     lp: float | None = None,
-    max_iterations: int = 20,
+    max_iterations: int = 40,
     derivative_filter: float = DRIVE_DERIVATIVE_FILTER,
     friction_smoothing: float = FRICTION_SMOOTHING,
     parameters: str | list[str] = "base",
@@ -78,7 +78,8 @@ def estimate_from_initial(
     the recorded commands; the result's ``guess`` and ``rms_before`` are the initial model's.
     ``pot_noise``: passed to :func:`rss6.identify.cloe` — by default the model's drive replays the
     potentiometer noise estimated from the recorded readings (docs/identification.md, "Replaying
-    the potentiometer noise"). Raises what :func:`rss6.identify.cloe` raises."""
+    the potentiometer noise"). ``max_iterations``: 40, as ``rss6 identify --simulate`` and the
+    identification study give the stick–slip law. Raises what :func:`rss6.identify.cloe` raises."""
     dp0, pid0 = initial_model()
     t_f = derivative_filter
     if friction_law == "tanh":
@@ -149,8 +150,11 @@ def run(
     files: list[Path] = []
     elapsed: dict[str, float] = {}
     harmonics, f0, gens, iters, n_val = (3, 0.5, 5, 10, 2) if quick else (5, 0.1, 30, 20, 10)
-    # Free-coefficient bounds (rates, m/s and rad/s). Larger ones make the visual-PID loop on the
-    # rapier plant leave its workspace more often (docs/identification.md).
+    # Free-coefficient bounds (rates, m/s and rad/s): the design's (the default of
+    # `identify.excitation`), and the random validation trajectories' — smaller for thesis-size
+    # runs: larger random ones made the visual-PID loop on the rapier plant leave its workspace
+    # (docs/identification.md).
+    design_amplitude = (0.002, 0.01)
     amplitude = (0.002, 0.01) if quick else (0.001, 0.005)
     use_rapier = plant == "rapier" or (plant == "auto" and rss6.Plant is not None)
     t_f = 0.0 if as_printed else DRIVE_DERIVATIVE_FILTER
@@ -190,7 +194,7 @@ def run(
         seed=seed,
         maxiter=gens,
         popsize=5 if quick else 8,
-        amplitude=amplitude,
+        amplitude=design_amplitude,
         progress=None if b is None else (lambda g, o: b.update(1)),
     )
     if b is not None:

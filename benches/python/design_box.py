@@ -1,0 +1,106 @@
+"""How large may the exciting trajectory be? The design of ``rss6 identify --simulate`` (DE on the
+torque regressor's O_in, 30 generations) inside two boxes of the free coefficients, each
+collected on the rapier plant (Table 5.2 truth, stick–slip law at 48 solver iterations,
+identification drive) and identified by CLOE from the thesis's initial model through the linear
+start (l_p known): the setting of the CLI, for several seeds.
+
+Prints per box and seed the regressor's O_in, CLOE's iterations and seconds, and for f_c, f_v and
+(l_i, l_d) the RMS of the relative errors against the truth and the median reported σ; then the
+medians over the seeds that converged and how many did not (CLOE's ``IdentificationError``). Camera
+and potentiometer noise differ per seed, the plant and truth do not.
+
+    python benches/python/design_box.py [--seeds 10] [--start 0] [--boxes 0.001,0.005 0.002,0.01]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import rss6
+from rss6 import identify, identify_sim
+from rss6.identify_report import quantities
+
+GROUPS = {
+    "f_c": lambda n: n.startswith("fc"),
+    "f_v": lambda n: n.startswith("fv"),
+    "l_i, l_d": lambda n: n in ("li", "ld"),
+}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--start", type=int, default=0, help="first seed")
+    ap.add_argument("--boxes", nargs="+", default=["0.001,0.005", "0.002,0.01"])
+    args = ap.parse_args()
+    kp = rss6.KinematicParams.nominal()
+    dp_true, pid_true = identify.table_5_2_truth()
+    names = identify.parameter_names()
+    truth = dict(zip(names, quantities(dp_true, pid_true), strict=True))
+    t_f = identify_sim.DRIVE_DERIVATIVE_FILTER
+    summary: dict[str, list[list[float]]] = {}
+    failed: dict[str, int] = {}
+    for box in args.boxes:
+        lo, hi = (float(v) for v in box.split(","))
+        rows = summary.setdefault(box, [])
+        for seed in range(args.start, args.start + args.seeds):
+            exc = identify.excitation(kp, seed=seed, maxiter=30, amplitude=(lo, hi))
+            robot = rss6.Plant(
+                kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f,
+                implicit_friction=True, solver_iterations=identify_sim.IMPLICIT_PLANT_ITERATIONS,
+            )  # fmt: skip
+            tr = robot.truth()
+            data = identify.collect(
+                robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
+                target_in_effector=tr["target_in_effector"],
+            )  # fmt: skip
+            if data.fault is not None:
+                print(f"box {box} seed {seed}: the plant faulted ({data.fault})")
+                continue
+            t0 = time.perf_counter()
+            try:
+                res = identify_sim.estimate_from_initial(data, kp, lp=pid_true[0])
+            except rss6.IdentificationError as err:
+                failed[box] = failed.get(box, 0) + 1
+                print(f"box {box} seed {seed}: {str(err)[:60]}…", flush=True)
+                continue
+            secs = time.perf_counter() - t0
+            est = dict(zip(names, quantities(res.dynamics, res.pid), strict=True))
+            std = dict(zip(res.identified, res.relative_std, strict=True))
+            row: list[float] = [exc.observability, res.iterations, secs]
+            parts = []
+            for g, keep in GROUPS.items():
+                sel = [n for n in names if keep(n) and n in std]
+                err = float(np.sqrt(np.mean([(est[n] / truth[n] - 1) ** 2 for n in sel])))
+                sig = float(np.median([std[n] for n in sel]))
+                row += [err, sig]
+                parts.append(f"{g}: RMS error {100 * err:.1f} %, σ {100 * sig:.1f} %")
+            ld = est["ld"] / truth["ld"] - 1
+            row.append(abs(ld))
+            rows.append(row)
+            print(
+                f"box {box} seed {seed}: O_in {exc.observability:.4f}, {res.iterations} iterations "
+                f"({res.converged_by}), {secs:.1f} s, χ² {res.reduced_chi2:.2f}; "
+                + "; ".join(parts)
+                + f"; l_d {100 * ld:+.1f} %",
+                flush=True,
+            )
+    print("\nmedians over the seeds")
+    for box, rows in summary.items():
+        if not rows:
+            continue
+        m = np.median(np.array(rows), axis=0)
+        print(
+            f"box {box} ({len(rows)} converged, {failed.get(box, 0)} not): O_in {m[0]:.4f}, {m[1]:.0f} iterations, {m[2]:.1f} s; "
+            + "; ".join(
+                f"{g}: RMS error {100 * m[3 + 2 * k]:.1f} %, σ {100 * m[4 + 2 * k]:.1f} %"
+                for k, g in enumerate(GROUPS)
+            )
+            + f"; |l_d error| {100 * m[9]:.1f} % (worst {100 * max(r[9] for r in rows):.1f} %)"
+        )
+
+
+if __name__ == "__main__":
+    main()
