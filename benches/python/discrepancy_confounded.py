@@ -74,7 +74,7 @@ def main() -> None:
     with ProcessPoolExecutor(args.workers) as pool:
         records = list(pool.map(_case, specs))
     truth = PAYLOAD if args.hidden == "payload" else GAINS
-    flagged = named_payload = named_other = faulted = 0
+    flagged = named_payload = named_other = nearly = faulted = 0
     for r in records:
         if r.get("kind") == "faulted":
             faulted += 1
@@ -86,6 +86,7 @@ def main() -> None:
         named = r["named"]
         named_payload += named.startswith(truth)
         named_other += named != "none" and not named.startswith(truth)
+        nearly += named != "none" and "nearly ambiguous" in r["verdict"]
         mimic = re.search(r"round 1: (.+?)'s closest mimic (.+?), \|ρ\| ([0-9.]+)", r["notes"])
         closest = f"{mimic[1]} ~ {mimic[2]} |ρ| {mimic[3]}" if mimic else "—"
         print(
@@ -107,7 +108,10 @@ def main() -> None:
         )
         + f"({faulted} faulted), {time.perf_counter() - t0:.0f} s on {args.workers} workers:\n"
         f"  payload and drive gains flagged ambiguous (|ρ| > 0.9): {flagged}/{n}\n"
-        f"  {truth} named first: {named_payload}/{n}; another effect named: {named_other}/{n}"
+        f"  {truth} named first: {named_payload}/{n}; another effect named: {named_other}/{n}\n"
+        f"  named with the verdict's 'nearly ambiguous' (closest mimic |ρ| ≥ 0.85): {nearly}/"
+        f"{named_payload + named_other}\n"
+        f"  flagged or nearly: {flagged + nearly}/{n}"
     )
 
 
