@@ -318,6 +318,11 @@ def test_report_saves_markdown_and_figures(
     assert dataclasses.replace(rep, named=[far], ambiguous=[]).verdict == (
         "named: coulomb friction (joint 1)"
     )
+    assert (
+        "closest mimic backlash (joint 1) (|ρ| 0.84)"
+        in dataclasses.replace(rep, named=[far]).table()
+    )
+    assert "closest mimic" not in rep.table()  # it passed its round alone
     assert rep.verdict in rep.table()
     assert "f_c=0.02 [0.018, 0.022]" in rep.table()
     # The named effect with its interval and the held-out run's own estimate.

@@ -267,7 +267,12 @@ class DiscrepancyReport:
                     else f"{k}={v:.4g}"
                     for k, v in e.params.items()
                 )
-                lines.append(f"  {e.name} ({e.scope}): {est}; held-out p = {e.p_value:.3g}")
+                mimic = (
+                    f"; closest mimic {e.closest_mimic[0]} (|ρ| {e.closest_mimic[1]:.2f})"
+                    if e.closest_mimic is not None
+                    else ""
+                )
+                lines.append(f"  {e.name} ({e.scope}): {est}; held-out p = {e.p_value:.3g}{mimic}")
         if self.notes:
             lines += ["", "notes:", *(f"  {n}" for n in self.notes)]
         for amb in self.ambiguous:
