@@ -39,7 +39,6 @@ def main() -> None:
     dp_true, pid_true = identify.table_5_2_truth()
     names = identify.parameter_names()
     truth = dict(zip(names, quantities(dp_true, pid_true), strict=True))
-    t_f = identify_sim.DRIVE_DERIVATIVE_FILTER
     summary: dict[str, list[list[float]]] = {}
     failed: dict[str, int] = {}
     for box in args.boxes:
@@ -47,15 +46,7 @@ def main() -> None:
         rows = summary.setdefault(box, [])
         for seed in range(args.start, args.start + args.seeds):
             exc = identify.excitation(kp, seed=seed, maxiter=30, amplitude=(lo, hi))
-            robot = rss6.Plant(
-                kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f,
-                implicit_friction=True, solver_iterations=identify_sim.IMPLICIT_PLANT_ITERATIONS,
-            )  # fmt: skip
-            tr = robot.truth()
-            data = identify.collect(
-                robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
-                target_in_effector=tr["target_in_effector"],
-            )  # fmt: skip
+            data = identify_sim.collect_on_plant(exc, seed=seed)
             if data.fault is not None:
                 print(f"box {box} seed {seed}: the plant faulted ({data.fault})")
                 continue

@@ -47,15 +47,7 @@ def main() -> None:
     truth = dict(zip(identify.parameter_names(), quantities(dp_true, pid_true), strict=True))
 
     def run(exc: identify.Excitation) -> identify.IdentificationResult:
-        robot = rss6.Plant(
-            kp, dp_true, pid=pid_true, seed=args.seed, drive_derivative_filter=t_f,
-            implicit_friction=True, solver_iterations=identify_sim.IMPLICIT_PLANT_ITERATIONS,
-        )  # fmt: skip
-        tr = robot.truth()
-        data = identify.collect(
-            robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
-            target_in_effector=tr["target_in_effector"],
-        )  # fmt: skip
+        data = identify_sim.collect_on_plant(exc, seed=args.seed)
         return identify_sim.estimate_from_initial(data, kp, lp=pid_true[0])
 
     def seen(exc: identify.Excitation, res: identify.IdentificationResult) -> float:

@@ -59,6 +59,25 @@ def initial_model() -> tuple[rss6.DynamicParams, tuple[float, float, float]]:
     return rss6.DynamicParams.from_dict(d), INITIAL_PID
 
 
+def collect_on_plant(exc: identify.Excitation, *, seed: int = 0) -> identify.IdentificationData:
+    """One identification run of ``exc`` on the robot of ``rss6 identify --simulate``: the rapier
+    plant with :func:`rss6.identify.table_5_2_truth`, the drive's derivative filter and the
+    stick–slip law at :data:`IMPLICIT_PLANT_ITERATIONS`, camera and potentiometer noise of
+    ``seed``; collected through its true sensor and target frames (the benches that compare
+    trajectories use it). Check ``.fault`` before identifying."""
+    kp = rss6.KinematicParams.nominal()
+    dp_true, pid_true = identify.table_5_2_truth()
+    robot = rss6.Plant(
+        kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=DRIVE_DERIVATIVE_FILTER,
+        implicit_friction=True, solver_iterations=IMPLICIT_PLANT_ITERATIONS,
+    )  # fmt: skip
+    tr = robot.truth()
+    return identify.collect(
+        robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
+        target_in_effector=tr["target_in_effector"],
+    )  # fmt: skip
+
+
 def estimate_from_initial(
     d: identify.IdentificationData,
     kp: rss6.KinematicParams,
