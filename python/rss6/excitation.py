@@ -270,8 +270,9 @@ def excitation(
     ``progress(generation, best O_in)`` after each generation; ``maxiter`` generations of ``popsize`` ×
     dimension candidates; ``amplitude`` bounds the free coefficients (rates, m/s and rad/s) for
     translations and rotations — the limits decide what is feasible inside it (the default doubled
-    in the ninth session: the design's O_in 1.3× and the loop's 1.3–2×, docs/identification.md;
-    a box of 2.5·10⁻³, 1.25·10⁻² finds no feasible trajectory for some seeds); other keywords set the limits (``start``, ``stroke``,
+    in the ninth session: O_in 1.4× and, on the plant, the friction's errors a third to a half
+    smaller, docs/identification.md; at 2.5·10⁻³, 1.25·10⁻² 3 seeds of 10 found no feasible
+    trajectory in 30 generations); other keywords set the limits (``start``, ``stroke``,
     ``stroke_margin``, ``max_joint_rate``, ``samples``). Raises :class:`rss6.IdentificationError` if no
     feasible trajectory was found.
     """
