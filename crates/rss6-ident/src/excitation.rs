@@ -372,13 +372,14 @@ pub fn aliases(h: &DMatrix<f64>, base: &[usize]) -> Vec<(usize, Vec<f64>, f64)> 
         .collect()
 }
 
-/// A trajectory is sampled over one period and then held at rest at its end pose (= its start).
+/// The trajectory repeats with its period (a run of N periods excites the robot N times, each
+/// period starting and ending at rest at the start pose); before t = 0 it holds the start at rest.
 impl Trajectory for Excitation {
     fn sample(&self, t: f64) -> Reference {
-        if t >= self.period() {
-            Reference::hold(&self.at(0.0).pose)
+        if t > 0.0 {
+            self.at(t % self.period())
         } else {
-            self.at(t.max(0.0))
+            Reference::hold(&self.at(0.0).pose)
         }
     }
 }

@@ -37,10 +37,20 @@ fn an_at_rest_trajectory_starts_and_ends_at_rest_at_its_pose() {
     let (a, b, c) = (e.at(t - h), e.at(t), e.at(t + h));
     assert!(((c.pose - a.pose) / (2.0 * h) - b.pose_dot).amax() < 1e-8);
     assert!(((c.pose_dot - a.pose_dot) / (2.0 * h) - b.pose_ddot).amax() < 1e-7);
-    // After one period the reference holds the start pose at rest.
-    let held = e.sample(e.period() + 1.0);
-    assert_eq!(held.pose_dot, Vec6::zeros());
-    assert!((held.pose - start).amax() < 1e-15);
+    // The reference repeats with the period (a run of several periods excites every one), and
+    // holds the start at rest before t = 0.
+    for t in [1.3, 4.1] {
+        let (first, third) = (e.sample(t), e.sample(t + 2.0 * e.period()));
+        assert!((third.pose - first.pose).amax() < 1e-12, "t = {t}");
+        assert!((third.pose_dot - first.pose_dot).amax() < 1e-10, "t = {t}");
+        assert!(
+            (first.pose - start).amax() > 1e-4,
+            "t = {t}: the trajectory moves"
+        );
+    }
+    let before = e.sample(-1.0);
+    assert_eq!(before.pose_dot, Vec6::zeros());
+    assert!((before.pose - start).amax() < 1e-15);
     assert!(Excitation::at_rest(1, 0.1, &start, &[]).is_err());
     assert!(Excitation::at_rest(5, 0.1, &start, &[0.0; 5]).is_err());
 }
