@@ -13,6 +13,9 @@ a right σ gives a ratio anywhere in about [0.68, 1.83]. Camera and potentiomete
 seed, the plant and truth do not.
 
     python benches/python/design_box.py [--seeds 10] [--start 0] [--boxes 0.001,0.005 0.002,0.01]
+        [--periods 1]
+
+``--periods N``: collect N periods of each design (the CLI collects one) and identify on all.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--start", type=int, default=0, help="first seed")
     ap.add_argument("--boxes", nargs="+", default=["0.001,0.005", "0.002,0.01"])
+    ap.add_argument("--periods", type=int, default=1)
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
@@ -58,7 +62,7 @@ def main() -> None:
                 print(f"box {box} seed {seed}: no design: {str(err)[:70]}…", flush=True)
                 continue
             t_design = time.perf_counter() - t0
-            data = identify_sim.collect_on_plant(exc, seed=seed)
+            data = identify_sim.collect_on_plant(exc, seed=seed, periods=args.periods)
             if data.fault is not None:
                 print(f"box {box} seed {seed}: the plant faulted ({data.fault})")
                 continue

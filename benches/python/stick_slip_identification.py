@@ -1,10 +1,15 @@
 """CLOE with the stick–slip law from spread starts (docs/identification.md, "Stick–slip").
 
-python benches/python/stick_slip_identification.py multistart [--n 25]
+python benches/python/stick_slip_identification.py multistart [--n 25] [--pot-noise recorded]
+        [--smooth-first EPS] [--hops DELTA ...]
     the twin-as-robot with the implicit law and Table 4.1 pixel noise, the 2 s test trajectory
     of python/tests/test_identify_stick_slip.py; N starts with every quantity but l_p moved by a
     seeded factor in [0.7, 1.3]; CLOE on the recorded commands holding l_p. Prints each start's
     iterations, reduced χ² and largest |error|/σ (quantities with σ < 10 %), then a summary.
+    Remedies tried for the local minima: --pot-noise recorded (the model replays the robot's
+    potentiometer noise), --smooth-first EPS (CLOE with tanh friction of width EPS rad/s first,
+    then stick–slip from its estimate), --hops (after CLOE, CLOE again from the estimate with every
+    identified quantity moved by the log-factor DELTA, keeping the lower χ², once per DELTA).
 
 python benches/python/stick_slip_identification.py spread [--robot rapier|twin] [--quick]
         [--spread 0.3] [--hold-lp] [--commands recorded|simulated] [--from-initial] [--iterations 30]
@@ -46,7 +51,16 @@ def _collect(robot: Any, exc: identify.Excitation, kp: rss6.KinematicParams) -> 
     )  # fmt: skip
 
 
-def multistart(n_starts: int) -> None:
+def _hop(r: Any, names: list[str], delta: float) -> tuple[Any, Any]:
+    """The estimate of `r` with every identified quantity moved by the log-factor `delta`."""
+    psi, _, _ = _rss6.cloe_psi(r.dynamics, r.pid)
+    for n in r.identified:
+        psi[names.index(n)] += delta
+    _, gdp, gpid = _rss6.cloe_psi(r.dynamics, r.pid, list(psi))
+    return gdp, gpid
+
+
+def multistart(n_starts: int, pot_noise: str, smooth_first: float, hops: list[float]) -> None:
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
     names = identify.parameter_names()
@@ -57,16 +71,27 @@ def multistart(n_starts: int) -> None:
     )  # fmt: skip
     d = _collect(robot, exc, kp)
     psi_t, _, _ = _rss6.cloe_psi(dp, pid)
+    common: dict[str, Any] = {
+        "commands": "recorded", "hold": ["lp"], "max_iterations": 40, "per_tick_jacobians": True,
+        "derivative_filter": DRIVE_DERIVATIVE_FILTER,
+    }  # fmt: skip
     chis, zs, its, worst = [], [], [], dict.fromkeys(("fc1", "fc3", "li", "ld"), 0.0)
     t0 = time.perf_counter()
     for k in range(n_starts):
         _, gdp, gpid = _rss6.cloe_psi(dp, pid, _moved(psi_t, names, 0.3, 100 + k, "lp"))
         try:
-            r = identify.cloe(
-                d, kp, gdp, gpid, commands="recorded", hold=["lp"], max_iterations=40,
-                per_tick_jacobians=True, **LAW,
-            )  # fmt: skip
-        except rss6.IdentificationError as e:
+            if smooth_first > 0:
+                r0 = identify.cloe(d, kp, gdp, gpid, friction_smoothing=smooth_first, **common)
+                gdp, gpid = r0.dynamics, r0.pid
+            law = {"implicit_friction": True, "pot_noise": pot_noise}
+            r = identify.cloe(d, kp, gdp, gpid, **law, **common)
+            n_it, path = r.iterations, [r.reduced_chi2]
+            for delta in hops:
+                h = identify.cloe(d, kp, *_hop(r, names, delta), **law, **common)
+                n_it += h.iterations
+                path.append(h.reduced_chi2)
+                r = h if h.reduced_chi2 < r.reduced_chi2 else r
+        except (rss6.IdentificationError, rss6.InvalidInputError) as e:
             print(f"{k:3d} FAILED {str(e)[:120]}")
             continue
         pe, _, _ = _rss6.cloe_psi(r.dynamics, r.pid)
@@ -75,10 +100,11 @@ def multistart(n_starts: int) -> None:
         z = max(abs(err[n]) / s for n, s in rs.items() if s < 0.1)
         chis.append(r.reduced_chi2)
         zs.append(z)
-        its.append(r.iterations)
+        its.append(n_it)
         for n in worst:
             worst[n] = max(worst[n], abs(err[n]))
-        print(f"{k:3d} iterations {r.iterations:2d}  χ² {r.reduced_chi2:.3f}  max|err|/σ {z:.2f}")
+        hop = f"  (after each hop: {' → '.join(f'{c:.3f}' for c in path)})" if hops else ""
+        print(f"{k:3d} iterations {n_it:2d}  χ² {r.reduced_chi2:.3f}  max|err|/σ {z:.2f}{hop}")
     best = min(chis)
     print(
         f"{len(chis)}/{n_starts} stopped by the rules; χ² median {np.median(chis):.3f} "
@@ -151,6 +177,9 @@ def main() -> None:
     sub = p.add_subparsers(dest="mode", required=True)
     m = sub.add_parser("multistart")
     m.add_argument("--n", type=int, default=25)
+    m.add_argument("--pot-noise", choices=("none", "recorded"), default="none")
+    m.add_argument("--smooth-first", type=float, default=0.0, metavar="EPS")
+    m.add_argument("--hops", type=float, nargs="*", default=[], metavar="DELTA")
     s = sub.add_parser("spread")
     s.add_argument("--robot", choices=("rapier", "twin"), default="rapier")
     s.add_argument("--quick", action="store_true")
@@ -161,7 +190,7 @@ def main() -> None:
     s.add_argument("--iterations", type=int, default=30)
     a = p.parse_args()
     if a.mode == "multistart":
-        multistart(a.n)
+        multistart(a.n, a.pot_noise, a.smooth_first, a.hops)
     else:
         spread_run(a.robot, a.quick, a.spread, a.hold_lp, a.commands, a.from_initial, a.iterations)
 

@@ -59,12 +59,14 @@ def initial_model() -> tuple[rss6.DynamicParams, tuple[float, float, float]]:
     return rss6.DynamicParams.from_dict(d), INITIAL_PID
 
 
-def collect_on_plant(exc: identify.Excitation, *, seed: int = 0) -> identify.IdentificationData:
+def collect_on_plant(
+    exc: identify.Excitation, *, seed: int = 0, periods: int = 1
+) -> identify.IdentificationData:
     """One identification run of ``exc`` on the robot of ``rss6 identify --simulate``: the rapier
     plant with :func:`rss6.identify.table_5_2_truth`, the drive's derivative filter and the
     stick–slip law at :data:`IMPLICIT_PLANT_ITERATIONS`, camera and potentiometer noise of
-    ``seed``; collected through its true sensor and target frames (the benches that compare
-    trajectories use it). Check ``.fault`` before identifying."""
+    ``seed``; collected through its true sensor and target frames over ``periods`` periods (the
+    benches that compare trajectories use it). Check ``.fault`` before identifying."""
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
     robot = rss6.Plant(
@@ -74,7 +76,7 @@ def collect_on_plant(exc: identify.Excitation, *, seed: int = 0) -> identify.Ide
     tr = robot.truth()
     return identify.collect(
         robot, exc, kp_model=kp, sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
+        target_in_effector=tr["target_in_effector"], periods=periods,
     )  # fmt: skip
 
 
