@@ -322,6 +322,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         as_printed=args.as_printed,
         variation=not args.no_variation,
         friction_law=args.friction_law or ("tanh" if args.as_printed else "implicit"),
+        periods=args.periods,
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")
@@ -476,6 +477,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--quick",
         action="store_true",
         help="2 s trajectory, 10 CLOE iterations, 2 validation runs: under a minute",
+    )
+    i.add_argument(
+        "--periods",
+        type=int,
+        default=None,
+        help="periods of the exciting trajectory in the identification run (default 3; 1 with "
+        "--quick)",
     )
     i.add_argument(
         "--plant",

@@ -72,6 +72,11 @@ _STOP_RULES = {
 }
 
 
+def _periods(n: float) -> str:
+    k = round(n)
+    return f"{k} period" if k == 1 else f"{k} periods"
+
+
 @dataclass
 class IdentifyReport:
     """Everything ``rss6 identify --simulate`` found and wrote."""
@@ -267,7 +272,8 @@ class IdentifyReport:
                         f"{self.loop_observability.condition:.4g} (camera poses / noise)"
                     )
                 ),
-                f"2. identification loop: {self.data.frames} camera frames"
+                f"2. identification loop: {self.data.frames} camera frames in "
+                f"{self.data.duration:.0f} s ({_periods(self.data.duration / e.duration)})"
                 + (f", visual-PID fault {self.data.fault}" if self.data.fault else ""),
                 (
                     f"3. CLOE: {len(self.identified)} quantities estimated, "

@@ -192,6 +192,7 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
     for name in ("platform.Sxx", "wrench1.Iz", "link6.It", "fc1", "fv6", "lp", "li", "ld"):
         assert name in text
     assert "cost history" in text
+    assert "camera frames in 2 s (1 period)" in text  # --quick: one period of the 2 s design
     # §5.6.3's validation run with other outer-loop gains is in Table 5.4.
     assert "outer gains k_p, k_i, k_d = 0.45, 1.6, 0.002" in text
     for f in ("fig5_7_excitation.png", "fig5_8_identification.png", "fig5_9_validation.png"):
@@ -200,6 +201,8 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
         log = rss6.logs.read_log(out / f)
         assert log is not None
     assert run("identify").returncode == 2  # --simulate is the only mode
+    bad = run("identify", "--simulate", "--periods", "0", "--quiet", "--out", str(out / "bad"))
+    assert bad.returncode == 1 and "periods must be >= 1" in bad.stderr, bad.stderr
 
 
 def test_identify_simulate_quick_with_tanh_friction_does_not_converge_and_says_so(tmp_path):

@@ -158,6 +158,25 @@ def test_noise_free_round_trip_on_the_twin(kp: rss6.KinematicParams, tmp_path) -
     assert np.allclose(res.dynamics.to_vector()[28:52], guess[0].to_vector()[28:52], rtol=1e-12)
 
 
+def test_collect_of_several_periods_excites_every_period(kp: rss6.KinematicParams) -> None:
+    """`collect(periods=3)` follows the trajectory three times (until the tenth session the robot
+    stood still after the first period): the reference and the robot's pose repeat period by
+    period, and the noise-free twin's measured frames match the model's replay in every period."""
+    exc = _short_excitation(kp)
+    d = _collect(_twin(*_smooth_truth()), exc, periods=3)
+    assert d.duration == pytest.approx(3 * exc.duration)
+    assert d.tick_t is not None and d.reference_pose is not None and d.true_pose is not None
+    per = round(exc.duration / d.dt)
+    ref = d.reference_pose[: 3 * per].reshape(3, per, 6)
+    pose = d.true_pose[: 3 * per].reshape(3, per, 6)
+    for k in (1, 2):
+        assert np.abs(ref[k] - ref[0]).max() < 1e-12
+        # The robot moves as much in every period as in the first (measured ratio 1.00).
+        assert np.ptp(pose[k], axis=0).min() > 0.9 * np.ptp(pose[0], axis=0).min()
+    chi = identify.simulate(kp, *_smooth_truth(), exc, times=d.t, dt=d.dt, torque_limit=1e4)
+    assert np.abs(chi - d.measured).max() < 1e-9
+
+
 def test_identification_data_from_arrays_refuses_bad_input(kp: rss6.KinematicParams) -> None:
     exc = _short_excitation(kp)
     t = np.arange(5) * 0.033
