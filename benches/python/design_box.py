@@ -15,7 +15,8 @@ seed, the plant and truth do not.
     python benches/python/design_box.py [--seeds 10] [--start 0] [--boxes 0.001,0.005 0.002,0.01]
         [--periods 1]
 
-``--periods N``: collect N periods of each design (the CLI collects one) and identify on all.
+``--periods N``: collect N periods of each design (the CLI collects three since the tenth session)
+and identify on all. ``--hops DELTA ...``: CLOE's hops (`identify.cloe(hops=...)`).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ def main() -> None:
     ap.add_argument("--start", type=int, default=0, help="first seed")
     ap.add_argument("--boxes", nargs="+", default=["0.001,0.005", "0.002,0.01"])
     ap.add_argument("--periods", type=int, default=1)
+    ap.add_argument("--hops", type=float, nargs="*", default=[], metavar="DELTA")
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
@@ -68,7 +70,9 @@ def main() -> None:
                 continue
             t0 = time.perf_counter()
             try:
-                res = identify_sim.estimate_from_initial(data, kp, lp=pid_true[0])
+                res = identify_sim.estimate_from_initial(
+                    data, kp, lp=pid_true[0], hops=tuple(args.hops)
+                )
             except rss6.IdentificationError as err:
                 failed[box] = failed.get(box, 0) + 1
                 print(f"box {box} seed {seed}: {str(err)[:60]}…", flush=True)
@@ -95,7 +99,9 @@ def main() -> None:
             print(
                 f"box {box} seed {seed}: design {t_design:.1f} s, O_in {exc.observability:.4f}, "
                 f"{res.iterations} iterations "
-                f"({res.converged_by}), {secs:.1f} s, χ² {res.reduced_chi2:.2f}; "
+                f"({res.converged_by}), {secs:.1f} s, χ² {res.reduced_chi2:.2f}"
+                + (f" (hops: {' → '.join(f'{c:.2f}' for c in res.hops)})" if res.hops else "")
+                + "; "
                 + "; ".join(parts)
                 + f"; l_d {100 * ld:+.1f} %",
                 flush=True,

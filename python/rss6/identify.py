@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rss6 import _rss6
+from rss6 import _rss6, identify_hops
 from rss6.errors import (
     IdentificationError,
     InvalidInputError,
@@ -24,6 +24,7 @@ from rss6.errors import (
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
     LinearGuess,
+    effect_kwargs,
     linear_guess,
     lowpass_measured,
     potentiometer_noise,
@@ -336,7 +337,7 @@ def simulate(
         commands=None if commands is None else np.asarray(commands, dtype=np.float64),
         outer_gains=outer_gains,
         pot_dither=None if pot_dither is None else np.asarray(pot_dither, dtype=np.float64),
-        **_effect_kwargs(gravity, load, offset_drift),
+        **effect_kwargs(gravity, load, offset_drift),
     )
     ts = np.asarray(ts)
     k = np.clip(np.searchsorted(ts, tt), 0, max(ts.size - 1, 0))
@@ -366,6 +367,8 @@ class IdentificationResult:
     ``"invisible"`` (Φ fell by < 10⁻² residual variances twice), ``"settled"`` (over the last five
     steps Φ fell by < 1 residual variance and no quantity moved by half its σ: creeping along the
     kinks of a stick–slip cost) or ``"stationary"`` (no step lowers Φ at a first-order optimum);
+    ``hops``: with :func:`cloe`'s ``hops``, the reduced χ² of the first run and after each hop
+    (``iterations`` and ``simulations`` then count every run);
     ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
     ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
     stopped at its sweep bound (0 expected; otherwise χ_s is approximate there); ``aliases``: for
@@ -393,6 +396,7 @@ class IdentificationResult:
     aliases: dict[str, tuple[dict[str, float], float]] = field(default_factory=dict)
     relative_std_wald: F64 = field(default_factory=lambda: np.zeros(0))
     converged_by: str = "tolerances"
+    hops: tuple[float, ...] = ()
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -409,23 +413,6 @@ class IdentificationResult:
             return float(self.relative_std[self.identified.index(name)])
         except ValueError:
             raise InvalidInputError(f"{name!r} was not identified") from None
-
-
-def _effect_kwargs(
-    gravity: ArrayLike | None,
-    load: tuple[float, ArrayLike, ArrayLike] | None,
-    offset_drift: ArrayLike | None,
-) -> dict[str, Any]:
-    """The model effects as the bindings take them (arrays of float64; None: absent)."""
-
-    def f64(a: ArrayLike | None) -> F64 | None:
-        return None if a is None else np.asarray(a, dtype=np.float64)
-
-    return {
-        "gravity": f64(gravity),
-        "load": None if load is None else (float(load[0]), f64(load[1]), f64(load[2])),
-        "offset_drift": f64(offset_drift),
-    }
 
 
 def cloe(
@@ -456,6 +443,7 @@ def cloe(
     measured_cutoff: float | None = None,
     pot_noise: str | ArrayLike = "none",
     settle_steps: int = 5,
+    hops: Sequence[float] = (),
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
@@ -491,11 +479,17 @@ def cloe(
     only: the result's model replays none on other runs) (docs/identification.md, "Replaying the potentiometer noise").
     ``settle_steps``: the *settled* stopping rule looks back over this many accepted steps
     (``converged_by == "settled"``: Φ fell by < 1 residual variance over them and no quantity moved
-    by half its σ — creeping along a stick–slip cost's kinks); 0 turns it off.
+    by half its σ — creeping along a stick–slip cost's kinks); 0 turns it off. ``hops``: after
+    converging, CLOE again from the estimate with every quantity but the held ones moved by the
+    log-factor δ, for each δ, keeping the lowest χ² (the stick–slip cost's local minima lie along
+    the loop's common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
     not produce, data whose run faulted (see :meth:`IdentificationData.before_fault`)."""
+    call = dict(locals())
+    if hops:
+        identify_hops.check(hops, parameters, hold)
     if data.fault is not None:
         raise IdentificationError(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
@@ -556,10 +550,10 @@ def cloe(
         outer_gains=data.outer_gains,
         pot_dither=dither,
         settle_steps=settle_steps,
-        **_effect_kwargs(gravity, load, offset_drift),
+        **effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]
-    return IdentificationResult(
+    result = IdentificationResult(
         dynamics=r["dynamics"],
         pid=(float(lp), float(li), float(ld)),
         identified=tuple(r["identified"]),
@@ -591,6 +585,11 @@ def cloe(
             # An array is this run's noise: other runs (validation) replay none.
             pot_noise=pot_noise if isinstance(pot_noise, str) else "none",
         ),
+    )
+    if not hops:
+        return result
+    return identify_hops.hopped(
+        result, hops, lambda g: cloe(**{**call, **g, "hops": ()}), parameters, hold
     )
 
 

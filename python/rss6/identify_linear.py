@@ -30,9 +30,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import optimize, signal
 
 from rss6 import _rss6
@@ -41,7 +42,7 @@ from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, 
 if TYPE_CHECKING:
     from rss6.identify import IdentificationData
 
-__all__ = ["LinearGuess", "linear_guess", "potentiometer_noise", "replayed_noise"]
+__all__ = ["LinearGuess", "effect_kwargs", "linear_guess", "potentiometer_noise", "replayed_noise"]
 
 _N_Q = 43
 _LP, _LI, _LD = 40, 41, 42
@@ -315,3 +316,20 @@ def lowpass_measured(data: IdentificationData, cutoff: float) -> np.ndarray:
     if len(t) <= pad:
         raise InvalidInputError(f"filtering χ_m needs more than {pad} frames, got {len(t)}")
     return np.asarray(signal.filtfilt(b, a, data.measured, axis=0), dtype=np.float64)
+
+
+def effect_kwargs(
+    gravity: ArrayLike | None,
+    load: tuple[float, ArrayLike, ArrayLike] | None,
+    offset_drift: ArrayLike | None,
+) -> dict[str, Any]:
+    """The model effects as the bindings take them (arrays of float64; None: absent)."""
+
+    def f64(a: ArrayLike | None) -> NDArray[np.float64] | None:
+        return None if a is None else np.asarray(a, dtype=np.float64)
+
+    return {
+        "gravity": f64(gravity),
+        "load": None if load is None else (float(load[0]), f64(load[1]), f64(load[2])),
+        "offset_drift": f64(offset_drift),
+    }

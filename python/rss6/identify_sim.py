@@ -92,6 +92,7 @@ def estimate_from_initial(
     parameters: str | list[str] = "base",
     progress: Callable[[int, float], Any] | None = None,
     pot_noise: str = "recorded",
+    hops: tuple[float, ...] = (),
 ) -> identify.IdentificationResult:
     """CLOE on ``d`` from :func:`initial_model`. ``friction_law="tanh"``: CLOE from the initial
     model with tanh friction (ε = ``friction_smoothing``). ``"implicit"``: the stick–slip law, a
@@ -100,7 +101,8 @@ def estimate_from_initial(
     ``pot_noise``: passed to :func:`rss6.identify.cloe` — by default the model's drive replays the
     potentiometer noise estimated from the recorded readings (docs/identification.md, "Replaying
     the potentiometer noise"). ``max_iterations``: 40, as ``rss6 identify --simulate`` and the
-    identification study give the stick–slip law. Raises what :func:`rss6.identify.cloe` raises."""
+    identification study give the stick–slip law. ``hops``: :func:`rss6.identify.cloe`'s, with the
+    implicit law (l_p held). Raises what :func:`rss6.identify.cloe` raises."""
     dp0, pid0 = initial_model()
     t_f = derivative_filter
     if friction_law == "tanh":
@@ -120,7 +122,7 @@ def estimate_from_initial(
         d, kp, g.dynamics, g.pid, parameters=parameters, max_iterations=max_iterations,
         per_tick_jacobians=True, progress=progress, commands="recorded",
         hold=[] if parameters != "base" else ["lp"], derivative_filter=t_f,
-        implicit_friction=True, pot_noise=pot_noise,
+        implicit_friction=True, pot_noise=pot_noise, hops=hops,
     )  # fmt: skip
     chi0 = identify.simulate(
         kp, dp0, pid0, d.reference, times=d.t, dt=d.dt, commands=d.frame_commands(),
