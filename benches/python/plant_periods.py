@@ -17,10 +17,8 @@ import argparse
 import numpy as np
 import rss6
 from rss6 import identify
+from rss6.discrepancy.benchmark import CAMERA_SIGMA
 from rss6.identify_sim import DRIVE_DERIVATIVE_FILTER, IMPLICIT_PLANT_ITERATIONS
-
-#: 1 / Table 4.1's camera noise (m, rad) per pose axis.
-WEIGHT = np.array([1 / 0.0096e-3] * 3 + [1 / np.radians(0.0261)] * 3)
 
 
 def main() -> None:
@@ -46,7 +44,7 @@ def main() -> None:
         kp, dp, pid, d.reference, times=d.t, dt=d.dt, commands=d.frame_commands(),
         derivative_filter=DRIVE_DERIVATIVE_FILTER, implicit_friction=True,
     )  # fmt: skip
-    e = (d.measured - chi) * WEIGHT
+    e = (d.measured - chi) / CAMERA_SIGMA
 
     def rms(m: np.ndarray) -> str:
         return " ".join(f"{v:5.2f}" for v in np.sqrt(np.mean(e[m] ** 2, axis=0)))
