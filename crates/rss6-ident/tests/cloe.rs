@@ -303,3 +303,79 @@ fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
     assert!(seq.0 == par.0 && seq.1 == par.1, "the paths differ");
     assert!(par.2 > seq.2 || seq.2 == 0, "no speculative trial ran");
 }
+
+/// Iterating on per-tick sensitivities (`CloeOptions::per_tick_jacobians`, ≈ 10⁻³ relative) ends
+/// where iterating on the exact ones does, to a small fraction of every σ: the stop is checked on
+/// the exact sensitivities and the σ come from them.
+#[test]
+fn per_tick_iterations_end_where_exact_ones_do() {
+    let truth = table_5_2_truth();
+    let exc = excitation();
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
+    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let noise = Normal::new(0.0, 0.0096e-3).unwrap();
+    let data = CloeData {
+        t: run.t.clone(),
+        measured: run
+            .chi
+            .iter()
+            .map(|c| c + Vec6::from_fn(|_, _| noise.sample(&mut rng)))
+            .collect(),
+    };
+    let names: Vec<String> = ["fv1", "fv2", "fc3", "li", "ld", "platform.Szz"]
+        .map(String::from)
+        .to_vec();
+    let guess = spread_guess(&truth, &names, 0.3, 4);
+    let mut res = Vec::new();
+    // The last two: tol_1 = 5 %, met at the second accepted step (Φ 99.9 → 95.7, the first on
+    // per-tick sensitivities when they are on).
+    for (per_tick, tol) in [(false, 1e-6), (true, 1e-6), (false, 0.05), (true, 0.05)] {
+        let opts = CloeOptions {
+            parameters: Some(names.clone()),
+            per_tick_jacobians: per_tick,
+            max_iterations: 30,
+            tol_cost: tol,
+            tol_step: tol,
+            ..CloeOptions::default()
+        };
+        res.push(cloe(&data, &cfg, &exc, &guess, &opts).unwrap());
+    }
+    let (exact, fast) = (&res[0], &res[1]);
+    // There the exact step still predicts Φ to fall by 1.6 residual variances (measured): on exact
+    // sensitivities the loose stop stands (nothing checks it), on per-tick ones the exact check
+    // refuses it once and the next step, on exact sensitivities, ends the run lower.
+    let (loose, loose_fast) = (&res[2], &res[3]);
+    let last = |r: &rss6_ident::CloeResult| *r.cost_history.last().unwrap();
+    println!(
+        "tol 5 %: exact {} iterations, Φ {:.4}; per tick {} iterations, Φ {:.4}",
+        loose.iterations,
+        last(loose),
+        loose_fast.iterations,
+        last(loose_fast)
+    );
+    assert_eq!(
+        loose_fast.iterations,
+        loose.iterations + 1,
+        "the per-tick stop was not checked"
+    );
+    assert!(last(loose_fast) < last(loose));
+    let all = Consistent::names();
+    let mut worst = (0.0_f64, 0.0_f64);
+    for (k, name) in exact.identified.iter().enumerate() {
+        let j = all.iter().position(|n| n == name).unwrap();
+        let z = (fast.psi[j] - exact.psi[j]).abs() / exact.relative_std[k];
+        let ds = (fast.relative_std[k] / exact.relative_std[k] - 1.0).abs();
+        println!("  {name:14} Δ/σ {z:.4}  σ ratio − 1 {ds:.2e}");
+        worst = (worst.0.max(z), worst.1.max(ds));
+    }
+    println!(
+        "exact: {} iterations, {} simulations, {:?}; per tick: {} iterations, {} simulations, {:?}; worst Δ/σ {:.4}, σ {:.2e}",
+        exact.iterations, exact.simulations, exact.converged_by,
+        fast.iterations, fast.simulations, fast.converged_by, worst.0, worst.1
+    );
+    // Measured: Δ ≤ 2·10⁻⁴ σ, σ equal within 3.2·10⁻⁵ relative; bounds ≈ 3×.
+    assert!(worst.0 < 6e-4, "estimates {:.2e} σ apart", worst.0);
+    assert!(worst.1 < 1e-4, "σ differ by {:.2e}", worst.1);
+}

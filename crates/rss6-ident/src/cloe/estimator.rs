@@ -27,7 +27,7 @@ use super::closed_loop::{simulate_recorded, Recording};
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
-use super::lm_step::{lm_step, optimal, shifted, Settle};
+use super::lm_step::{lm_step, next_lambda, optimal, shifted, Settle};
 use super::observability::{identifiable_columns, noise_weight, weighted_sensitivity};
 use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
@@ -78,8 +78,12 @@ pub struct CloeOptions {
     /// Largest change of any log-parameter per iteration (0.5: a factor 1.65).
     pub max_log_step: f64,
     /// Iterate on sensitivities with the state Jacobians evaluated once per tick
-    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, 3× cheaper); the identifiability
-    /// analysis and the final standard deviations always use the exact ones.
+    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.5× cheaper on two cores); the
+    /// identifiability analysis and the final standard deviations always use the exact ones. A
+    /// stop found on the per-tick ones is checked on the exact ones at the same estimate (computed
+    /// for the σ anyway): it stands if their LM step predicts Φ to fall by at most one residual
+    /// variance (the *settled* rule's bound, a likelihood ratio below e^0.5), else the iterations
+    /// go on with exact sensitivities; likewise when no damping lowers Φ.
     pub per_tick_jacobians: bool,
     /// When no step lowers Φ: converged if every |cos| between the residual and a Jacobian column
     /// is at most this (first-order optimality), else [`IdentError::NotConverged`].
@@ -234,6 +238,10 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         }
     };
     let mut cur = evaluate_with(&psi, true, false, None, &mut sims)?;
+    // Whether `cur`'s sensitivities are the exact ones (the final σ need them).
+    let mut cur_exact = true;
+    // Set when a stop found on per-tick sensitivities is refused by the exact ones.
+    let mut exact_only = false;
     let rms_before = cur.rms;
     // Identifiability at the guess.
     let g0 = cur
@@ -326,6 +334,16 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         }
         (ga, ra)
     };
+    // Φ's decrease predicted by the LM step at λ on `e`'s sensitivities (prior included).
+    let predicted_gain = |e: &Eval, psi: &[f64], lambda: f64| -> Result<f64> {
+        let g =
+            e.g.as_ref()
+                .ok_or_else(|| IdentError::InvalidInput("missing sensitivities".into()))?;
+        let (ga, ra) = augment(g, &e.residual, psi);
+        let (gtg, gtr) = (ga.tr_mul(&ga), ga.tr_mul(&ra));
+        Ok(lm_step(&gtg, &gtr, lambda, options.max_log_step)
+            .map_or(0.0, |d| 2.0 * d.dot(&gtr) - (&gtg * &d).dot(&d)))
+    };
     let mut lambda = options.lambda0;
     // The trial at 10λ on another core (`LoopConfig::parallel_stages`; not from a rayon worker).
     let speculate = cfg.parallel_stages
@@ -363,7 +381,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                 _ => {
                     // Both cores: the same path as one trial at a time, one wasted simulation
                     // when the first is taken.
-                    let l10 = lambda * 10.0;
+                    let l10 = next_lambda(&gtg, &gtr, lambda, options.max_log_step, &step);
                     let next = lm_step(&gtg, &gtr, l10, options.max_log_step)
                         .filter(|_| speculate && l10 <= 1e12)
                         .map(|s| shifted(&psi, &active, &s));
@@ -429,7 +447,20 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                         None
                     };
                     if let Some(r) = rule {
+                        let per_tick = !cur_exact;
                         cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
+                        cur_exact = true;
+                        // A stop found on per-tick sensitivities stands if the exact ones see less
+                        // than one residual variance left to gain (the settled rule's bound);
+                        // else iterate on the exact ones.
+                        if per_tick && predicted_gain(&cur, &psi, lambda)? > cur.cost / dof {
+                            exact_only = true;
+                            iterations += 1;
+                            if iterations > options.max_iterations {
+                                break 'outer;
+                            }
+                            continue 'outer;
+                        }
                         converged_by = Some(r);
                         break 'outer;
                     }
@@ -438,14 +469,24 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                         cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
                         break 'outer;
                     }
-                    // Near the minimum the per-tick approximation's error (≈ 10⁻³) would make
-                    // convergence linear: exact sensitivities once Φ changes by < 1 %.
-                    let fast = options.per_tick_jacobians && rel_cost > 1e-2;
+                    // Per-tick sensitivities (≈ 10⁻³ relative) until a stop; the exact ones check it.
+                    let fast = options.per_tick_jacobians && !exact_only;
                     cur = evaluate_with(&psi, true, fast, rec, &mut sims)?;
+                    cur_exact = !fast;
                     continue 'outer;
                 }
                 _ => {
-                    lambda *= 10.0;
+                    lambda = next_lambda(&gtg, &gtr, lambda, options.max_log_step, &step);
+                    if lambda > 1e12 && !cur_exact {
+                        // No step of the per-tick sensitivities lowers Φ: try the exact ones.
+                        cur = evaluate_with(&psi, true, false, cur.recording.take(), &mut sims)?;
+                        (cur_exact, exact_only, lambda) = (true, true, options.lambda0);
+                        iterations += 1;
+                        if iterations > options.max_iterations {
+                            break 'outer;
+                        }
+                        continue 'outer;
+                    }
                     if lambda > 1e12 {
                         // No step lowers Φ: a minimum to the precision of Φ if the residual is
                         // orthogonal to every column (first-order optimality), else a failure.
@@ -464,7 +505,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             cost_history: history,
         });
     };
-    if options.per_tick_jacobians {
+    if !cur_exact {
         cur = evaluate_with(&psi, true, false, None, &mut sims)?;
     }
     // Relative standard deviations from the exact Jacobian and the residual variance.

@@ -28,6 +28,29 @@ pub(super) fn lm_step(
     Some(step)
 }
 
+/// The damping after the step at `lambda` was rejected: 10λ, or the first 10ᵏλ whose step differs
+/// from the rejected `step` by more than 1 % of its norm (λ at most 10¹³). Where λD is still small
+/// beside GᵀG (λ far below every eigenvalue that matters, or components clipped to
+/// `max_log_step`) the damped step is the rejected one again, and simulating it would only be
+/// rejected again: after many accepted steps λ sits at 10⁻¹², twelve decades below the damping a
+/// kinked (stick–slip) cost needs. Only solves of the small normal equations, no simulation.
+pub(super) fn next_lambda(
+    gtg: &DMatrix<f64>,
+    gtr: &DVector<f64>,
+    lambda: f64,
+    max_log_step: f64,
+    step: &DVector<f64>,
+) -> f64 {
+    let mut l = lambda * 10.0;
+    while l <= 1e12 {
+        match lm_step(gtg, gtr, l, max_log_step) {
+            Some(s) if (&s - step).norm() <= 1e-2 * step.norm() => l *= 10.0,
+            _ => return l,
+        }
+    }
+    l
+}
+
 /// ψ with `step` added to its `active` components.
 pub(super) fn shifted(psi: &[f64], active: &[usize], step: &DVector<f64>) -> Vec<f64> {
     let mut trial = psi.to_vec();
@@ -98,7 +121,28 @@ impl Settle {
 
 #[cfg(test)]
 mod tests {
-    use super::Settle;
+    use super::{lm_step, next_lambda, Settle};
+    use nalgebra::{DMatrix, DVector};
+
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn after_a_rejection_the_damping_skips_the_decades_that_leave_the_step_as_it_was() {
+        // Diagonal (D = diag): every component is scaled by 1/(1 + λ), so the step moves by more
+        // than 1 % only past λ = 1/99: from 10⁻¹², the next damping worth a simulation is 10⁻¹.
+        let gtg = DMatrix::from_diagonal(&DVector::from_vec(vec![1e4, 1.0]));
+        let gtr = DVector::from_vec(vec![1.0, 0.1]);
+        let step = |l| lm_step(&gtg, &gtr, l, 10.0).unwrap();
+        let l = next_lambda(&gtg, &gtr, 1e-12, 10.0, &step(1e-12));
+        assert!((l / 1e-1 - 1.0).abs() < 1e-9, "λ = {l:e}");
+        // Where every decade changes the step: 10λ, as before.
+        assert!((next_lambda(&gtg, &gtr, 1.0, 10.0, &step(1.0)) / 10.0 - 1.0).abs() < 1e-12);
+        // A component clipped at max_log_step stays clipped: those decades are skipped too.
+        let big = DVector::from_vec(vec![1e3, 1e3]);
+        let clipped = |l| lm_step(&gtg, &big, l, 0.5).unwrap();
+        let l = next_lambda(&gtg, &big, 1e-12, 0.5, &clipped(1e-12));
+        assert!((clipped(l) - clipped(1e-12)).norm() > 1e-2 * clipped(1e-12).norm());
+        assert!((clipped(l / 10.0) - clipped(1e-12)).norm() <= 1e-2 * clipped(1e-12).norm());
+    }
 
     /// Five accepted steps of `drop` each (Φ in units of a residual variance of 1), ψ[0] moving by
     /// `move_` per step with σ = 1: whether the rule says settled after each.
