@@ -250,14 +250,9 @@ fn requesting_an_unidentifiable_parameter_is_a_typed_error() {
     }
 }
 
-/// With the other cores (`LoopConfig::parallel_stages`: stages evaluated ahead, the trial at 10λ
-/// beside the one at λ) CLOE takes exactly the sequential path: the same iterates, costs and
-/// estimate bit for bit, only more (speculative) simulations.
-#[test]
-fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
-    let _ = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build_global();
+/// The 1 s stick–slip twin run of the path tests (implicit friction, T_f = 5 ms) and its frames
+/// with 9.6 µm of noise on every axis (the same σ on the angles' axes: only the paths matter).
+fn stick_slip_run() -> (LoopParams, Excitation, LoopConfig, CloeData) {
     let truth = table_5_2_truth();
     let exc = excitation();
     let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
@@ -265,7 +260,6 @@ fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
     let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let noise = Normal::new(0.0, 0.0096e-3).unwrap();
-    // (the same σ on the angles' axes: only the path matters here)
     let data = CloeData {
         t: run.t.clone(),
         measured: run
@@ -274,6 +268,18 @@ fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
             .map(|c| c + Vec6::from_fn(|_, _| noise.sample(&mut rng)))
             .collect(),
     };
+    (truth, exc, cfg, data)
+}
+
+/// With the other cores (`LoopConfig::parallel_stages`: stages evaluated ahead, the trial at 10λ
+/// beside the one at λ) CLOE takes exactly the sequential path: the same iterates, costs and
+/// estimate bit for bit, only more (speculative) simulations.
+#[test]
+fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build_global();
+    let (truth, exc, mut cfg, data) = stick_slip_run();
     let names: Vec<String> = ["fv1", "fv2", "fc3", "li", "ld"].map(String::from).to_vec();
     let guess = spread_guess(&truth, &names, 0.3, 2);
     let opts = CloeOptions {
@@ -309,21 +315,7 @@ fn on_two_cores_cloe_takes_the_sequential_path_bit_for_bit() {
 /// the exact sensitivities and the σ come from them.
 #[test]
 fn per_tick_iterations_end_where_exact_ones_do() {
-    let truth = table_5_2_truth();
-    let exc = excitation();
-    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
-    (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
-    let run = simulate_loop(&cfg, &truth, &exc, None).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let noise = Normal::new(0.0, 0.0096e-3).unwrap();
-    let data = CloeData {
-        t: run.t.clone(),
-        measured: run
-            .chi
-            .iter()
-            .map(|c| c + Vec6::from_fn(|_, _| noise.sample(&mut rng)))
-            .collect(),
-    };
+    let (truth, exc, cfg, data) = stick_slip_run();
     let names: Vec<String> = ["fv1", "fv2", "fc3", "li", "ld", "platform.Szz"]
         .map(String::from)
         .to_vec();
