@@ -477,10 +477,9 @@ def cloe(
     the noise dithers the drive torque and breaks sticking joints free earlier; ``"none"``
     (default): noise-free readings; an array (T, 6) rad: that noise, one row per tick (this run
     only: the result's model replays none on other runs) (docs/identification.md, "Replaying the potentiometer noise").
-    ``per_tick_jacobians``: iterate on sensitivities whose state Jacobians are evaluated once per
-    tick (≈ 10⁻³ relative, cheaper); a stop is then checked on the exact ones (iterations go on with
-    them if their step would lower Φ by more than one residual variance), and the σ always come
-    from the exact ones.
+    ``per_tick_jacobians``: iterate on cheaper sensitivities (state Jacobians once per tick, ≈ 10⁻³);
+    a stop is checked on the exact ones (iterations go on with them if their step would lower Φ by
+    more than one residual variance), and the σ always come from the exact ones.
     ``settle_steps``: the *settled* stopping rule looks back over this many accepted steps
     (``converged_by == "settled"``: Φ fell by < 1 residual variance over them and no quantity moved
     by half its σ — creeping along a stick–slip cost's kinks); 0 turns it off. ``hops``: after
