@@ -78,7 +78,7 @@ pub struct CloeOptions {
     /// Largest change of any log-parameter per iteration (0.5: a factor 1.65).
     pub max_log_step: f64,
     /// Iterate on sensitivities with the state Jacobians evaluated once per tick
-    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.5× cheaper on two cores); the
+    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.4× cheaper on two cores); the
     /// identifiability analysis and the final standard deviations always use the exact ones. A
     /// stop found on the per-tick ones is checked on the exact ones at the same estimate (computed
     /// for the σ anyway): it stands if their LM step predicts Φ to fall by at most one residual
