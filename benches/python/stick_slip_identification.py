@@ -1,7 +1,7 @@
 """CLOE with the stick–slip law from spread starts (docs/identification.md, "Stick–slip").
 
 python benches/python/stick_slip_identification.py multistart [--n 25] [--pot-noise recorded]
-        [--smooth-first EPS] [--hops DELTA ...] [--hops-identified DELTA ...]
+        [--smooth-first EPS] [--hops DELTA ...] [--hops-identified DELTA ...] [--restarts N]
     the twin-as-robot with the implicit law and Table 4.1 pixel noise, the 2 s test trajectory
     of python/tests/test_identify_stick_slip.py; N starts with every quantity but l_p moved by a
     seeded factor in [0.7, 1.3]; CLOE on the recorded commands holding l_p. Prints each start's
@@ -11,7 +11,10 @@ python benches/python/stick_slip_identification.py multistart [--n 25] [--pot-no
     potentiometer noise), --smooth-first EPS (CLOE with tanh friction of width EPS rad/s first,
     then stick–slip from its estimate), --hops (`identify.cloe(hops=...)`: after CLOE, CLOE again
     from the estimate with every quantity but the held l_p moved by the log-factor DELTA, keeping the
-    lower χ², once per DELTA), --hops-identified (the same, moving only the identified quantities).
+    lower χ², once per DELTA), --hops-identified (the same, moving only the identified quantities),
+    --restarts N (`identify.cloe(restarts=N)`: N more runs from the guess with the identified
+    quantities moved by seeded factors in [0.7, 1.3], the best kept, σ at least the spread over
+    equally good runs).
 
 python benches/python/stick_slip_identification.py spread [--robot rapier|twin] [--quick]
         [--spread 0.3] [--hold-lp] [--commands recorded|simulated] [--from-initial] [--iterations 30]
@@ -68,6 +71,7 @@ def multistart(
     smooth_first: float,
     hops: list[float],
     hops_identified: list[float],
+    restarts: int = 0,
 ) -> None:
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
@@ -93,8 +97,8 @@ def multistart(
                 r0 = identify.cloe(d, kp, gdp, gpid, friction_smoothing=smooth_first, **common)
                 gdp, gpid = r0.dynamics, r0.pid
             law = {"implicit_friction": True, "pot_noise": pot_noise}
-            r = identify.cloe(d, kp, gdp, gpid, hops=hops, **law, **common)
-            n_it, path = r.iterations, list(r.hops) or [r.reduced_chi2]
+            r = identify.cloe(d, kp, gdp, gpid, hops=hops, restarts=restarts, **law, **common)
+            n_it, path = r.iterations, list(r.restarts or r.hops) or [r.reduced_chi2]
             for delta in hops_identified:
                 h = identify.cloe(d, kp, *_hop(r, names, delta), **law, **common)
                 n_it += h.iterations
@@ -117,7 +121,9 @@ def multistart(
         its.append(n_it)
         for n in worst:
             worst[n] = max(worst[n], abs(err[n]))
-        hop = f"  (after each hop: {' → '.join(f'{c:.3f}' for c in path)})" if len(path) > 1 else ""
+        label = "every run" if r.restarts else "after each hop"
+        runs = " → ".join(f"{c:.3f}" for c in path)
+        hop = f"  ({label}: {runs})" if len(path) > 1 else ""
         print(
             f"{k:3d} iterations {n_it:2d}  χ² {r.reduced_chi2:.3f}  max|err|/σ {z:.2f}  all "
             f"{z_all:.2f} ({n_all}){hop}"
@@ -204,6 +210,7 @@ def main() -> None:
     m.add_argument("--smooth-first", type=float, default=0.0, metavar="EPS")
     m.add_argument("--hops", type=float, nargs="*", default=[], metavar="DELTA")
     m.add_argument("--hops-identified", type=float, nargs="*", default=[], metavar="DELTA")
+    m.add_argument("--restarts", type=int, default=0, metavar="N")
     s = sub.add_parser("spread")
     s.add_argument("--robot", choices=("rapier", "twin"), default="rapier")
     s.add_argument("--quick", action="store_true")
@@ -214,7 +221,7 @@ def main() -> None:
     s.add_argument("--iterations", type=int, default=30)
     a = p.parse_args()
     if a.mode == "multistart":
-        multistart(a.n, a.pot_noise, a.smooth_first, a.hops, a.hops_identified)
+        multistart(a.n, a.pot_noise, a.smooth_first, a.hops, a.hops_identified, a.restarts)
     else:
         spread_run(a.robot, a.quick, a.spread, a.hold_lp, a.commands, a.from_initial, a.iterations)
 

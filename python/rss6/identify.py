@@ -24,11 +24,13 @@ from rss6.errors import (
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
     LinearGuess,
+    check_options,
     effect_kwargs,
     linear_guess,
     lowpass_measured,
     potentiometer_noise,
     replayed_noise,
+    requested_names,
 )
 
 __all__ = [
@@ -368,7 +370,9 @@ class IdentificationResult:
     steps Φ fell by < 1 residual variance and no quantity moved by half its σ: creeping along the
     kinks of a stick–slip cost) or ``"stationary"`` (no step lowers Φ at a first-order optimum);
     ``hops``: with :func:`cloe`'s ``hops``, the reduced χ² of the first run and after each hop
-    (``iterations`` and ``simulations`` then count every run);
+    (``iterations`` and ``simulations`` then count every run); ``restarts``: with ``restarts``, the
+    reduced χ² of every run and ``start_spread`` the largest |log change| of each identified
+    quantity between equally good runs (a floor under ``relative_std``);
     ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
     ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
     stopped at its sweep bound (0 expected; otherwise χ_s is approximate there); ``aliases``: for
@@ -397,6 +401,8 @@ class IdentificationResult:
     relative_std_wald: F64 = field(default_factory=lambda: np.zeros(0))
     converged_by: str = "tolerances"
     hops: tuple[float, ...] = ()
+    restarts: tuple[float, ...] = ()
+    start_spread: F64 = field(default_factory=lambda: np.zeros(0))
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -444,6 +450,9 @@ def cloe(
     pot_noise: str | ArrayLike = "none",
     settle_steps: int = 5,
     hops: Sequence[float] = (),
+    restarts: int = 0,
+    restart_spread: float = 0.3,
+    initial: tuple[_rss6.DynamicParams, tuple[float, float, float]] | None = None,
 ) -> IdentificationResult:
     """Closed-loop output-error identification (thesis §5.3, eq. 5.6–5.9) of Ξ and the drive gains
     from ``data``, starting from (``dp_guess``, ``pid_guess``), by Levenberg–Marquardt on the
@@ -486,6 +495,10 @@ def cloe(
     converging, CLOE again from the estimate with every quantity but the held ones moved by the
     log-factor δ, for each δ, keeping the lowest χ² (the stick–slip cost's local minima lie along
     the loop's common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
+    ``restarts``: as many more runs (hops included) from the guess with each identified quantity
+    moved by a seeded factor in [1 − ``restart_spread``, 1 + ``restart_spread``], the best kept and
+    its σ widened to the spread over equally good runs (:func:`rss6.identify_hops.restarted`).
+    ``initial`` (dynamics, gains): where LM starts instead of the guess (which centres the prior).
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
@@ -493,33 +506,14 @@ def cloe(
     call = dict(locals())
     if hops:
         identify_hops.check(hops, parameters, hold)
+    identify_hops.check_restarts(restarts, restart_spread)
     if data.fault is not None:
         raise IdentificationError(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
             "frames after it do not follow the loop: use data.before_fault()"
         )
-    if not consistent:
-        raise InvalidInputError(
-            "consistent=False is not implemented: CLOE estimates logs of physical quantities"
-        )
-    if int(settle_steps) != settle_steps or settle_steps < 0:
-        raise InvalidInputError(f"settle_steps must be an int ≥ 0, got {settle_steps!r}")
-    if isinstance(parameters, str):
-        if parameters != "base":
-            raise InvalidInputError(
-                f"parameters must be 'base' or a list of names, got {parameters!r}"
-            )
-        names: list[str] | None = None
-    else:
-        names = [str(n) for n in parameters]
-        known = set(parameter_names())
-        unknown = [n for n in names if n not in known]
-        if unknown:
-            raise InvalidInputError(
-                f"unknown parameter(s) {', '.join(unknown)}; see rss6.identify.parameter_names()"
-            )
-    if commands not in ("simulated", "recorded"):
-        raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
+    check_options(consistent, settle_steps, commands)
+    names = requested_names(parameters, parameter_names())
     held = data.frame_commands() if commands == "recorded" else None
     dither = replayed_noise(data, pot_noise)
     pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
@@ -553,6 +547,7 @@ def cloe(
         outer_gains=data.outer_gains,
         pot_dither=dither,
         settle_steps=settle_steps,
+        initial=initial,
         **effect_kwargs(gravity, load, offset_drift),
     )
     lp, li, ld = r["pid"]
@@ -589,11 +584,15 @@ def cloe(
             pot_noise=pot_noise if isinstance(pot_noise, str) else "none",
         ),
     )
-    if not hops:
-        return result
-    return identify_hops.hopped(
-        result, hops, lambda g: cloe(**{**call, **g, "hops": ()}), parameters, hold
-    )
+    if hops:
+        once = {"hops": (), "restarts": 0, "initial": None}
+        result = identify_hops.hopped(
+            result, hops, lambda g: cloe(**{**call, **g, **once}), parameters, hold
+        )
+    if restarts:
+        rerun = lambda g: cloe(**{**call, **g, "restarts": 0})  # noqa: E731
+        result = identify_hops.restarted(result, restarts, restart_spread, rerun, hold, data)
+    return result
 
 
 # Validation and Table 5.5 live in identify_validate (they use the names above).

@@ -333,3 +333,33 @@ def effect_kwargs(
         "load": None if load is None else (float(load[0]), f64(load[1]), f64(load[2])),
         "offset_drift": f64(offset_drift),
     }
+
+
+def requested_names(parameters: str | Sequence[str], known: Sequence[str]) -> list[str] | None:
+    """:func:`rss6.identify.cloe`'s ``parameters`` checked: ``None`` for ``"base"``, else the names.
+    Raises :class:`rss6.InvalidInputError` for another string or a name not in ``known``."""
+    if isinstance(parameters, str):
+        if parameters != "base":
+            raise InvalidInputError(
+                f"parameters must be 'base' or a list of names, got {parameters!r}"
+            )
+        return None
+    names = [str(n) for n in parameters]
+    unknown = [n for n in names if n not in set(known)]
+    if unknown:
+        raise InvalidInputError(
+            f"unknown parameter(s) {', '.join(unknown)}; see rss6.identify.parameter_names()"
+        )
+    return names
+
+
+def check_options(consistent: bool, settle_steps: int, commands: str) -> None:
+    """Raises :class:`rss6.InvalidInputError` for :func:`rss6.identify.cloe` options it refuses."""
+    if not consistent:
+        raise InvalidInputError(
+            "consistent=False is not implemented: CLOE estimates logs of physical quantities"
+        )
+    if int(settle_steps) != settle_steps or settle_steps < 0:
+        raise InvalidInputError(f"settle_steps must be an int ≥ 0, got {settle_steps!r}")
+    if commands not in ("simulated", "recorded"):
+        raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")

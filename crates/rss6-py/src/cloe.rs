@@ -362,10 +362,11 @@ pub(crate) fn simulate_identification<'py>(
 /// `torque_limit`, `camera_latency`, `dt`, run for `duration` s. `progress(iteration, cost)` after
 /// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
 /// propagates. `gravity`, `load`, `offset_drift`: effects of the model, as for
-/// `simulate_identification` (re-identification with named effects); `pot_dither` as there. Returns a dict (see
+/// `simulate_identification` (re-identification with named effects); `pot_dither` as there;
+/// `initial` (dynamics, gains): where LM starts instead of the guess (`CloeOptions::initial`). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=5))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=5, initial=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -402,6 +403,7 @@ pub(crate) fn cloe_identify<'py>(
     outer_gains: Option<(f64, f64, f64)>,
     pot_dither: Option<&Bound<'py, PyAny>>,
     settle_steps: usize,
+    initial: Option<(PyRef<'py, PyDynamicParams>, (f64, f64, f64))>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -445,6 +447,10 @@ pub(crate) fn cloe_identify<'py>(
         per_tick_jacobians,
         prior_log_std: (prior_log_std != 0.0).then_some(prior_log_std),
         settle_steps,
+        initial: initial.map(|(d, g)| LoopParams {
+            dynamics: d.inner,
+            pid: pid_gains(g),
+        }),
         ..CloeOptions::default()
     };
     if let Some((p, a)) = noise {

@@ -101,6 +101,10 @@ pub struct CloeOptions {
     /// Lags (camera frames) of the residual autocovariance behind the sandwich standard deviations
     /// (see [`CloeResult::relative_std`]); 0: residual frames uncorrelated in time.
     pub hac_lags: usize,
+    /// Where LM starts instead of the guess (which still centres the prior): identifiability and
+    /// `rms_before` are evaluated there, and quantities left unidentifiable stay there. `None`: the
+    /// guess (multi-start: `rss6.identify.cloe(restarts=…)`).
+    pub initial: Option<LoopParams>,
 }
 
 impl Default for CloeOptions {
@@ -121,6 +125,7 @@ impl Default for CloeOptions {
             prior_log_std: Some(1.0),
             hac_lags: HAC_LAGS,
             settle_steps: SETTLE_STEPS,
+            initial: None,
         }
     }
 }
@@ -226,8 +231,11 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             })
         };
 
-    let mut psi: Vec<f64> = cons.psi(guess)?.to_vec();
-    let psi_prior = psi.clone();
+    let psi_prior: Vec<f64> = cons.psi(guess)?.to_vec();
+    let mut psi = match &options.initial {
+        Some(start) => cons.psi(start)?.to_vec(),
+        None => psi_prior.clone(),
+    };
     let prior_w = match options.prior_log_std {
         None => 0.0,
         Some(s) if s.is_finite() && s > 0.0 => 1.0 / s,
