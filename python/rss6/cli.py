@@ -482,7 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--periods",
         type=int,
         default=None,
-        help="periods of the exciting trajectory in the identification run (default 3; 1 with "
+        help="periods of the exciting trajectory in the identification run (default 10; 1 with "
         "--quick)",
     )
     i.add_argument(
