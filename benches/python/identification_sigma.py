@@ -2,12 +2,13 @@
 identifications of random thesis-size trajectories on the model twin (stick–slip law, the study's
 task `rss6.studies.tasks.identification_task`), optionally with the twin's potentiometer noise off
 or χ_m low-passed, or CLOE replaying the recorded potentiometer noise in the model's drive
-(``--pot-replay recorded``; ``exact``: the twin's true noise, docs/identification.md "Replaying the potentiometer noise"); prints per quantity the bias and spread of log(estimate/truth), the RMS of the
+(``--pot-replay recorded``; ``model``: a second pass replaying the readings minus the first
+estimate's angles, ``identify.cloe(pot_noise="model")``; ``exact``: the twin's true noise, docs/identification.md "Replaying the potentiometer noise"); prints per quantity the bias and spread of log(estimate/truth), the RMS of the
 reported σ and of its Wald part, and the median residual RMS. For the plant, use
 `rss6 study identification --n 10` (its summary prints σ / spread).
 
     python benches/python/identification_sigma.py [--n 10] [--pot-noise on|off] [--cutoff HZ]
-        [--pot-replay none|recorded|exact] [--robot twin|plant]
+        [--pot-replay none|recorded|model|exact] [--robot twin|plant]
     python benches/python/identification_sigma.py --estimate-error   # potentiometer_noise's error
 """
 
@@ -59,7 +60,7 @@ def run(
             "seed": seed,
             "robot": robot,
             "friction_law": "implicit",
-            "pot_noise": "none" if replay == "none" else "recorded",
+            "pot_noise": "recorded" if replay == "exact" else replay,
         }
     )
 
@@ -103,7 +104,7 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=10)
     ap.add_argument("--pot-noise", default="on", choices=("on", "off"))
     ap.add_argument("--cutoff", type=float, default=None)
-    ap.add_argument("--pot-replay", default="none", choices=("none", "recorded", "exact"))
+    ap.add_argument("--pot-replay", default="none", choices=("none", "recorded", "exact", "model"))
     ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--estimate-error", action="store_true")

@@ -600,7 +600,7 @@ def simulate_identification(
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
     pot_dither: ArrayLike | None = None,
-) -> tuple[_F64, _F64, int]: ...
+) -> tuple[_F64, _F64, int, _F64]: ...
 def cloe_identify(
     t: ArrayLike,
     measured: ArrayLike,

@@ -28,6 +28,7 @@ from rss6.identify_linear import (
     effect_kwargs,
     linear_guess,
     lowpass_measured,
+    model_noise_passes,
     potentiometer_noise,
     replayed_noise,
     requested_names,
@@ -322,7 +323,7 @@ def simulate(
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
     if tt.size == 0 or not np.all(np.isfinite(tt)):
         raise InvalidInputError("times must be a non-empty array of finite times")
-    ts, chi, _ = _rss6.simulate_identification(
+    ts, chi, _, _ = _rss6.simulate_identification(
         kp,
         dynamics,
         (float(pid[0]), float(pid[1]), float(pid[2])),
@@ -372,15 +373,14 @@ class IdentificationResult:
     ``hops``: with :func:`cloe`'s ``hops``, the reduced χ² of the first run and after each hop
     (``iterations`` and ``simulations`` then count every run); ``restarts``: with ``restarts``, the
     reduced χ² of every run and ``start_spread`` the largest |log change| of each identified
-    quantity between equally good runs (a floor under ``relative_std``);
-    ``reduced_chi2`` = Φ/(N − p) (≈ 1 when the residual is the camera noise);
-    ``inexact_friction_ticks``: ticks of the loop at the estimate whose implicit friction solve
-    stopped at its sweep bound (0 expected; otherwise χ_s is approximate there); ``aliases``: for
-    each unidentifiable quantity, the estimated ones that absorb it — {name: ({estimated: c},
-    residual)}: a relative change δ of it moves the output at the guess as relative changes c·δ of
-    those do (|c| ≥ 0.05, at most 4), ``residual`` the relative misfit of that combination (≈ 0:
-    it combines into them; near 1: the output hardly sees it); :meth:`alias_text` says it in
-    words. ``guess`` and ``model`` keep what :func:`validate` needs."""
+    quantity between equally good runs (a floor under ``relative_std``); ``reduced_chi2`` = Φ/(N −
+    p) (≈ 1 when the residual is the camera noise); ``inexact_friction_ticks``: ticks of the loop at
+    the estimate whose implicit friction solve stopped at its sweep bound (0 expected; otherwise χ_s
+    is approximate there); ``aliases``: for each unidentifiable quantity, the estimated ones that
+    absorb it — {name: ({estimated: c}, residual)}: a relative change δ of it moves the output at
+    the guess as relative changes c·δ of those do (|c| ≥ 0.05, at most 4), ``residual`` the relative
+    misfit of that combination (≈ 0: it combines into them; near 1: the output hardly sees it);
+    :meth:`alias_text` says it in words. ``guess`` and ``model`` keep what :func:`validate` needs."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -478,14 +478,13 @@ def cloe(
     the model, as for :func:`simulate` (re-identification with named effects).
     ``measured_cutoff`` (Hz): low-pass χ_m first with a zero-phase 4th-order Butterworth filter
     (scipy ``filtfilt``); it must lie below the camera's Nyquist frequency (the thesis's 60 Hz is
-    above the 15 Hz of a 30 Hz camera and is refused). Default ``None``: no filter — the weights
-    assume white noise and filtering correlates it; the reported σ (sandwich on the residual's
-    autocovariance) stays honest either way (docs/identification.md, "Filtering χ_m").
-    ``pot_noise="recorded"``: the model's drive reads its potentiometers with the robot's recorded
-    noise added (:func:`rss6.identify.potentiometer_noise`, needs per-tick data): with stick–slip
-    the noise dithers the drive torque and breaks sticking joints free earlier; ``"none"``
-    (default): noise-free readings; an array (T, 6) rad: that noise, one row per tick (this run
-    only: the result's model replays none on other runs) (docs/identification.md, "Replaying the potentiometer noise").
+    above the 15 Hz of a 30 Hz camera and is refused). Default ``None``: no filter, as the weights
+    assume white noise (docs/identification.md, "Filtering χ_m").
+    ``pot_noise``: noise the model's drive adds to its potentiometer readings — ``"none"``
+    (default); ``"recorded"``: :func:`potentiometer_noise` of the data (needs per-tick data; with
+    stick–slip the noise breaks sticking joints free earlier); ``"model"``: that, then a second
+    pass replaying the readings minus the first estimate's angles (:func:`rss6.identify_linear.
+    model_noise_passes`); an array (T, 6) rad: that noise (this run only; docs/identification.md).
     ``per_tick_jacobians``: iterate on cheaper sensitivities (state Jacobians once per tick, ≈ 10⁻³);
     a stop is checked on the exact ones (iterations go on with them if their step would lower Φ by
     more than one residual variance), and the σ always come from the exact ones.
@@ -497,7 +496,7 @@ def cloe(
     the loop's common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
     ``restarts``: as many more runs (hops included) from the guess with each identified quantity
     moved by a seeded factor in [1 − ``restart_spread``, 1 + ``restart_spread``], the best kept and
-    its σ widened to the spread over equally good runs (:func:`rss6.identify_hops.restarted`).
+    its σ widened to the spread over equally good runs (:func:`rss6.identify_hops.restarted`);
     ``initial`` (dynamics, gains): where LM starts instead of the guess (which centres the prior).
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
@@ -507,6 +506,8 @@ def cloe(
     if hops:
         identify_hops.check(hops, parameters, hold)
     identify_hops.check_restarts(restarts, restart_spread)
+    if isinstance(pot_noise, str) and pot_noise == "model":
+        return model_noise_passes(data, lambda g: cloe(**{**call, **g}))
     if data.fault is not None:
         raise IdentificationError(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "

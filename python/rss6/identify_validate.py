@@ -121,7 +121,7 @@ def validate(
                 implicit_friction=m.implicit_friction,
                 commands=d.frame_commands() if m.commands == "recorded" else None,
                 outer_gains=outer_gains,
-                pot_dither=replayed_noise(d, m.pot_noise),
+                pot_dither=replayed_noise(d, m.pot_noise, result),
             )
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)

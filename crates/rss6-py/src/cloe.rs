@@ -191,6 +191,7 @@ type SimulatedFrames<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, numpy::PyArray2<f64>>,
     usize,
+    Bound<'py, numpy::PyArray2<f64>>,
 );
 
 /// An unidentifiable quantity, what it combines into (name, coefficient), and the misfit.
@@ -295,7 +296,8 @@ fn apply_effects(
 /// (mass kg, centre of mass (3,) m in ΣE, inertia (3, 3) kg·m² about it) fixed to the platform,
 /// `offset_drift` (6,) rad/s of the potentiometer offsets. `pot_dither` (T, 6): potentiometer
 /// noise (drive convention, rad) added to the model's reading at each sampling tick (row = tick).
-/// Returns (frame times (F,), χ_s (F, 6), joint-ticks with the torque clamped).
+/// Returns (frame times (F,), χ_s (F, 6), joint-ticks with the torque clamped, the model's
+/// noise-free potentiometer angles at its sampling ticks (S, 6), drive convention).
 #[pyfunction]
 #[pyo3(signature = (kp, dp, pid, f0, coefficients, *, start, duration, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None))]
 #[allow(clippy::too_many_arguments)]
@@ -347,7 +349,12 @@ pub(crate) fn simulate_identification<'py>(
     let run = py
         .detach(|| simulate_loop(&cfg, &a, &exc, None))
         .map_err(cloe_err)?;
-    Ok((out1(py, &run.t), out_rows6(py, &run.chi), run.saturated))
+    Ok((
+        out1(py, &run.t),
+        out_rows6(py, &run.chi),
+        run.saturated,
+        out_rows6(py, &run.pot_angles),
+    ))
 }
 
 /// CLOE (eq. 5.6–5.9) of the measured frames `measured` (F, 6) at times `t` (F,) collected with the

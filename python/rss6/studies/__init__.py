@@ -136,11 +136,14 @@ def identification_variation(
     Table 5.2 (``robot``: "plant" or "twin"); ``quick``: 2 s trajectories, 10 iterations;
     ``friction_law``: "tanh" or "implicit" (stick–slip in robot and model, linear start, l_p
     known; :func:`rss6.identify_sim.estimate_from_initial`); ``pot_noise``: "recorded" (the
-    model's drive replays the potentiometer noise estimated from the readings) or "none"."""
+    model's drive replays the potentiometer noise estimated from the readings), "model" (then a
+    second pass against the first estimate's model, ``identify.cloe(pot_noise="model")``) or "none"."""
     from rss6 import identify
 
-    if pot_noise not in ("recorded", "none"):
-        raise InvalidInputError(f"pot_noise must be 'recorded' or 'none', got {pot_noise!r}")
+    if pot_noise not in ("recorded", "model", "none"):
+        raise InvalidInputError(
+            f"pot_noise must be 'recorded', 'model' or 'none', got {pot_noise!r}"
+        )
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"

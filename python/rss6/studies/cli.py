@@ -53,10 +53,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument(
         "--pot-noise",
-        choices=("recorded", "none"),
+        choices=("recorded", "model", "none"),
         default="recorded",
         help="identification: the model's drive replays the potentiometer noise estimated from "
-        "the recorded readings (recorded, the default) or reads clean angles (none)",
+        "the recorded readings (recorded, the default), then against the first estimate's model "
+        "in a second pass (model), or reads clean angles (none)",
     )
 
 

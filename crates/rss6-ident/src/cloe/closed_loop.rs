@@ -242,6 +242,7 @@ impl<'a> Lean<'a> {
             inexact_friction: 0,
             stuck_joint_ticks: 0,
             stages_ahead: 0,
+            pot_angles: vec![self.theta_meas - cfg.dither(0, 0.0)?],
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
@@ -289,6 +290,7 @@ impl<'a> Lean<'a> {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
                 // The last reading of the run is never used: no dither row is needed for it.
                 self.theta_meas = cfg.pot_angle(&theta, t + cfg.dt);
+                out.pot_angles.push(self.theta_meas);
                 if tick_new < ticks {
                     self.theta_meas += cfg.dither(tick_new, t + cfg.dt)?;
                 }

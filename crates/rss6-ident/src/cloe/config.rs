@@ -343,6 +343,10 @@ pub struct LoopRun {
     /// RK4 stages whose derivatives were evaluated ahead in parallel
     /// ([`LoopConfig::parallel_stages`]; 0 when they were evaluated in turn).
     pub stages_ahead: usize,
+    /// The model's noise-free potentiometer angle (drive convention, rad) at each sampling tick —
+    /// tick 0 and every `pot_period` after it — before any `pot_dither`: what a model-based
+    /// estimate of the robot's potentiometer noise subtracts from the robot's readings.
+    pub pot_angles: Vec<Vec6>,
 }
 
 impl LoopRun {
