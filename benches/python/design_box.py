@@ -17,6 +17,8 @@ seed, the plant and truth do not.
 
 ``--periods N``: collect N periods of each design (the CLI collects three since the tenth session)
 and identify on all. ``--hops DELTA ...``: CLOE's hops (`identify.cloe(hops=...)`).
+``--pot-noise recorded|model``: the replayed potentiometer noise (`identify.cloe(pot_noise=...)`;
+the CLI's is ``recorded``).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ def main() -> None:
     ap.add_argument("--boxes", nargs="+", default=["0.001,0.005", "0.002,0.01"])
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--hops", type=float, nargs="*", default=[], metavar="DELTA")
+    ap.add_argument("--pot-noise", choices=("recorded", "model"), default="recorded")
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
@@ -71,7 +74,7 @@ def main() -> None:
             t0 = time.perf_counter()
             try:
                 res = identify_sim.estimate_from_initial(
-                    data, kp, lp=pid_true[0], hops=tuple(args.hops)
+                    data, kp, lp=pid_true[0], hops=tuple(args.hops), pot_noise=args.pot_noise
                 )
             except rss6.IdentificationError as err:
                 failed[box] = failed.get(box, 0) + 1
