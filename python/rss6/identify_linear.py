@@ -276,7 +276,7 @@ def potentiometer_noise(
         raise InvalidInputError(f"{kappa.shape[0]} ticks are too few to filter")
     # The drive's readings are held between samples: filter the samples (a staircase's steps are
     # motion, θ̇·Δt/2 ≈ the noise itself on a fast joint), then hold the estimate likewise.
-    fresh = np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
+    fresh = _fresh_samples(kappa)
     period = float(np.median(np.diff(fresh))) * float(data.dt) if fresh.size > 1 else 0.0
     if fresh.size < 50 or not period > 0.0:
         raise InvalidInputError(f"{fresh.size} potentiometer samples are too few to filter")
@@ -289,8 +289,20 @@ def potentiometer_noise(
     theta = np.array([drive.theta_from_reading(k) for k in kappa[fresh]])
     b, a = signal.butter(4, cutoff * 2.0 * period)
     est = theta - signal.filtfilt(b, a, theta, axis=0)
-    held = np.searchsorted(fresh, np.arange(kappa.shape[0]), side="right") - 1
-    return np.asarray(est[held], dtype=np.float64)
+    return _held(est, fresh, kappa.shape[0])
+
+
+def _fresh_samples(kappa: np.ndarray) -> np.ndarray:
+    """The ticks at which the drive's held potentiometer reading (T, 6) changed: a new sample
+    (tick 0 counts as one)."""
+    return np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
+
+
+def _held(est: np.ndarray, fresh: np.ndarray, ticks: int) -> np.ndarray:
+    """(ticks, 6): the per-sample values ``est`` at the sample ticks ``fresh``, held between
+    samples as the drive holds its reading (before the first sample: the first value)."""
+    held = np.searchsorted(fresh, np.arange(ticks), side="right") - 1
+    return np.asarray(est[np.maximum(held, 0)], dtype=np.float64)
 
 
 def replayed_noise(
@@ -401,7 +413,7 @@ def model_potentiometer_noise(
         )
     m = result.model
     kappa = np.asarray(data.kappa, dtype=np.float64)
-    fresh = np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
+    fresh = _fresh_samples(kappa)
     step = max(round(float(np.median(np.diff(fresh)))), 1) if fresh.size > 1 else 1
     _, _, _, ang = _rss6.simulate_identification(
         m.kp, result.dynamics, result.pid, data.reference.f0, data.reference.coefficients,
@@ -423,8 +435,7 @@ def model_potentiometer_noise(
             raise InvalidInputError(f"cutoff must be in (0, {nyquist:.4g}) Hz, got {cutoff}")
         b, a = signal.butter(4, cutoff / nyquist)
         est = est - signal.filtfilt(b, a, est, axis=0)
-    held = np.searchsorted(fresh, np.arange(kappa.shape[0]), side="right") - 1
-    return np.asarray(est[np.maximum(held, 0)], dtype=np.float64)
+    return _held(est, fresh, kappa.shape[0])
 
 
 def model_noise_passes(
@@ -434,7 +445,9 @@ def model_noise_passes(
     arguments replaced) first replaying :func:`potentiometer_noise`, then from that estimate
     (``initial``; the same guess, so the same prior) replaying :func:`model_potentiometer_noise`
     against it. The second result, with both passes' iterations and simulations, the first's
-    ``rms_before`` and ``model.pot_noise == "model"`` (validation runs estimate theirs likewise)."""
+    ``rms_before`` and ``model.pot_noise == "model"`` (validation runs estimate theirs likewise).
+    Both passes run the call's ``hops`` and ``restarts``: the noise is estimated against the first
+    pass's model, which must not sit in a local minimum either."""
     first = rerun({"pot_noise": "recorded"})
     est = model_potentiometer_noise(data, first)
     second = rerun({"pot_noise": est, "initial": (first.dynamics, first.pid)})

@@ -196,9 +196,13 @@ proptest! {
         let _ = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         let _ = inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &pdd, &env, h, k);
         let _ = forward_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
-        let req = JacobianRequest { state: true, rate_step: Some(h), h_pose: h, h_vel: k };
-        let mut fj = ForwardJacobians::default();
-        let _ = forward_dynamics_jacobians_with_env(&kp, &dp, &p, &pd, &pdd, &env, &req, &mut fj);
+        for one_sided in [false, true] {
+            let req = JacobianRequest {
+                state: true, rate_step: Some(h), h_pose: h, h_vel: k, one_sided, param_columns: k.to_bits(),
+            };
+            let mut fj = ForwardJacobians::default();
+            let _ = forward_dynamics_jacobians_with_env(&kp, &dp, &p, &pd, &pdd, &env, &req, &mut fj);
+        }
         let _ = mass_matrix_with_env(&kp, &dp, &p, &env);
         let _ = dynamics_terms_with_env(&kp, &dp, &p, &pd, &env);
         let _ = gravity_with_env(&kp, &dp, &p, &env);

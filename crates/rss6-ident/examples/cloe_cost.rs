@@ -9,6 +9,8 @@
 //! configuration of `tests/cloe.rs` (no torque clamp, Table 5.2's Coulomb friction as printed).
 //! Each loop timing is the median of three runs. `--sequential`: the stages' derivatives evaluated
 //! in turn (`LoopConfig::parallel_stages = false`) instead of ahead on all rayon threads.
+//! `--repeat N`: each loop timing is the median of N runs (default 3). `--per-tick-only`: time the
+//! simulation and the per-tick sensitivities only, alternating (for a profiler).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
@@ -20,9 +22,20 @@ use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let secs: f64 = args.iter().find_map(|s| s.parse().ok()).unwrap_or(10.0);
+    let secs: f64 = args
+        .iter()
+        .take_while(|a| *a != "--repeat")
+        .find_map(|s| s.parse().ok())
+        .unwrap_or(10.0);
     let implicit = args.iter().any(|a| a == "--implicit");
     let sequential = args.iter().any(|a| a == "--sequential");
+    let per_tick_only = args.iter().any(|a| a == "--per-tick-only");
+    let repeat: usize = args
+        .iter()
+        .position(|a| a == "--repeat")
+        .and_then(|i| args.get(i + 1)?.parse().ok())
+        .unwrap_or(3)
+        .max(1);
     let free = [
         0.010, -0.004, 0.006, 0.003, -0.008, 0.005, 0.004, -0.002, 0.006, 0.002, -0.005, 0.004,
         0.04, -0.02, 0.03, 0.01, -0.03, 0.02, 0.02, -0.01, 0.05, 0.01, -0.03, 0.02,
@@ -45,7 +58,7 @@ fn main() {
     }
     cfg.parallel_stages = !sequential;
     let time = |f: &dyn Fn()| {
-        let mut t: Vec<f64> = (0..3)
+        let mut t: Vec<f64> = (0..repeat)
             .map(|_| {
                 let t0 = Instant::now();
                 f();
@@ -53,20 +66,39 @@ fn main() {
             })
             .collect();
         t.sort_by(f64::total_cmp);
-        t[1]
+        t[repeat / 2]
     };
     let t_sim = time(&|| {
         simulate_loop(&cfg, &truth, &exc, None).unwrap();
     });
     let cols = Consistent::a_columns();
+    let mut cfg_fast = cfg.clone();
+    cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
+    if per_tick_only {
+        let (mut ts, mut tf) = (Vec::new(), Vec::new());
+        for _ in 0..repeat {
+            let t0 = Instant::now();
+            simulate_loop(&cfg, &truth, &exc, None).unwrap();
+            ts.push(t0.elapsed().as_secs_f64());
+            let t0 = Instant::now();
+            simulate_loop(&cfg_fast, &truth, &exc, Some(&cols)).unwrap();
+            tf.push(t0.elapsed().as_secs_f64());
+        }
+        ts.sort_by(f64::total_cmp);
+        tf.sort_by(f64::total_cmp);
+        let (s, f) = (ts[repeat / 2], tf[repeat / 2]);
+        println!(
+            "{secs} s run, medians of {repeat}: simulation {s:.3} s, per-tick sensitivities (49) {f:.3} s = {:.2} ×",
+            f / s
+        );
+        return;
+    }
     let t_jac = time(&|| {
         simulate_loop(&cfg, &truth, &exc, Some(&cols)).unwrap();
     });
     let t_jac12 = time(&|| {
         simulate_loop(&cfg, &truth, &exc, Some(&cols[..12])).unwrap();
     });
-    let mut cfg_fast = cfg.clone();
-    cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
     let t_fast = time(&|| {
         simulate_loop(&cfg_fast, &truth, &exc, Some(&cols)).unwrap();
     });

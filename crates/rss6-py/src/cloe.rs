@@ -342,6 +342,7 @@ pub(crate) fn simulate_identification<'py>(
     if let Some(d) = pot_dither {
         cfg.pot_dither = Some(rows6(d, "pot_dither")?);
     }
+    cfg.record_pot_angles = true;
     let a = LoopParams {
         dynamics: dp.inner,
         pid: pid_gains(pid),

@@ -310,7 +310,7 @@ pub fn inverse_dynamics_derivatives_with_env(
     let geom = LegGeometry::at_pose(kp, pose)?;
     let (_, theta_dot) = rigid_torques(&geom, dp, pose, pose_dot, pose_ddot, env)?;
     let (d_pose, d_vel, _) = derivatives_at(
-        kp, &geom, &theta_dot, dp, pose_dot, pose_ddot, env, h_pose, h_vel, None,
+        kp, &geom, &theta_dot, dp, pose_dot, pose_ddot, env, h_pose, h_vel, false, None,
     )?;
     Ok((d_pose, d_vel))
 }
@@ -329,6 +329,7 @@ pub(super) fn derivatives_at(
     env: &Environment,
     h_pose: f64,
     h_vel: f64,
+    one_sided: bool,
     twist: Option<&Vec6>,
 ) -> Result<(Mat6, Mat6, Option<Mat6>)> {
     let pose = &geom.pose;
@@ -339,26 +340,48 @@ pub(super) fn derivatives_at(
     let mut d_pose = Mat6::zeros();
     let (mut d_force, mut d_rate) = (Mat6::zeros(), Mat6::zeros());
     let mut d_rates = twist.map(|_| Mat6::zeros());
+    // One-sided: the minus side of every step is the state itself, evaluated once.
+    let centre = if one_sided {
+        let (f, td, j_ad_t) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
+        let nu_j = twist.map(|nu| j_ad_t.transpose() * nu);
+        Some((torque((solve_j_ad_t(&j_ad_t, &f)?, td)), f, td, nu_j))
+    } else {
+        None
+    };
     for k in 0..6 {
         let (mut pp, mut pm) = (*pose, *pose);
         pp[k] += h_pose;
-        pm[k] -= h_pose;
-        let (gp, gm) = (
-            LegGeometry::at_pose(kp, &pp)?,
-            LegGeometry::at_pose(kp, &pm)?,
-        );
+        let gp = LegGeometry::at_pose(kp, &pp)?;
         let tp = torque(rigid_torques(&gp, dp, &pp, pose_dot, pose_ddot, env)?);
-        let tm = torque(rigid_torques(&gm, dp, &pm, pose_dot, pose_ddot, env)?);
+        let (tm, jm_nu) = match &centre {
+            Some((t0, _, _, nu_j)) => (*t0, *nu_j),
+            None => {
+                pm[k] -= h_pose;
+                let gm = LegGeometry::at_pose(kp, &pm)?;
+                let tm = torque(rigid_torques(&gm, dp, &pm, pose_dot, pose_ddot, env)?);
+                let jm_nu = match twist {
+                    Some(nu) => Some(gm.j_ad()? * nu),
+                    None => None,
+                };
+                (tm, jm_nu)
+            }
+        };
         d_pose.set_column(k, &((tp - tm) / (pp[k] - pm[k])));
-        if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
-            d.set_column(k, &((gp.j_ad()? * nu - gm.j_ad()? * nu) / (pp[k] - pm[k])));
+        if let (Some(d), Some(nu), Some(jm_nu)) = (d_rates.as_mut(), twist, jm_nu) {
+            d.set_column(k, &((gp.j_ad()? * nu - jm_nu) / (pp[k] - pm[k])));
         }
         // χ̇ steps at this geometry: difference the twist-space force, map it once below.
         let (mut vp, mut vm) = (*pose_dot, *pose_dot);
         vp[k] += h_vel;
-        vm[k] -= h_vel;
         let (fp, tdp, _) = rigid_forces(geom, dp, pose, &vp, pose_ddot, env)?;
-        let (fm, tdm, _) = rigid_forces(geom, dp, pose, &vm, pose_ddot, env)?;
+        let (fm, tdm) = match &centre {
+            Some((_, f0, td0, _)) => (*f0, *td0),
+            None => {
+                vm[k] -= h_vel;
+                let (fm, tdm, _) = rigid_forces(geom, dp, pose, &vm, pose_ddot, env)?;
+                (fm, tdm)
+            }
+        };
         let h = vp[k] - vm[k];
         d_force.set_column(k, &((fp - fm) / h));
         d_rate.set_column(k, &((tdp - tdm) / h));

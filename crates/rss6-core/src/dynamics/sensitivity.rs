@@ -8,7 +8,8 @@
 //! [`regressor_with_gravity`](crate::regressor_with_gravity)) solve the inverse kinematics five
 //! times at the same pose and form the mass matrix twice. Here: ∂χ̈/∂τ_a = M̃⁻¹J_θᵀ = J_s⁻¹M⁻¹J_adᵀ
 //! and ∂χ̈/∂Ξ = −M̃⁻¹J_θᵀΓ = −J_s⁻¹M⁻¹Γ_g (Γ_g = J_adᵀΓ, [`crate::regressor_tau_g`]) from the
-//! Cholesky factor of the twist-space M the forward dynamics already has.
+//! Cholesky factor of the twist-space M the forward dynamics already has (through the 6 × 6
+//! K = J_s⁻¹M⁻¹, one product per column of Ξ, and only for the columns requested).
 
 use super::check_state;
 use super::load::Environment;
@@ -35,16 +36,24 @@ pub struct JacobianRequest {
     pub h_pose: f64,
     /// Step in χ̇ (exact for any step: τ_a is quadratic in χ̇ plus the viscous term).
     pub h_vel: f64,
+    /// One-sided (forward) differences instead of central ones: 6 pose steps (6 inverse
+    /// kinematics) and 6 χ̇ steps instead of 12 and 12, plus one evaluation at the state; the
+    /// error grows from O(h²) to O(h) (χ̇: h_vel times the quadratic term), so use smaller steps.
+    pub one_sided: bool,
+    /// The columns of ∂χ̈/∂Ξ wanted, bit k for column k (default: all); the others are zero.
+    pub param_columns: u64,
 }
 
 impl Default for JacobianRequest {
-    /// No state Jacobians; steps 10⁻⁶ and 10⁻².
+    /// No state Jacobians; central differences with steps 10⁻⁶ and 10⁻².
     fn default() -> Self {
         JacobianRequest {
             state: false,
             rate_step: None,
             h_pose: 1e-6,
             h_vel: 1e-2,
+            one_sided: false,
+            param_columns: u64::MAX,
         }
     }
 }
@@ -134,8 +143,9 @@ pub fn forward_dynamics_jacobians_with_env(
     let j_ad = f.j_ad_t.transpose();
     out.pose_ddot = f.chi_ddot;
     out.j_theta = j_ad * twist_jacobian(pose);
-    out.d_torque = f.js_inv * f.chol.solve(&f.j_ad_t);
-    // ∂χ̈/∂Ξ = −J_s⁻¹M⁻¹Γ_g in place, column by column.
+    // K = J_s⁻¹M⁻¹ once; then ∂χ̈/∂τ_a = K J_adᵀ and ∂χ̈/∂Ξ = −K Γ_g, column by column.
+    let k = f.js_inv * f.chol.inverse();
+    out.d_torque = k * f.j_ad_t;
     regressor_tau_g_into(
         &geom,
         &j_ad,
@@ -144,10 +154,13 @@ pub fn forward_dynamics_jacobians_with_env(
         &env.gravity,
         &mut out.d_params,
     )?;
-    f.chol.solve_mut(&mut out.d_params);
-    for mut c in out.d_params.column_iter_mut() {
-        let x: Vec6 = -(f.js_inv * &c);
-        c.copy_from(&x);
+    for (c, mut col) in out.d_params.column_iter_mut().enumerate() {
+        if request.param_columns >> c & 1 == 1 {
+            let x: Vec6 = -(k * &col);
+            col.copy_from(&x);
+        } else {
+            col.fill(0.0);
+        }
     }
     (out.d_state, out.d_rates) = (None, None);
     if request.state {
@@ -162,6 +175,7 @@ pub fn forward_dynamics_jacobians_with_env(
             env,
             request.h_pose,
             request.h_vel,
+            request.one_sided,
             nu.as_ref(),
         )?;
         out.d_state = Some((-(out.d_torque * dtp), -(out.d_torque * dtv)));

@@ -242,7 +242,11 @@ impl<'a> Lean<'a> {
             inexact_friction: 0,
             stuck_joint_ticks: 0,
             stages_ahead: 0,
-            pot_angles: vec![self.theta_meas - cfg.dither(0, 0.0)?],
+            pot_angles: if cfg.record_pot_angles {
+                vec![self.theta_meas - cfg.dither(0, 0.0)?]
+            } else {
+                Vec::new()
+            },
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
@@ -290,7 +294,9 @@ impl<'a> Lean<'a> {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
                 // The last reading of the run is never used: no dither row is needed for it.
                 self.theta_meas = cfg.pot_angle(&theta, t + cfg.dt);
-                out.pot_angles.push(self.theta_meas);
+                if cfg.record_pot_angles {
+                    out.pot_angles.push(self.theta_meas);
+                }
                 if tick_new < ticks {
                     self.theta_meas += cfg.dither(tick_new, t + cfg.dt)?;
                 }
@@ -502,33 +508,7 @@ impl<'a> Lean<'a> {
             });
         }
         if let (Some(s), Some(s_tau)) = (self.sens.as_mut(), s_tau) {
-            let da = |st: &Stage, sp: &Sens, sv: &Sens| -> Sens {
-                match &st.jac {
-                    Some(j) => {
-                        let mut out = j.fxi.clone();
-                        mul_add(&mut out, &j.fp, sp);
-                        mul_add(&mut out, &j.fv, sv);
-                        mul_add(&mut out, &j.ft, s_tau);
-                        out
-                    }
-                    None => Sens::zeros(sp.ncols()),
-                }
-            };
-            let (sp0, sv0) = (&s.p, &s.v);
-            let da1 = da(&s1, sp0, sv0);
-            let sp2 = sp0 + sv0 * (0.5 * dt);
-            let sv2 = sv0 + &da1 * (0.5 * dt);
-            let da2 = da(&s2, &sp2, &sv2);
-            let sp3 = sp0 + &sv2 * (0.5 * dt);
-            let sv3 = sv0 + &da2 * (0.5 * dt);
-            let da3 = da(&s3, &sp3, &sv3);
-            let sp4 = sp0 + &sv3 * dt;
-            let sv4 = sv0 + &da3 * dt;
-            let da4 = da(&s4, &sp4, &sv4);
-            let new_p = sp0 + (sv0 + &sv2 * 2.0 + &sv3 * 2.0 + &sv4) * (dt / 6.0);
-            let new_v = sv0 + (da1 + da2 * 2.0 + da3 * 2.0 + da4) * (dt / 6.0);
-            s.p = new_p;
-            s.v = new_v;
+            stages::propagate(s, [&s1, &s2, &s3, &s4], s_tau, dt);
         }
         Ok(())
     }

@@ -80,6 +80,8 @@ pub struct LoopConfig {
     /// free earlier than a clean replay does (docs/identification.md, "Replaying the
     /// potentiometer noise"). `None`: noise-free readings. Its sensitivity is 0 (data).
     pub pot_dither: Option<Vec<Vec6>>,
+    /// Record [`LoopRun::pot_angles`] (default off: CLOE's trial and sensitivity runs never read it).
+    pub record_pot_angles: bool,
 }
 
 /// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
@@ -120,6 +122,7 @@ impl LoopConfig {
             parallel_stages: true,
             recorded_commands: None,
             pot_dither: None,
+            record_pot_angles: false,
         }
     }
 
@@ -345,7 +348,8 @@ pub struct LoopRun {
     pub stages_ahead: usize,
     /// The model's noise-free potentiometer angle (drive convention, rad) at each sampling tick —
     /// tick 0 and every `pot_period` after it — before any `pot_dither`: what a model-based
-    /// estimate of the robot's potentiometer noise subtracts from the robot's readings.
+    /// estimate of the robot's potentiometer noise subtracts from the robot's readings. Empty
+    /// unless [`LoopConfig::record_pot_angles`].
     pub pot_angles: Vec<Vec6>,
 }
 

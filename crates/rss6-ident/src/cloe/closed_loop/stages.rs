@@ -1,13 +1,19 @@
 //! One RK4 stage of the loop's model with its derivatives (see the parent module's docs).
 
-use super::super::config::LoopConfig;
+use super::super::config::{LoopConfig, StateJacobians};
 use super::super::friction::{central_jacobians, sim_err, Sens, COULOMB};
+use super::super::sens_state::{mul_add, SensState};
 use crate::error::{IdentError, Result};
 use rss6_core::{
     forward_dynamics_jacobians_with_env, forward_dynamics_with_env, jacobian_theta,
     mass_matrix_with_env, regressor_with_gravity, DynamicParams, ForwardJacobians, JacobianRequest,
     Mat6, Vec6, LEGS, N_DYN,
 };
+
+/// Pose step (m, rad) of the one-sided state Jacobians of [`StateJacobians::PerTick`].
+const PER_TICK_H_POSE: f64 = 1e-7;
+/// χ̇ step (m/s, rad/s) of the one-sided state Jacobians of [`StateJacobians::PerTick`].
+const PER_TICK_H_VEL: f64 = 1e-6;
 
 /// What a stage needs of the loop: the configuration, the parameters and the active columns. It
 /// holds no loop state, so the threads that evaluate stages ahead (`ahead.rs`) share it.
@@ -20,6 +26,8 @@ pub(super) struct StageModel<'a> {
     pub(super) dp_nf: DynamicParams,
     /// The active columns of A (`None`: no sensitivities).
     pub(super) columns: Option<Vec<usize>>,
+    /// The columns of ∂χ̈/∂Ξ a stage needs (bit k for column k of Ξ).
+    param_mask: u64,
 }
 
 /// One RK4 stage's acceleration and (optionally) its derivatives.
@@ -60,13 +68,28 @@ impl<'a> StageModel<'a> {
         dp_nc.coulomb = [0.0; LEGS];
         let mut dp_nf = dp_nc;
         dp_nf.viscous = [0.0; LEGS];
+        let param_mask = columns.iter().flatten().fold(0u64, |m, &col| {
+            if Self::uses_params_column(cfg, col) {
+                m | 1 << col
+            } else {
+                m
+            }
+        });
         StageModel {
             cfg,
             dp: *dp,
             dp_nc,
             dp_nf,
             columns,
+            param_mask,
         }
+    }
+
+    /// Whether column `col` of A takes its sensitivity from ∂χ̈/∂Ξ: the dynamic parameters, and
+    /// the friction unless the implicit law applies it through τ_f (its sensitivity is then in
+    /// the held torque's).
+    fn uses_params_column(cfg: &LoopConfig, col: usize) -> bool {
+        col < N_DYN && !(cfg.implicit_friction && col >= COULOMB)
     }
 
     /// One stage of the forward dynamics, with derivatives if sensitivities are on. With the
@@ -99,11 +122,18 @@ impl<'a> StageModel<'a> {
                 .map_err(|e| sim_err(t, e))?;
             return Ok(Stage { a, jac: None });
         };
-        let request = JacobianRequest {
+        // Per tick the state Jacobians are an approximation already (≈ 10⁻³): one-sided
+        // differences halve their cost for an O(h) error far below that.
+        let mut request = JacobianRequest {
             state: frozen.is_none(),
             rate_step: free_rates.then_some(cfg.dt),
+            param_columns: self.param_mask,
             ..JacobianRequest::default()
         };
+        if cfg.state_jacobians == StateJacobians::PerTick {
+            (request.h_pose, request.h_vel, request.one_sided) =
+                (PER_TICK_H_POSE, PER_TICK_H_VEL, true);
+        }
         forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, fj)
             .map_err(|e| sim_err(t, e))?;
         let (fp, fv) = match (frozen, fj.d_state) {
@@ -112,9 +142,7 @@ impl<'a> StageModel<'a> {
         };
         let mut fxi = Sens::zeros(columns.len());
         for (c, &col) in columns.iter().enumerate() {
-            // With the implicit law friction acts through τ_f (its sensitivity is in the held
-            // torque's).
-            if col < N_DYN && !(implicit && col >= COULOMB) {
+            if Self::uses_params_column(cfg, col) {
                 fxi.set_column(c, &fj.d_params.column(col));
             }
         }
@@ -196,4 +224,39 @@ impl<'a> StageModel<'a> {
             }),
         })
     }
+}
+
+/// The RK4 step of the sensitivities (s_χ, s_χ̇) in `s`, in place in its scratch space: the same
+/// arithmetic, in the same order, as the step of the state (χ̈'s sensitivity at a stage is
+/// fxi + F_χ s_χ + F_χ̇ s_χ̇ + F_τ s_τ, zero for a stage without derivatives).
+pub(super) fn propagate(s: &mut SensState, stages: [&Stage; 4], s_tau: &Sens, dt: f64) {
+    let [sp, sv, da, acc_p, acc_v] = &mut s.rk4;
+    let (sp0, sv0) = (&s.p, &s.v);
+    let stage_da = |da: &mut Sens, st: &Stage, sp: &Sens, sv: &Sens| match &st.jac {
+        Some(j) => {
+            da.copy_from(&j.fxi);
+            mul_add(da, &j.fp, sp);
+            mul_add(da, &j.fv, sv);
+            mul_add(da, &j.ft, s_tau);
+        }
+        None => da.fill(0.0),
+    };
+    stage_da(da, stages[0], sp0, sv0);
+    acc_p.copy_from(sv0);
+    acc_v.copy_from(da);
+    // Stages 2 and 3 at half a step along the previous stage's rates, stage 4 at a full step.
+    for (k, (h, w)) in [(0.5 * dt, 2.0), (0.5 * dt, 2.0), (dt, 1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let prev_sv = if k == 0 { sv0 } else { &*sv };
+        sp.zip_zip_apply(sp0, prev_sv, |x, a, b| *x = a + b * h);
+        sv.zip_zip_apply(sv0, da, |x, a, b| *x = a + b * h);
+        acc_p.zip_apply(sv, |x, b| *x += b * w);
+        stage_da(da, stages[k + 1], sp, sv);
+        acc_v.zip_apply(da, |x, b| *x += b * w);
+    }
+    let sixth = dt / 6.0;
+    s.p.zip_apply(acc_p, |x, b| *x += b * sixth);
+    s.v.zip_apply(acc_v, |x, b| *x += b * sixth);
 }
