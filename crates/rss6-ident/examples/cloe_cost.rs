@@ -9,14 +9,15 @@
 //! configuration of `tests/cloe.rs` (no torque clamp, Table 5.2's Coulomb friction as printed).
 //! Each loop timing is the median of three runs. `--sequential`: the stages' derivatives evaluated
 //! in turn (`LoopConfig::parallel_stages = false`) instead of ahead on all rayon threads.
-//! `--repeat N`: each loop timing is the median of N runs (default 3). `--per-tick-only`: time the
-//! simulation and the per-tick sensitivities only, alternating (for a profiler).
+//! `--repeat N`: each loop timing is the median of N runs (default 3). `--per-tick-only`: time
+//! only, alternating, a simulation, the per-tick sensitivities, and the per-tick sensitivities
+//! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
 use rss6_ident::{
-    cloe, simulate_loop, table_5_2_truth, CloeData, CloeOptions, Consistent, Excitation,
-    LoopConfig, DRIVE_UNIT_TO_NM,
+    cloe, simulate_loop, simulate_loop_from, simulate_loop_recording, table_5_2_truth, CloeData,
+    CloeOptions, Consistent, Excitation, LoopConfig, DRIVE_UNIT_TO_NM,
 };
 use std::time::Instant;
 
@@ -75,21 +76,33 @@ fn main() {
     let mut cfg_fast = cfg.clone();
     cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
     if per_tick_only {
-        let (mut ts, mut tf) = (Vec::new(), Vec::new());
+        // Alternating: a plain simulation; the per-tick sensitivities as `simulate_loop` runs
+        // them (a primal run first when the stages are evaluated ahead); a recording primal run
+        // and the per-tick sensitivities taken from it, as CLOE runs a Jacobian after a trial.
+        let mut t = [vec![], vec![], vec![], vec![]];
         for _ in 0..repeat {
             let t0 = Instant::now();
             simulate_loop(&cfg, &truth, &exc, None).unwrap();
-            ts.push(t0.elapsed().as_secs_f64());
+            t[0].push(t0.elapsed().as_secs_f64());
             let t0 = Instant::now();
             simulate_loop(&cfg_fast, &truth, &exc, Some(&cols)).unwrap();
-            tf.push(t0.elapsed().as_secs_f64());
+            t[1].push(t0.elapsed().as_secs_f64());
+            let t0 = Instant::now();
+            let (_, rec) = simulate_loop_recording(&cfg, &truth, &exc).unwrap();
+            t[2].push(t0.elapsed().as_secs_f64());
+            let t0 = Instant::now();
+            simulate_loop_from(&cfg_fast, &truth, &exc, &cols, rec).unwrap();
+            t[3].push(t0.elapsed().as_secs_f64());
         }
-        ts.sort_by(f64::total_cmp);
-        tf.sort_by(f64::total_cmp);
-        let (s, f) = (ts[repeat / 2], tf[repeat / 2]);
+        let [s, f, r, g] = t.map(|mut v| {
+            v.sort_by(f64::total_cmp);
+            v[repeat / 2]
+        });
         println!(
-            "{secs} s run, medians of {repeat}: simulation {s:.3} s, per-tick sensitivities (49) {f:.3} s = {:.2} ×",
-            f / s
+            "{secs} s run, {} rayon threads, medians of {repeat}: simulation {s:.3} s; per-tick sensitivities (49) {f:.3} s = {:.2} ×; recording simulation {r:.3} s, per-tick sensitivities from it {g:.3} s = {:.2} ×",
+            rayon::current_num_threads(),
+            f / s,
+            g / s
         );
         return;
     }

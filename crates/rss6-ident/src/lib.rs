@@ -35,9 +35,10 @@ pub use crate::calibrate::{
 };
 pub use crate::cloe::{
     cloe, cloe_observed, output_observability, parameter_names as loop_parameter_names,
-    simulate as simulate_loop, table_5_2_truth, Alias, CloeData, CloeOptions, CloeResult, CloeStop,
-    Consistent, LoopConfig, LoopParams, LoopRun, OutputObservability, StateJacobians,
-    DRIVE_UNIT_TO_NM, HAC_LAGS, N_A, N_PSI, SETTLE_STEPS,
+    simulate as simulate_loop, simulate_from as simulate_loop_from,
+    simulate_recording as simulate_loop_recording, table_5_2_truth, Alias, CloeData, CloeOptions,
+    CloeResult, CloeStop, Consistent, LoopConfig, LoopParams, LoopRun, OutputObservability,
+    Recording, StateJacobians, DRIVE_UNIT_TO_NM, HAC_LAGS, N_A, N_PSI, SETTLE_STEPS,
 };
 pub use crate::data::{
     collect, collect_with_progress, CalibrationData, ConfigurationData, RobotSource,

@@ -5,7 +5,10 @@
 use rss6_core::{home_pose, DynamicParams, KinematicParams, Mat3, PlatformLoad, Vec3, Vec6};
 use rss6_ctrl::PidGains;
 use rss6_exp::{ident, Externals, Record};
-use rss6_ident::{simulate_loop, Excitation, LoopConfig, LoopParams, N_A};
+use rss6_ident::{
+    simulate_loop, simulate_loop_from, simulate_loop_recording, Excitation, LoopConfig, LoopParams,
+    N_A,
+};
 use rss6_sim::{CmmConfig, EffectSpec, ModelSim, RobotSim, SimConfig};
 
 /// A short, gentle at-rest excitation (3 harmonics of 0.5 Hz, one 2 s period).
@@ -270,6 +273,33 @@ fn per_tick_state_jacobians_approximate_the_exact_sensitivities() {
     }
     println!("per-tick state Jacobians: worst relative column error {worst:.2e}");
     assert!(worst < BOUND_PER_TICK, "{worst}");
+}
+
+#[test]
+fn sensitivities_from_a_recorded_run_are_the_plain_calls_bit_for_bit() {
+    // The public pair CLOE's iterations use: a recording primal run, then the sensitivities
+    // taken from it (stages ahead on the rayon threads when there are several) — equal to
+    // simulate_loop's, exact and per tick, and with no recording.
+    let a = truth();
+    let exc = excitation();
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.3);
+    cfg.implicit_friction = true;
+    cfg.derivative_filter = 5e-3;
+    let cols = [0usize, 4, 33, 54, 64, 66];
+    for per_tick in [false, true] {
+        let mut c = cfg.clone();
+        if per_tick {
+            c.state_jacobians = rss6_ident::StateJacobians::PerTick;
+        }
+        let (plain, rec) = simulate_loop_recording(&cfg, &a, &exc).unwrap();
+        assert_eq!(plain.chi, simulate_loop(&cfg, &a, &exc, None).unwrap().chi);
+        let want = simulate_loop(&c, &a, &exc, Some(&cols)).unwrap();
+        for r in [rec, None] {
+            let got = simulate_loop_from(&c, &a, &exc, &cols, r).unwrap();
+            assert_eq!(got.chi, want.chi);
+            assert_eq!(got.jacobian, want.jacobian);
+        }
+    }
 }
 
 /// ≈ 3× the measured worst column error of the per-tick approximation (8.8e-4, release).

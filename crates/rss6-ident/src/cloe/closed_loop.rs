@@ -68,10 +68,46 @@ pub fn simulate<T: Trajectory + ?Sized>(
     simulate_recorded(cfg, a, reference, columns, None, false).map(|(run, _)| run)
 }
 
-/// The stage calls of a primal run ([`simulate_recorded`]), for a sensitivity run with the same
-/// configuration (but for `state_jacobians`), parameters and reference.
+/// The stage calls of a primal run ([`simulate_recording`]), for a sensitivity run with the same
+/// configuration (but for `state_jacobians`), parameters and reference ([`simulate_from`]).
 #[derive(Clone)]
-pub(crate) struct Recording(Arc<[StageCall]>);
+pub struct Recording(Arc<[StageCall]>);
+
+impl std::fmt::Debug for Recording {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Recording({} stage calls)", self.0.len())
+    }
+}
+
+/// [`simulate`] without sensitivities that also records its stage calls when the loop would
+/// evaluate them ahead on several threads (`cfg.parallel_stages`, more than one rayon thread, not
+/// called from a rayon worker; otherwise `None`). CLOE records its trial runs so: the trial it
+/// accepts serves the next sensitivity run, which then needs no primal run of its own.
+///
+/// Errors: as [`simulate`].
+pub fn simulate_recording<T: Trajectory + ?Sized>(
+    cfg: &LoopConfig,
+    a: &LoopParams,
+    reference: &T,
+) -> Result<(LoopRun, Option<Recording>)> {
+    simulate_recorded(cfg, a, reference, None, None, true)
+}
+
+/// [`simulate`] with sensitivities of `columns`, its stages' derivatives evaluated ahead from
+/// `recording` (of [`simulate_recording`] with the same configuration but for
+/// `state_jacobians`, the same parameters and reference; a call that differs is evaluated in
+/// turn), or, with `None`, as [`simulate`] does. The result is bit for bit [`simulate`]'s.
+///
+/// Errors: as [`simulate`].
+pub fn simulate_from<T: Trajectory + ?Sized>(
+    cfg: &LoopConfig,
+    a: &LoopParams,
+    reference: &T,
+    columns: &[usize],
+    recording: Option<Recording>,
+) -> Result<LoopRun> {
+    simulate_recorded(cfg, a, reference, Some(columns), recording, false).map(|(run, _)| run)
+}
 
 /// [`simulate`], with the stages' derivatives evaluated ahead on all rayon threads when
 /// `cfg.parallel_stages` allows it (not from inside a rayon worker: its pool may be busy with other

@@ -14,7 +14,7 @@ mod result;
 mod sens_state;
 mod truth;
 
-pub use closed_loop::simulate;
+pub use closed_loop::{simulate, simulate_from, simulate_recording, Recording};
 pub use config::{parameter_names, LoopConfig, LoopParams, LoopRun, StateJacobians, N_A};
 pub use consistent::{Consistent, N_PSI};
 pub use estimator::{cloe, cloe_observed, CloeData, CloeOptions, HAC_LAGS};
