@@ -155,7 +155,7 @@ pub fn forward_dynamics_jacobians_with_env(
         &mut out.d_params,
     )?;
     for (c, mut col) in out.d_params.column_iter_mut().enumerate() {
-        if request.param_columns >> c & 1 == 1 {
+        if (request.param_columns.checked_shr(c as u32)).is_some_and(|m| m & 1 == 1) {
             let x: Vec6 = -(k * &col);
             col.copy_from(&x);
         } else {
