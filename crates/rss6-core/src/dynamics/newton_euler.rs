@@ -317,7 +317,8 @@ pub fn inverse_dynamics_derivatives_with_env(
 
 /// The body of [`inverse_dynamics_derivatives_with_env`] at a known geometry and θ̇ (the state and
 /// steps already checked). With `twist`: also ∂(J_ad(χ) ν)/∂χ at ν = `twist` held, from the same
-/// pose steps (the joint rates' pose derivative, no extra IK).
+/// pose steps (the joint rates' pose derivative, no extra IK). `one_sided`: forward differences from
+/// the state (evaluated once) instead of central ones.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn derivatives_at(
     kp: &KinematicParams,
