@@ -61,6 +61,17 @@ fn dynamics_hot_paths_do_not_allocate() {
             forward_dynamics_jacobians_with_env(&kp, &dp, p, &pose_dot, &tau, &env, &req, &mut fj)
                 .unwrap();
             sink += fj.d_params[(0, 4)] + fj.d_rates.unwrap()[(1, 1)];
+            // The per-tick path: one-sided steps, a column mask.
+            let one = JacobianRequest {
+                one_sided: true,
+                h_pose: 1e-7,
+                h_vel: 1e-6,
+                param_columns: 0x00ff_00ff,
+                ..req
+            };
+            forward_dynamics_jacobians_with_env(&kp, &dp, p, &pose_dot, &tau, &env, &one, &mut fj)
+                .unwrap();
+            sink += fj.d_params[(0, 4)] + fj.d_state.unwrap().0[(1, 1)];
             sink += implicit_friction(&kp, &dp, p, &pose_dot, &tau, &env, 1e-3)
                 .unwrap()
                 .torque[0];
