@@ -5,13 +5,13 @@ commands, per-tick Jacobians while iterating). Prints the wall time of CLOE alon
 and simulations, and the per-iteration cost. Run on an idle machine.
 
     python benches/python/cloe_30s.py [--seed 0] [--periods 3] [--prior-log-std 1.0] [--trace]
-        [--parameters fc1,fc2,...] [--designed] [--settle-steps 5]
+        [--parameters fc1,fc2,...] [--designed] [--settle-steps 3]
 
 ``--prior-log-std``: σ of CLOE's log-prior around the linear start (default 1.0, CLOE's own); a
 failure to converge prints the cost history instead of raising. ``--trace``: Φ and the wall time
 after every accepted iteration. ``--parameters``: estimate only these quantities (the others stay
 at the linear start; l_p stays at the drive's value), e.g. the friction and gains alone.
-``--settle-steps``: CLOE's ``settle_steps`` (the *settled* rule's look-back, default 5).
+``--settle-steps``: CLOE's ``settle_steps`` (the *settled* rule's look-back, default 3; 5 until the fourteenth session).
 ``--designed``: three periods of the designed exciting trajectory instead of a random feasible one
 (the default, thesis-size box 10⁻³ m/s, 5·10⁻³ rad/s).
 """
@@ -32,8 +32,8 @@ def main() -> None:
     ap.add_argument("--periods", type=int, default=3, help="10 s periods of the excitation")
     ap.add_argument("--prior-log-std", type=float, default=1.0)
     ap.add_argument(
-        "--settle-steps", type=int, default=5,
-        help="accepted steps the settled stopping rule looks back over (CLOE's default 5)",
+        "--settle-steps", type=int, default=3,
+        help="accepted steps the settled stopping rule looks back over (CLOE's default 3)",
     )  # fmt: skip
     ap.add_argument("--trace", action="store_true", help="print Φ after every iteration")
     ap.add_argument("--parameters", default="base", help="comma-separated names, or base")
@@ -47,7 +47,7 @@ def main() -> None:
     )
     if args.prior_log_std != 1.0:
         identify.cloe = partial(identify.cloe, prior_log_std=args.prior_log_std)  # type: ignore[assignment]
-    if args.settle_steps != 5:
+    if args.settle_steps != 3:
         identify.cloe = partial(identify.cloe, settle_steps=args.settle_steps)  # type: ignore[assignment]
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()

@@ -635,7 +635,7 @@ def cloe_identify(
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
     pot_dither: ArrayLike | None = None,
-    settle_steps: int = 5,
+    settle_steps: int = 3,
     initial: tuple[DynamicParams, tuple[float, float, float]] | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...

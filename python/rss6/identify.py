@@ -23,6 +23,7 @@ from rss6.errors import (
 )
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
+    SETTLE_STEPS,
     LinearGuess,
     check_options,
     effect_kwargs,
@@ -367,9 +368,9 @@ class IdentificationResult:
     ``rms_before``/``rms_after`` (6,): RMS of χ_m − χ_s per axis (m, rad) at the guess and at the
     estimate; ``cost_history``: Φ at the guess and after every accepted step; ``iterations``;
     ``converged_by``: the stopping rule that ended it — ``"tolerances"`` (eq. 5.9),
-    ``"invisible"`` (Φ fell by < 10⁻² residual variances twice), ``"settled"`` (over the last five
-    steps Φ fell by < 1 residual variance and no quantity moved by half its σ: creeping along the
-    kinks of a stick–slip cost) or ``"stationary"`` (no step lowers Φ at a first-order optimum);
+    ``"invisible"`` (Φ fell by < 10⁻² residual variances twice), ``"settled"`` (over the last
+    ``settle_steps`` steps Φ fell by < 1 residual variance, no quantity moved by half its σ: creeping
+    along a stick–slip cost's kinks) or ``"stationary"`` (no step lowers Φ, first-order optimum);
     ``hops``: with :func:`cloe`'s ``hops``, the reduced χ² of the first run and after each hop
     (``iterations`` and ``simulations`` then count every run); ``restarts``: with ``restarts``, the
     reduced χ² of every run and ``start_spread`` the largest |log change| of each identified
@@ -448,7 +449,7 @@ def cloe(
     offset_drift: ArrayLike | None = None,
     measured_cutoff: float | None = None,
     pot_noise: str | ArrayLike = "none",
-    settle_steps: int = 5,
+    settle_steps: int = SETTLE_STEPS,
     hops: Sequence[float] = (),
     restarts: int = 0,
     restart_spread: float = 0.3,
@@ -488,12 +489,11 @@ def cloe(
     ``per_tick_jacobians``: iterate on cheaper sensitivities (state Jacobians once per tick, ≈ 10⁻³);
     a stop is checked on the exact ones (iterations go on with them if their step would lower Φ by
     more than one residual variance), and the σ always come from the exact ones.
-    ``settle_steps``: the *settled* stopping rule looks back over this many accepted steps
-    (``converged_by == "settled"``: Φ fell by < 1 residual variance over them and no quantity moved
-    by half its σ — creeping along a stick–slip cost's kinks); 0 turns it off. ``hops``: after
-    converging, CLOE again from the estimate with every quantity but the held ones moved by the
-    log-factor δ, for each δ, keeping the lowest χ² (the stick–slip cost's local minima lie along
-    the loop's common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
+    ``settle_steps``: the *settled* rule's look-back in accepted steps (``IdentificationResult.
+    converged_by``; 0 turns it off; 5 until the fourteenth session). ``hops``: after converging,
+    CLOE again from the estimate with every quantity but the held ones moved by the log-factor δ,
+    for each δ, keeping the lowest χ² (the stick–slip cost's local minima lie along the loop's
+    common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
     ``restarts``: as many more runs (hops included) from the guess with each identified quantity
     moved by a seeded factor in [1 − ``restart_spread``, 1 + ``restart_spread``], the best kept and
     its σ widened to the spread over equally good runs (:func:`rss6.identify_hops.restarted`);

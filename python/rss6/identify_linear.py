@@ -381,6 +381,11 @@ def requested_names(parameters: str | Sequence[str], known: Sequence[str]) -> li
     return names
 
 
+#: Default of :func:`rss6.identify.cloe`'s ``settle_steps`` (``rss6_ident::SETTLE_STEPS``; 5 until
+#: the fourteenth session: docs/identification.md "A shorter look-back for the settled rule").
+SETTLE_STEPS = 3
+
+
 def check_options(consistent: bool, settle_steps: int, commands: str) -> None:
     """Raises :class:`rss6.InvalidInputError` for :func:`rss6.identify.cloe` options it refuses."""
     if not consistent:

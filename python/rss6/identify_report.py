@@ -11,6 +11,7 @@ import numpy as np
 import rss6
 from rss6 import _rss6, identify, thesis
 from rss6.excitation import LoopObservability
+from rss6.identify_linear import SETTLE_STEPS
 
 __all__ = ["IdentifyReport", "loop_text", "quantities"]
 
@@ -66,8 +67,8 @@ def loop_text(t_f: float, eps: float, implicit: bool = False) -> str:
 _STOP_RULES = {
     "tolerances": "eq. 5.9: Φ and every quantity changed by less than the tolerances",
     "invisible": "Φ fell by < 1 % of a residual variance twice",
-    "settled": "settled: over the last 5 steps Φ fell by < 1 residual variance and no quantity "
-    "moved by half its σ",
+    "settled": f"settled: over the last {SETTLE_STEPS} steps Φ fell by < 1 residual variance and "
+    "no quantity moved by half its σ",
     "stationary": "no step lowers Φ and the gradient vanishes",
 }
 

@@ -6,7 +6,7 @@ use rss6_core::Vec6;
 
 /// Default of [`CloeOptions::settle_steps`](super::CloeOptions::settle_steps): the accepted steps
 /// over which [`CloeStop::Settled`] looks back.
-pub const SETTLE_STEPS: usize = 5;
+pub const SETTLE_STEPS: usize = 3;
 
 /// Which stopping rule ended a converged [`cloe`](super::cloe) (its module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
