@@ -49,7 +49,7 @@ def run(
             kp = rss6.KinematicParams.nominal()
             theta = np.array([rss6.ik(kp, p) for p in np.asarray(data.true_pose)])
             kappa = np.asarray(data.kappa)
-            read = np.array([kp.theta_from_reading(r) for r in kappa])
+            read = kp.theta_from_reading(kappa)
             k.pop("pot_noise", None)
             return inner(data, *a, pot_noise=read - theta, **k)
 
@@ -86,7 +86,7 @@ def estimate_error() -> None:
             target_in_effector=tr["target_in_effector"],
         )  # fmt: skip
         theta = np.array([rss6.ik(kp, p) for p in np.asarray(d.true_pose)])
-        noise = np.array([kp.theta_from_reading(k) for k in np.asarray(d.kappa)]) - theta
+        noise = kp.theta_from_reading(np.asarray(d.kappa)) - theta
         kappa = np.asarray(d.kappa)
         fresh = np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
         line = []

@@ -141,14 +141,17 @@ def linear_guess(
     n = kappa.shape[0]
     if n < 4 * int(edge / dt) + 50:
         raise IdentificationError(f"{n} ticks are too few for the linear guess")
-    e = cmd - np.array([drive.theta_from_reading(k) for k in kappa])
+    e = cmd - drive.theta_from_reading(kappa)
     integral = np.cumsum(e, axis=0) * dt
-    d_unit = np.zeros_like(e)
-    for k in range(1, n):
-        de = e[k] - e[k - 1]
-        t_f = derivative_filter
-        d_unit[k] = (t_f * d_unit[k - 1] + de) / (t_f + dt) if t_f > 0 else de / dt
-    theta = np.array([kp.theta_from_reading(k) for k in kappa])
+    # The drive's derivative D_k = (T_f D_{k−1} + Δe_k)/(T_f + dt), D_0 = 0 (Δe/dt unfiltered).
+    de = np.diff(e, axis=0, prepend=e[:1])
+    t_f = derivative_filter
+    d_unit = (
+        signal.lfilter([1.0 / (t_f + dt)], [1.0, -t_f / (t_f + dt)], de, axis=0)
+        if t_f > 0
+        else de / dt
+    )
+    theta = kp.theta_from_reading(kappa)
     poses = np.asarray(_rss6.fk_batch(kp, theta, data.start))
     b, a = signal.butter(4, cutoff * 2.0 * dt)
     pose = signal.filtfilt(b, a, poses, axis=0)
@@ -160,29 +163,24 @@ def linear_guess(
     ticks = np.arange(int(edge / dt), n - int(edge / dt), stride)
     rates = np.array([_rss6.jacobian_theta(kp, pose[k]) @ pose_dot[k] for k in ticks])
     peak = np.abs(rates).max(axis=0)
-    rows: list[np.ndarray] = []
-    rhs: list[float] = []
-    terms: list[tuple[float, float, float]] = []
-    excluded = 0
-    for j, k in enumerate(ticks):
-        gamma = np.asarray(_rss6.regressor(kp, pose[k], pose_dot[k], pose_ddot[k]))
-        for i in range(6):
-            if abs(rates[j, i]) < min_rate * peak[i]:
-                excluded += 1
-                continue
-            # Γ_i (L q + c)_Ξ − l_i ∫e_i − l_d D_i = l_p e_i
-            row = gamma[i] @ lin[:64]
-            row[_LI] -= int_f[k, i]
-            row[_LD] -= d_f[k, i]
-            row[_LP] = 0.0
-            rows.append(row)
-            rhs.append(lp * e_f[k, i] - gamma[i] @ c[:64])
-            terms.append((e_f[k, i], int_f[k, i], d_f[k, i]))
+    # One equation per tick and moving joint i: Γ_i (L q + c)_Ξ − l_i ∫e_i − l_d D_i = l_p e_i.
+    gamma = np.array([_rss6.regressor(kp, pose[k], pose_dot[k], pose_ddot[k]) for k in ticks])
+    moving = np.abs(rates) >= min_rate * peak
+    excluded = int(moving.size - moving.sum())
+    g_rows = gamma[moving]  # (rows, 64), tick-major as the ticks and joints are
+    tick_of = np.broadcast_to(ticks[:, None], moving.shape)[moving]
+    joint_of = np.broadcast_to(np.arange(6), moving.shape)[moving]
+    a_mat = g_rows @ lin[:64]
+    a_mat[:, _LI] -= int_f[tick_of, joint_of]
+    a_mat[:, _LD] -= d_f[tick_of, joint_of]
+    a_mat[:, _LP] = 0.0
+    y = lp * e_f[tick_of, joint_of] - g_rows @ c[:64]
+    terms = np.stack([e_f, int_f, d_f], axis=-1)[tick_of, joint_of]
+    rows = a_mat
     if len(rows) < 3 * _N_Q:
         raise IdentificationError(
             f"only {len(rows)} torque equations with moving joints (at least {3 * _N_Q} needed)"
         )
-    a_mat, y = np.array(rows), np.array(rhs)
     all_names = list(_rss6.cloe_parameter_names())
     if names is None:
         free = [j for j in range(_N_Q) if j != _LP]
@@ -194,7 +192,7 @@ def linear_guess(
     q, at_bound = _bounded_fit(a_mat, y, q0, free, ridge)
     q[_LP] = lp
     residual = float(np.sqrt(np.mean((a_mat @ q - y) ** 2)))
-    torque = float(np.sqrt(np.mean((np.array(terms) @ q[[_LP, _LI, _LD]]) ** 2)))
+    torque = float(np.sqrt(np.mean((terms @ q[[_LP, _LI, _LD]]) ** 2)))
     if residual >= torque:
         raise IdentificationError(
             f"the linear fit explains nothing (residual {residual:.3g} N·m ≥ torque {torque:.3g} N·m)"
@@ -286,7 +284,7 @@ def potentiometer_noise(
             f"got {cutoff}"
         )
     drive = _rss6.KinematicParams.nominal() if drive is None else drive
-    theta = np.array([drive.theta_from_reading(k) for k in kappa[fresh]])
+    theta = drive.theta_from_reading(kappa[fresh])
     b, a = signal.butter(4, cutoff * 2.0 * period)
     est = theta - signal.filtfilt(b, a, theta, axis=0)
     return _held(est, fresh, kappa.shape[0])
@@ -433,7 +431,7 @@ def model_potentiometer_noise(
     # missing from `fresh` and held over.
     fresh = fresh[(fresh % step == 0) & (fresh // step < len(ang))]
     drive = _rss6.KinematicParams.nominal()
-    est = np.array([drive.theta_from_reading(k) for k in kappa[fresh]]) - ang[fresh // step]
+    est = drive.theta_from_reading(kappa[fresh]) - ang[fresh // step]
     if cutoff is not None:
         nyquist = 0.5 / (step * float(data.dt))
         if not (np.isfinite(cutoff) and 0.0 < cutoff < nyquist):

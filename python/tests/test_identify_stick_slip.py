@@ -229,7 +229,7 @@ def test_the_potentiometer_noise_is_estimated_and_replayed() -> None:
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
     theta = np.array([rss6.ik(kp, p) for p in np.asarray(data.true_pose)])
-    reading = np.array([kp.theta_from_reading(k) for k in np.asarray(data.kappa)])
+    reading = kp.theta_from_reading(np.asarray(data.kappa))
     noise = reading - theta  # the twin's true noise (exact at the sampling ticks, the even ones)
     est = identify.potentiometer_noise(data)
     assert est.shape == noise.shape
@@ -350,7 +350,7 @@ def test_the_noise_estimated_against_the_model_replays_closer_to_the_truth() -> 
     np.testing.assert_array_equal(res.rms_before, once.rms_before)
     theta = np.array([rss6.ik(kp, p) for p in np.asarray(d.true_pose)])
     kappa = np.asarray(d.kappa)
-    noise = np.array([kp.theta_from_reading(k) for k in kappa]) - theta
+    noise = kp.theta_from_reading(kappa) - theta
     fresh = np.concatenate(([0], 1 + np.flatnonzero(np.any(kappa[1:] != kappa[:-1], axis=1))))
 
     def err(est: np.ndarray) -> float:

@@ -190,6 +190,22 @@ def test_reading_conversion_is_eq_4_2():
     np.testing.assert_allclose(KP.reading_from_theta(theta), kappa)
 
 
+def test_reading_conversion_takes_one_reading_per_row():
+    kappa = np.random.default_rng(3).normal(0, 300, (50, 6))
+    theta = KP.theta_from_reading(kappa)
+    assert theta.shape == (50, 6)
+    # row by row, bit for bit, and back
+    assert np.array_equal(theta, np.array([KP.theta_from_reading(k) for k in kappa]))
+    assert np.array_equal(
+        KP.reading_from_theta(theta), np.array([KP.reading_from_theta(t) for t in theta])
+    )
+    assert KP.theta_from_reading(np.zeros((0, 6))).shape == (0, 6)
+    with pytest.raises(rss6.ShapeError, match=r"kappa must have shape \(6,\) or \(N, 6\)"):
+        KP.theta_from_reading(np.zeros((4, 5)))
+    with pytest.raises(rss6.NonFiniteError, match=r"index \[1, 2\]"):
+        KP.theta_from_reading(np.where(np.arange(12).reshape(2, 6) == 8, np.nan, 0.0))
+
+
 def test_kinematic_dict_round_trip():
     kp = rss6.KinematicParams.perturbed(np.random.default_rng(2).normal(0, 1e-3, 60))
     d = kp.to_dict()

@@ -109,6 +109,34 @@ pub(crate) fn rows6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec6>> {
     Ok(rows::<6>(obj, name)?.into_iter().map(Vec6::from).collect())
 }
 
+/// `f` applied to a (6,) array, or to each row of an (N, 6) one: the same shape back (finite input
+/// only; other shapes raise `ShapeError`).
+pub(crate) fn per_row<'py>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    f: impl Fn(&Vec6) -> Vec6,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (dims, data) = array(obj, name)?;
+    match dims.as_slice() {
+        [6] | [_, 6] => check_finite(&data, &dims, name)?,
+        _ => {
+            return Err(shape(format!(
+                "{name} must have shape (6,) or (N, 6), got {}",
+                fmt_shape(&dims)
+            )))
+        }
+    }
+    let out: Vec<Vec6> = data
+        .chunks_exact(6)
+        .map(|c| f(&Vec6::from_column_slice(c)))
+        .collect();
+    Ok(match (dims.len(), out.first()) {
+        (1, Some(v)) => out6(py, v).into_any(),
+        _ => out_rows6(py, &out).into_any(),
+    })
+}
+
 /// A (6,) float64 numpy array.
 pub(crate) fn out6<'py>(py: Python<'py>, v: &Vec6) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_slice(py, v.as_slice())

@@ -6,7 +6,7 @@ use pyo3::types::{PyDict, PyType};
 use rss6_core::{DynamicParams, KinematicParams, LEGS, N_DYN, N_KIN_ERRORS};
 use std::path::PathBuf;
 
-use crate::convert::{exact, out1, out_rows, vec6, vecn};
+use crate::convert::{exact, out1, out_rows, per_row, vecn};
 use crate::errors::{core, invalid, make};
 
 // The TOML layout and its conversions are rss6-sim's (one format for Rust and Python).
@@ -133,24 +133,24 @@ impl PyKinematicParams {
         self.inner.validate().map_err(core)
     }
 
-    /// θ = η κ + Δθ (eq. 4.2): joint angles (rad) from potentiometer readings κ (bits), shape (6,).
+    /// θ = η κ + Δθ (eq. 4.2): joint angles (rad) from potentiometer readings κ (bits), shape (6,),
+    /// or (N, 6) with one reading per row (the same shape back).
     fn theta_from_reading<'py>(
         &self,
         py: Python<'py>,
         kappa: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let k = vec6(kappa, "kappa")?;
-        Ok(crate::convert::out6(py, &self.inner.theta_from_reading(&k)))
+    ) -> PyResult<Bound<'py, PyAny>> {
+        per_row(py, kappa, "kappa", |k| self.inner.theta_from_reading(k))
     }
 
-    /// κ = (θ − Δθ)/η: potentiometer readings (bits) from joint angles θ (rad), shape (6,).
+    /// κ = (θ − Δθ)/η: potentiometer readings (bits) from joint angles θ (rad), shape (6,) or
+    /// (N, 6).
     fn reading_from_theta<'py>(
         &self,
         py: Python<'py>,
         theta: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let t = vec6(theta, "theta")?;
-        Ok(crate::convert::out6(py, &self.inner.reading_from_theta(&t)))
+    ) -> PyResult<Bound<'py, PyAny>> {
+        per_row(py, theta, "theta", |t| self.inner.reading_from_theta(t))
     }
 
     /// B_i, shape (6, 3), m.
