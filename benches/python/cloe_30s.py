@@ -98,7 +98,8 @@ def main() -> None:
     wall = time.perf_counter() - t0
     print(
         f"{data.duration:.0f} s trajectory, {len(data.t)} frames: CLOE of {len(res.identified)} "
-        f"quantities {wall:.1f} s (linear start included), {res.iterations} iterations, "
+        f"quantities {wall:.1f} s (the linear start and one simulation of the initial model for "
+        f"Table 5.3 included), {res.iterations} iterations, "
         f"{res.simulations} plain simulations, {wall / max(res.iterations, 1):.2f} s per iteration, "
         f"reduced χ² {res.reduced_chi2:.3f}, stopped by {res.converged_by}"
     )
