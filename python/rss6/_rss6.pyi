@@ -9,6 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 from typing_extensions import Self, TypeAlias
 
 __all__ = [
+    "SETTLE_STEPS",
     "CalibrationData",
     "CalibrationResult",
     "Dsmc",
@@ -61,6 +62,8 @@ __all__ = [
     "table_5_2_truth_params",
     "thesis_tables",
 ]
+
+SETTLE_STEPS: int
 
 _F64: TypeAlias = NDArray[np.float64]
 _Path: TypeAlias = str | PathLike[str]
@@ -635,7 +638,7 @@ def cloe_identify(
     offset_drift: ArrayLike | None = None,
     outer_gains: tuple[float, float, float] | None = None,
     pot_dither: ArrayLike | None = None,
-    settle_steps: int = 3,
+    settle_steps: int = ...,
     initial: tuple[DynamicParams, tuple[float, float, float]] | None = None,
 ) -> dict[str, Any]: ...
 def cloe_parameter_names() -> list[str]: ...

@@ -176,10 +176,9 @@ def linear_guess(
     a_mat[:, _LP] = 0.0
     y = lp * e_f[tick_of, joint_of] - g_rows @ c[:64]
     terms = np.stack([e_f, int_f, d_f], axis=-1)[tick_of, joint_of]
-    rows = a_mat
-    if len(rows) < 3 * _N_Q:
+    if len(y) < 3 * _N_Q:
         raise IdentificationError(
-            f"only {len(rows)} torque equations with moving joints (at least {3 * _N_Q} needed)"
+            f"only {len(y)} torque equations with moving joints (at least {3 * _N_Q} needed)"
         )
     all_names = list(_rss6.cloe_parameter_names())
     if names is None:
@@ -201,7 +200,7 @@ def linear_guess(
     return LinearGuess(
         dynamics=dp,
         pid=(float(pid[0]), float(pid[1]), float(pid[2])),
-        rows=len(rows),
+        rows=len(y),
         excluded=excluded,
         torque_rms=torque,
         residual_rms=residual,
@@ -379,9 +378,9 @@ def requested_names(parameters: str | Sequence[str], known: Sequence[str]) -> li
     return names
 
 
-#: Default of :func:`rss6.identify.cloe`'s ``settle_steps`` (``rss6_ident::SETTLE_STEPS``; 5 until
+#: Default of :func:`rss6.identify.cloe`'s ``settle_steps``: ``rss6_ident::SETTLE_STEPS`` (3; 5 until
 #: the fourteenth session: docs/identification.md "A shorter look-back for the settled rule").
-SETTLE_STEPS = 3
+SETTLE_STEPS: int = _rss6.SETTLE_STEPS
 
 
 def check_options(consistent: bool, settle_steps: int, commands: str) -> None:

@@ -374,7 +374,7 @@ pub(crate) fn simulate_identification<'py>(
 /// `initial` (dynamics, gains): where LM starts instead of the guess (`CloeOptions::initial`). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=3, initial=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=rss6_ident::SETTLE_STEPS, initial=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,

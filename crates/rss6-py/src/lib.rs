@@ -27,6 +27,8 @@ mod thesis;
 /// The compiled part of the `rss6` package.
 #[pymodule]
 fn _rss6(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // CLOE's default look-back of the settled stopping rule (`rss6_ident::SETTLE_STEPS`).
+    m.add("SETTLE_STEPS", rss6_ident::SETTLE_STEPS)?;
     m.add_class::<params::PyKinematicParams>()?;
     m.add_class::<params::PyDynamicParams>()?;
     m.add_function(wrap_pyfunction!(kinematics::home_pose, m)?)?;
