@@ -103,6 +103,7 @@ def main() -> None:
         f"{res.simulations} plain simulations, {wall / max(res.iterations, 1):.2f} s per iteration, "
         f"reduced χ² {res.reduced_chi2:.3f}, stopped by {res.converged_by}"
     )
+    print(f"not identifiable ({len(res.unidentifiable)}): {', '.join(res.unidentifiable)}")
 
 
 if __name__ == "__main__":

@@ -307,40 +307,57 @@ pub fn observability_of(h: &DMatrix<f64>, columns: &[usize], m: usize) -> Result
     Ok((o_in, max / min))
 }
 
+/// Columns whose residual norm is within this fraction of the largest count as tied when
+/// [`base_columns`] pivots; the earliest of them is taken.
+pub const PIVOT_TIE: f64 = 0.1;
+
 /// The identifiable (base) columns of a stacked regressor by QR with column pivoting (Gautier's
 /// numerical method, eq. 5.2): columns whose |R_ii| exceeds `relative` × the largest |R_ii|, in pivot
 /// order, after scaling every column to unit norm (so the threshold does not depend on units).
+///
+/// The pivot is the column with the largest norm left after projecting out the chosen ones, except
+/// that among columns within [`PIVOT_TIE`] of that norm the earliest is taken. Near-parallel pairs
+/// (a crank's mass and its moment, say) otherwise go to whichever is ahead by rounding, so a
+/// 10⁻³ change of the columns, or another trajectory, swapped the names of the base set; with the
+/// tie rule the choice follows the column order. Every |R_ii| taken is still ≥ 0.9 × the largest
+/// available at its step (modified Gram–Schmidt with one re-orthogonalisation).
 pub fn base_columns(h: &DMatrix<f64>, relative: f64) -> Vec<usize> {
-    let mut scaled = h.clone();
-    let mut zero = Vec::new();
-    for (j, mut col) in scaled.column_iter_mut().enumerate() {
+    let mut w = h.clone();
+    let mut left: Vec<usize> = Vec::new();
+    for (j, mut col) in w.column_iter_mut().enumerate() {
         let n = col.norm();
-        if n > 0.0 {
+        if n > 0.0 && n.is_finite() {
             col /= n;
-        } else {
-            zero.push(j);
+            left.push(j);
         }
     }
-    let qr = scaled.col_piv_qr();
-    let r = qr.r();
-    let p = qr.p();
-    let mut order: Vec<usize> = (0..h.ncols()).collect();
-    // The pivot order: the permutation applied to a row of column indices.
-    let mut idx = DMatrix::<f64>::from_fn(1, h.ncols(), |_, j| j as f64);
-    p.permute_columns(&mut idx);
-    for (k, o) in order.iter_mut().enumerate() {
-        *o = idx[(0, k)] as usize;
+    let mut base = Vec::new();
+    let mut top = 0.0_f64;
+    while !left.is_empty() {
+        let norms: Vec<f64> = left.iter().map(|&j| w.column(j).norm()).collect();
+        let max = norms.iter().copied().fold(0.0_f64, f64::max);
+        if base.is_empty() {
+            top = max;
+        }
+        // Not above the threshold (or a NaN threshold): the rest is not identifiable.
+        if max.partial_cmp(&(relative * top)) != Some(std::cmp::Ordering::Greater) {
+            break;
+        }
+        let k = norms
+            .iter()
+            .position(|&n| n >= (1.0 - PIVOT_TIE) * max)
+            .unwrap_or(0);
+        let j = left.remove(k);
+        base.push(j);
+        let q = w.column(j) / norms[k];
+        for _ in 0..2 {
+            for &l in &left {
+                let c = q.dot(&w.column(l));
+                w.column_mut(l).axpy(-c, &q, 1.0);
+            }
+        }
     }
-    let diag: Vec<f64> = (0..r.nrows().min(r.ncols()))
-        .map(|k| r[(k, k)].abs())
-        .collect();
-    let top = diag.first().copied().unwrap_or(0.0);
-    order
-        .into_iter()
-        .zip(diag.iter())
-        .filter(|(j, d)| **d > relative * top && !zero.contains(j))
-        .map(|(j, _)| j)
-        .collect()
+    base
 }
 
 /// How the output mimics each column outside `base`: for column u, the least-squares coefficients c

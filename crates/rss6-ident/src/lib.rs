@@ -46,7 +46,7 @@ pub use crate::data::{
 pub use crate::error::{IdentError, Method, Result};
 pub use crate::excitation::{
     aliases, base_columns, observability_of, Excitation, ExcitationLimits, ExcitationProblem,
-    Violation,
+    Violation, PIVOT_TIE,
 };
 pub use crate::generator::{
     perturb_external, AnalyticRobot, NoiseModel, TrueRobot, NOMINAL_SENSOR_IN_BASE,

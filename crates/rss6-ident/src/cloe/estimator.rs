@@ -78,8 +78,10 @@ pub struct CloeOptions {
     /// Largest change of any log-parameter per iteration (0.5: a factor 1.65).
     pub max_log_step: f64,
     /// Iterate on sensitivities with the state Jacobians evaluated once per tick
-    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.4× cheaper on two cores); the
-    /// identifiability analysis and the final standard deviations always use the exact ones. A
+    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.4× cheaper on two cores), from
+    /// the guess on: the identifiability analysis uses the per-tick ones at the guess (their error
+    /// does not move the base set, see [`crate::base_columns`]), the final standard deviations
+    /// always the exact ones. A
     /// stop found on the per-tick ones is checked on the exact ones at the same estimate (computed
     /// for the σ anyway): it stands if their LM step predicts Φ to fall by at most one residual
     /// variance (the *settled* rule's bound, a likelihood ratio below e^0.5), else the iterations
@@ -245,9 +247,12 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             )))
         }
     };
-    let mut cur = evaluate_with(&psi, true, false, None, &mut sims)?;
+    // With per-tick sensitivities on, the ones at the guess are per tick too: identifiability is
+    // decided on them (their ≈ 10⁻³ error does not move the base set: `base_columns`' tie rule),
+    // and the σ come from the exact ones at the stop.
+    let mut cur = evaluate_with(&psi, true, options.per_tick_jacobians, None, &mut sims)?;
     // Whether `cur`'s sensitivities are the exact ones (the final σ need them).
-    let mut cur_exact = true;
+    let mut cur_exact = !options.per_tick_jacobians;
     // Set when a stop found on per-tick sensitivities is refused by the exact ones.
     let mut exact_only = false;
     let rms_before = cur.rms;
