@@ -98,8 +98,15 @@ def test_ctrl_c_stops_a_run_with_one_line_and_keeps_its_log(tmp_path):
     MCAP written so far readable with the run marked as interrupted."""
     log_path = tmp_path / "long.mcap"
     cmd = [sys.executable, "-m", "rss6.cli", "track", "--duration", "3000", "--plant", "model"]
+    # The child gets the default SIGINT action even when this test runs with SIGINT ignored (a
+    # runner started in the background by a shell without job control): Python installs its
+    # KeyboardInterrupt handler only over the default action.
     p = subprocess.Popen(
-        [*cmd, "--mcap", str(log_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [*cmd, "--mcap", str(log_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and p.poll() is None:

@@ -4,7 +4,8 @@
 //!
 //! Identifiability (Gautier's numerical method, eq. 5.2) is decided on what is measured: QR with
 //! column pivoting of the weighted output sensitivity ∂Y/∂ψ at the guess, columns scaled to unit
-//! norm, a column kept when |R_ii| > `identifiability_threshold` × the largest |R_ii|. The thesis
+//! norm, a column kept when |R_ii| > `identifiability_threshold` × the largest |R_ii| (of
+//! near-parallel columns the earliest, [`crate::PIVOT_TIE`]). The thesis
 //! uses R_ii < 10⁻³ on its regressor; on unit-norm columns the default 10⁻³ is the same rule made
 //! unit-free. Unidentifiable entries stay at the guess (the prior) and are reported by name.
 //!
