@@ -459,6 +459,7 @@ def test_unidentifiable_quantities_say_what_they_combine_into(kp: rss6.Kinematic
         tol_cost=1e-2,
         tol_step=1e-2,
     )
+    print("\n".join(res.alias_text()))
     assert set(res.aliases) == set(res.unidentifiable)
     cranks = [n for n in res.unidentifiable if n.startswith("wrench")]
     assert len(cranks) == 6, res.unidentifiable

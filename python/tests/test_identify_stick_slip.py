@@ -397,11 +397,16 @@ def test_a_profile_interval_follows_the_cost_where_the_curvature_does_not() -> N
     kw = {"commands": "recorded", "hold": ["lp"], "max_iterations": 40, "per_tick_jacobians": True}
     res = identify.cloe(d, kp, gdp, gpid, **kw, **LAW)
     fc1 = identify_profile.profile(d, kp, gdp, gpid, res, "fc1", **kw, **LAW)
+    print(f"fc1: estimate {fc1.estimate:.4g}, Wald {fc1.wald}, profile {fc1.interval}")
     assert fc1.bounded() and not fc1.lower_minimum
     ends = np.log(np.array(fc1.interval) / np.array(fc1.wald))
     # Measured 1.4e-3 and 3.1e-3 of a log half-width of 0.043; bound ≈ 3×.
     assert np.all(np.abs(ends) < 0.01), ends
     m6 = identify_profile.profile(d, kp, gdp, gpid, res, "wrench6.m", **kw, **LAW)
+    print(
+        f"wrench6.m: estimate {m6.estimate:.4g} (σ {res.std('wrench6.m'):.3f}), Wald {m6.wald}, "
+        f"profile {m6.interval}, {m6.runs} runs"
+    )
     assert "wrench6.m" in res.poorly_identified and m6.bounded()
     low, high = np.log(np.array(m6.interval) / m6.estimate)
     wald_low, wald_high = np.log(np.array(m6.wald) / m6.estimate)
