@@ -170,12 +170,12 @@ def profile(
             c *= 2.0
         sides[side] = (offs, ds)
     lowest = min(min(ds) for _, ds in sides.values())
+    est = math.exp(float(psi_est[j]))  # ψ is the log of the physical quantity
     bounds = []
     for side in (-1, 1):
         offs, ds = sides[side]
         x = _crossing([abs(o) for o in offs], [d - lowest for d in ds], threshold)
-        bounds.append(None if x is None else result_value(result, name) * math.exp(side * x))
-    est = result_value(result, name)
+        bounds.append(None if x is None else est * math.exp(side * x))
     all_off = sorted({o for offs, _ in sides.values() for o in offs})
     by_off = {o: d for offs, ds in sides.values() for o, d in zip(offs, ds, strict=True)}
     z = float(stats.norm.ppf(0.5 + level / 2.0))
@@ -194,11 +194,3 @@ def profile(
         lower_minimum=lowest < -threshold,
         runs=runs,
     )
-
-
-def result_value(result: IdentificationResult, name: str) -> float:
-    """The estimated value of ``name`` (its physical quantity, e^ψ)."""
-    from rss6 import identify
-
-    psi, _, _ = _rss6.cloe_psi(result.dynamics, result.pid)
-    return float(math.exp(psi[identify.parameter_names().index(name)]))
