@@ -65,7 +65,6 @@ fn dynamics_hot_paths_do_not_allocate() {
             let one = JacobianRequest {
                 one_sided: true,
                 h_pose: 1e-7,
-                h_vel: 1e-6,
                 param_columns: 0x00ff_00ff,
                 ..req
             };

@@ -225,6 +225,25 @@ impl LoadAt {
         Vec6::new(f[0], f[1], f[2], n[0], n[1], n[2])
     }
 
+    /// The tangent of [`force`](Self::force) along (δv, δv̇) at twist v (gravity drops out).
+    #[inline]
+    pub(super) fn force_tangent(&self, v: &Vec6, d_v: &Vec6, d_v_dot: &Vec6) -> Vec6 {
+        let omega = Vec3::new(v[3], v[4], v[5]);
+        let d_omega = Vec3::new(d_v[3], d_v[4], d_v[5]);
+        let d_e_ddot = Vec3::new(d_v_dot[0], d_v_dot[1], d_v_dot[2]);
+        let d_omega_dot = Vec3::new(d_v_dot[3], d_v_dot[4], d_v_dot[5]);
+        let d_p_ddot = d_e_ddot
+            + d_omega_dot.cross(&self.c)
+            + d_omega.cross(&omega.cross(&self.c))
+            + omega.cross(&d_omega.cross(&self.c));
+        let d_f = d_p_ddot * self.m;
+        let d_n = self.c.cross(&d_f)
+            + self.i * d_omega_dot
+            + d_omega.cross(&(self.i * omega))
+            + omega.cross(&(self.i * d_omega));
+        Vec6::new(d_f[0], d_f[1], d_f[2], d_n[0], d_n[1], d_n[2])
+    }
+
     /// G_L = [−m g; −m c × g] (twist coordinates).
     #[inline]
     pub(super) fn gravity(&self, g: &Vec3) -> Vec6 {

@@ -64,6 +64,7 @@ mod integration;
 mod load;
 mod matrices;
 mod newton_euler;
+mod rate_tangent;
 mod sensitivity;
 
 pub use self::friction_step::{implicit_friction, FrictionStep};

@@ -3,7 +3,8 @@
 
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
-use super::{check_finite, check_state, joint_friction, sign0, twist_and_rate, z_cross, z_triple};
+use super::rate_tangent::{force_rate_tangents, twist_rate_directions};
+use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
 use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
 use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
@@ -260,11 +261,6 @@ fn rigid_forces(
     Ok((f, theta_dot, j_ad_t))
 }
 
-/// J_adᵀ of a geometry.
-fn geom_j_ad_t(geom: &LegGeometry) -> Result<Mat6> {
-    Ok(geom.j_ad()?.transpose())
-}
-
 /// The actuator torques of the rigid bodies (friction not included) and θ̇, at a known geometry.
 fn rigid_torques(
     geom: &LegGeometry,
@@ -278,16 +274,18 @@ fn rigid_torques(
     Ok((solve_j_ad_t(&j_ad_t, &f)?, theta_dot))
 }
 
-/// State derivatives of the inverse dynamics, (∂τ_a/∂χ, ∂τ_a/∂χ̇) at (χ, χ̇, χ̈) in `env`, by
-/// central differences with steps `h_pose` (m, rad) in χ and `h_vel` in χ̇, Coulomb friction's sign
-/// held at the given state's θ̇ (the derivative of the smooth part). τ_a is quadratic in χ̇ plus the
-/// viscous term, so the χ̇ columns are exact up to rounding for any `h_vel`; the χ̇ steps reuse the
-/// state's geometry (no IK), which makes this cheaper than differencing the forward dynamics.
+/// State derivatives of the inverse dynamics, (∂τ_a/∂χ, ∂τ_a/∂χ̇) at (χ, χ̇, χ̈) in `env`,
+/// Coulomb friction's sign held at the given state's θ̇ (the derivative of the smooth part).
+/// ∂τ_a/∂χ̇ is exact: at a fixed pose τ_a is quadratic in χ̇ plus the viscous term, and its tangent
+/// is one product-rule pass of the leg recursion per column. ∂τ_a/∂χ is by central differences
+/// with step `h_pose` (m, rad); a step takes the IK linearised along it (θ ± h J_θ e_k: the IK's
+/// own derivative, no IK solved; O(h²) like the difference itself), and one LU of J_adᵀ at the
+/// state maps every column — cheaper than differencing the forward dynamics.
 ///
 /// With them the forward dynamics' state Jacobians follow from the implicit function theorem:
 /// ∂χ̈/∂χ = −M̃⁻¹J_θᵀ ∂τ_a/∂χ and ∂χ̈/∂χ̇ = −M̃⁻¹J_θᵀ ∂τ_a/∂χ̇ (∂τ_a/∂χ̈ = J_θ⁻ᵀM̃).
 ///
-/// Errors: as [`inverse_dynamics_with_env`] at the state or a stepped one;
+/// Errors: as [`inverse_dynamics_with_env`] at the state (type I also at a stepped geometry);
 /// [`CoreError::InvalidParameter`] for a step that is not finite and > 0.
 #[allow(clippy::too_many_arguments)]
 pub fn inverse_dynamics_derivatives_with_env(
@@ -298,104 +296,101 @@ pub fn inverse_dynamics_derivatives_with_env(
     pose_ddot: &Vec6,
     env: &Environment,
     h_pose: f64,
-    h_vel: f64,
 ) -> Result<(Mat6, Mat6)> {
     check_state(pose_dot, pose_ddot)?;
     env.check()?;
-    if !(h_pose.is_finite() && h_pose > 0.0 && h_vel.is_finite() && h_vel > 0.0) {
+    if !(h_pose.is_finite() && h_pose > 0.0) {
         return Err(CoreError::InvalidParameter(
-            "finite-difference steps must be finite and > 0",
+            "the finite-difference step must be finite and > 0",
         ));
     }
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let (_, theta_dot) = rigid_torques(&geom, dp, pose, pose_dot, pose_ddot, env)?;
     let (d_pose, d_vel, _) = derivatives_at(
-        kp, &geom, &theta_dot, dp, pose_dot, pose_ddot, env, h_pose, h_vel, false, None,
+        kp,
+        &geom,
+        &geom.j_theta()?,
+        dp,
+        pose_dot,
+        pose_ddot,
+        env,
+        h_pose,
+        false,
+        None,
     )?;
     Ok((d_pose, d_vel))
 }
 
-/// The body of [`inverse_dynamics_derivatives_with_env`] at a known geometry and θ̇ (the state and
-/// steps already checked). With `twist`: also ∂(J_ad(χ) ν)/∂χ at ν = `twist` held, from the same
-/// pose steps (the joint rates' pose derivative, no extra IK). `one_sided`: forward differences from
-/// the state (evaluated once) instead of central ones.
+/// The body of [`inverse_dynamics_derivatives_with_env`] at a known geometry and its J_θ (the state
+/// and steps already checked). With `twist`: also ∂(J_ad(χ) ν)/∂χ at ν = `twist` held, from the same
+/// pose steps (the joint rates' pose derivative). `one_sided`: forward differences from the state
+/// instead of central ones.
+///
+/// A pose step does not solve the inverse kinematics again: the stepped geometry takes the exact
+/// rotation and platform joints of χ ± h e_k with the joint angles θ ± h J_θ e_k — the IK linearised
+/// along the step, which has the IK's own derivative — so a difference of it differs from one
+/// through the IK only by terms the difference itself truncates (O(h²) central, O(h) one-sided).
+/// The torques are not solved per step either: with f = J_adᵀ τ_rigid,
+/// ∂τ_rigid = J_adᵀ⁻¹(∂f − ∂J_adᵀ τ_rigid), one LU at the state for every column.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn derivatives_at(
     kp: &KinematicParams,
     geom: &LegGeometry,
-    theta_dot: &Vec6,
+    j_theta: &Mat6,
     dp: &DynamicParams,
     pose_dot: &Vec6,
     pose_ddot: &Vec6,
     env: &Environment,
     h_pose: f64,
-    h_vel: f64,
     one_sided: bool,
     twist: Option<&Vec6>,
 ) -> Result<(Mat6, Mat6, Option<Mat6>)> {
     let pose = &geom.pose;
-    let sign = theta_dot.map(sign0);
-    let torque = |(t, td): (Vec6, Vec6)| -> Vec6 {
-        Vec6::from_fn(|i, _| t[i] + dp.coulomb[i] * sign[i] + dp.viscous[i] * td[i])
+    // The geometry at χ + h e_k with the IK linearised along the step (h as taken, after rounding).
+    let stepped = |k: usize, h: f64| -> (Vec6, f64, LegGeometry) {
+        let mut p = *pose;
+        p[k] += h;
+        let h = p[k] - pose[k];
+        let theta = geom.theta + j_theta.column(k) * h;
+        (p, h, LegGeometry::from_pose_and_theta(kp, &p, &theta))
     };
-    let mut d_pose = Mat6::zeros();
-    let (mut d_force, mut d_rate) = (Mat6::zeros(), Mat6::zeros());
+    // The state: its twist-space force, θ̇ and J_adᵀ, the LU of J_adᵀ and the rigid torque.
+    let (f0, td0, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
+    let lu = j0.lu();
+    let singular = || CoreError::Singular(SingularKind::TypeII);
+    let tau0 = lu.solve(&f0).ok_or_else(singular)?;
     let mut d_rates = twist.map(|_| Mat6::zeros());
-    // One-sided: the minus side of every step is the state itself, evaluated once.
-    let centre = if one_sided {
-        let (f, td, j_ad_t) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
-        let nu_j = twist.map(|nu| j_ad_t.transpose() * nu);
-        Some((torque((solve_j_ad_t(&j_ad_t, &f)?, td)), f, td, nu_j))
-    } else {
-        None
-    };
+    // Columns of ∂f − ∂J_adᵀ τ_rigid (pose) and ∂f (χ̇), with ∂θ̇ for the viscous term.
+    let (mut b_pose, mut d_rate_pose) = (Mat6::zeros(), Mat6::zeros());
     for k in 0..6 {
-        let (mut pp, mut pm) = (*pose, *pose);
-        pp[k] += h_pose;
-        let gp = LegGeometry::at_pose(kp, &pp)?;
-        let tp = torque(rigid_torques(&gp, dp, &pp, pose_dot, pose_ddot, env)?);
-        let (tm, jm_nu) = match &centre {
-            Some((t0, _, _, nu_j)) => (*t0, *nu_j),
-            None => {
-                pm[k] -= h_pose;
-                let gm = LegGeometry::at_pose(kp, &pm)?;
-                let tm = torque(rigid_torques(&gm, dp, &pm, pose_dot, pose_ddot, env)?);
-                let jm_nu = match twist {
-                    Some(nu) => Some(gm.j_ad()? * nu),
-                    None => None,
-                };
-                (tm, jm_nu)
-            }
+        let (pp, hp, gp) = stepped(k, h_pose);
+        let (fp, tdp, jp) = rigid_forces(&gp, dp, &pp, pose_dot, pose_ddot, env)?;
+        let (fm, tdm, jm, hm) = if one_sided {
+            (f0, td0, j0, 0.0)
+        } else {
+            let (pm, hm, gm) = stepped(k, -h_pose);
+            let (fm, tdm, jm) = rigid_forces(&gm, dp, &pm, pose_dot, pose_ddot, env)?;
+            (fm, tdm, jm, hm)
         };
-        d_pose.set_column(k, &((tp - tm) / (pp[k] - pm[k])));
-        if let (Some(d), Some(nu), Some(jm_nu)) = (d_rates.as_mut(), twist, jm_nu) {
-            d.set_column(k, &((gp.j_ad()? * nu - jm_nu) / (pp[k] - pm[k])));
+        let h = hp - hm;
+        b_pose.set_column(k, &((fp - fm - (jp - jm) * tau0) / h));
+        d_rate_pose.set_column(k, &((tdp - tdm) / h));
+        if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
+            d.set_column(k, &((jp - jm).tr_mul(nu) / h));
         }
-        // χ̇ steps at this geometry: difference the twist-space force, map it once below.
-        let (mut vp, mut vm) = (*pose_dot, *pose_dot);
-        vp[k] += h_vel;
-        let (fp, tdp, _) = rigid_forces(geom, dp, pose, &vp, pose_ddot, env)?;
-        let (fm, tdm) = match &centre {
-            Some((_, f0, td0, _)) => (*f0, *td0),
-            None => {
-                vm[k] -= h_vel;
-                let (fm, tdm, _) = rigid_forces(geom, dp, pose, &vm, pose_ddot, env)?;
-                (fm, tdm)
-            }
-        };
-        let h = vp[k] - vm[k];
-        d_force.set_column(k, &((fp - fm) / h));
-        d_rate.set_column(k, &((tdp - tdm) / h));
     }
-    // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇: one solve for the six χ̇ columns.
-    let lu = geom_j_ad_t(geom)?.lu();
-    let mut d_vel = lu
-        .solve(&d_force)
-        .ok_or(CoreError::Singular(SingularKind::TypeII))?;
+    // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
+    let mut d_pose = lu.solve(&b_pose).ok_or_else(singular)?;
+    // χ̇: the force's exact tangent at this geometry (θ̇ = J_θ χ̇ for the viscous term).
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let (dv, dvd) = twist_rate_directions(pose, pose_dot);
+    let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
+    let d_force = force_rate_tangents(geom, dp, load.as_ref(), &v, &v_dot, &dv, &dvd)?;
+    let mut d_vel = lu.solve(&d_force).ok_or_else(singular)?;
     for i in 0..LEGS {
         let fv = dp.viscous[i];
         for k in 0..6 {
-            d_vel[(i, k)] += fv * d_rate[(i, k)];
+            d_pose[(i, k)] += fv * d_rate_pose[(i, k)];
+            d_vel[(i, k)] += fv * j_theta[(i, k)];
         }
     }
     check_finite(d_pose.as_slice())?;
@@ -466,7 +461,6 @@ pub(super) struct ForwardAt {
     /// The twist v = J_s χ̇ and its rate v̇.
     pub v: Vec6,
     pub v_dot: Vec6,
-    pub theta_dot: Vec6,
     pub j_ad_t: Mat6,
     pub js_inv: Mat6,
     pub chol: nalgebra::Cholesky<f64, nalgebra::U6>,
@@ -500,7 +494,6 @@ pub(super) fn forward_at(
         chi_ddot,
         v,
         v_dot,
-        theta_dot,
         j_ad_t,
         js_inv,
         chol,

@@ -24,9 +24,9 @@ use crate::types::{Mat6, Vec6};
 /// What [`forward_dynamics_jacobians_with_env`] computes beyond χ̈, J_θ, ∂χ̈/∂τ_a and ∂χ̈/∂Ξ.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JacobianRequest {
-    /// The state Jacobians ∂χ̈/∂χ, ∂χ̈/∂χ̇ (central differences of the inverse dynamics, as
+    /// The state Jacobians ∂χ̈/∂χ, ∂χ̈/∂χ̇ (from the inverse dynamics' derivatives, as
     /// [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env)
-    /// with steps `h_pose`, `h_vel`).
+    /// with step `h_pose`: differences in χ, the exact tangent in χ̇).
     pub state: bool,
     /// With `state`: also ∂(J_ad(χ) ν)/∂χ at ν = v + `rate_step`·v̇ held (v = J_s χ̇ the twist, v̇
     /// its rate at this χ̈): the pose derivative of the joint rates one explicit step of
@@ -34,24 +34,21 @@ pub struct JacobianRequest {
     pub rate_step: Option<f64>,
     /// Step in χ (m, rad).
     pub h_pose: f64,
-    /// Step in χ̇ (exact for any step: τ_a is quadratic in χ̇ plus the viscous term).
-    pub h_vel: f64,
-    /// One-sided (forward) differences instead of central ones: 6 pose steps (6 inverse
-    /// kinematics) and 6 χ̇ steps instead of 12 and 12, plus one evaluation at the state; the
-    /// error grows from O(h²) to O(h) (χ̇: h_vel times the quadratic term), so use smaller steps.
+    /// One-sided (forward) differences in χ instead of central ones: 6 pose steps instead of 12;
+    /// the error grows from O(h²) to O(h), so use a smaller step. (The χ̇ columns are exact
+    /// either way.)
     pub one_sided: bool,
     /// The columns of ∂χ̈/∂Ξ wanted, bit k for column k (default: all); the others are zero.
     pub param_columns: u64,
 }
 
 impl Default for JacobianRequest {
-    /// No state Jacobians; central differences with steps 10⁻⁶ and 10⁻².
+    /// No state Jacobians; central differences with step 10⁻⁶.
     fn default() -> Self {
         JacobianRequest {
             state: false,
             rate_step: None,
             h_pose: 1e-6,
-            h_vel: 1e-2,
             one_sided: false,
             param_columns: u64::MAX,
         }
@@ -129,13 +126,9 @@ pub fn forward_dynamics_jacobians_with_env(
     check_state(pose_dot, tau_a)?;
     env.check()?;
     let h_ok = |h: f64| h.is_finite() && h > 0.0;
-    if request.state
-        && !(h_ok(request.h_pose)
-            && h_ok(request.h_vel)
-            && request.rate_step.is_none_or(f64::is_finite))
-    {
+    if request.state && !(h_ok(request.h_pose) && request.rate_step.is_none_or(f64::is_finite)) {
         return Err(CoreError::InvalidParameter(
-            "finite-difference steps must be finite and > 0, the rate step finite",
+            "the finite-difference step must be finite and > 0, the rate step finite",
         ));
     }
     let geom = LegGeometry::at_pose(kp, pose)?;
@@ -168,13 +161,12 @@ pub fn forward_dynamics_jacobians_with_env(
         let (dtp, dtv, d_rates) = derivatives_at(
             kp,
             &geom,
-            &f.theta_dot,
+            &out.j_theta,
             dp,
             pose_dot,
             &f.chi_ddot,
             env,
             request.h_pose,
-            request.h_vel,
             request.one_sided,
             nu.as_ref(),
         )?;

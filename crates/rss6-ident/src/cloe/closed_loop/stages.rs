@@ -12,8 +12,6 @@ use rss6_core::{
 
 /// Pose step (m, rad) of the one-sided state Jacobians of [`StateJacobians::PerTick`].
 const PER_TICK_H_POSE: f64 = 1e-7;
-/// χ̇ step (m/s, rad/s) of the one-sided state Jacobians of [`StateJacobians::PerTick`].
-const PER_TICK_H_VEL: f64 = 1e-6;
 
 /// What a stage needs of the loop: the configuration, the parameters and the active columns. It
 /// holds no loop state, so the threads that evaluate stages ahead (`ahead.rs`) share it.
@@ -122,7 +120,7 @@ impl<'a> StageModel<'a> {
                 .map_err(|e| sim_err(t, e))?;
             return Ok(Stage { a, jac: None });
         };
-        // Per tick the state Jacobians are an approximation already (≈ 10⁻³): one-sided
+        // Per tick the state Jacobians are an approximation already (≈ 10⁻³): one-sided pose
         // differences halve their cost for an O(h) error far below that.
         let mut request = JacobianRequest {
             state: frozen.is_none(),
@@ -131,8 +129,7 @@ impl<'a> StageModel<'a> {
             ..JacobianRequest::default()
         };
         if cfg.state_jacobians == StateJacobians::PerTick {
-            (request.h_pose, request.h_vel, request.one_sided) =
-                (PER_TICK_H_POSE, PER_TICK_H_VEL, true);
+            (request.h_pose, request.one_sided) = (PER_TICK_H_POSE, true);
         }
         forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, fj)
             .map_err(|e| sim_err(t, e))?;
