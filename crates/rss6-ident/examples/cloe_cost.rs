@@ -10,8 +10,9 @@
 //! Each loop timing is the median of three runs. `--sequential`: the stages' derivatives evaluated
 //! in turn (`LoopConfig::parallel_stages = false`) instead of ahead on all rayon threads.
 //! `--repeat N`: each loop timing is the median of N runs (default 3). `--per-tick-only`: time
-//! only, alternating, a simulation, the per-tick sensitivities, and the per-tick sensitivities
-//! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler).
+//! only, alternating, a simulation, the per-tick sensitivities, the per-tick sensitivities
+//! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler), and
+//! the exact sensitivities from a recorded run, as CLOE computes them at its stop.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
@@ -78,8 +79,9 @@ fn main() {
     if per_tick_only {
         // Alternating: a plain simulation; the per-tick sensitivities as `simulate_loop` runs
         // them (a primal run first when the stages are evaluated ahead); a recording primal run
-        // and the per-tick sensitivities taken from it, as CLOE runs a Jacobian after a trial.
-        let mut t = [vec![], vec![], vec![], vec![]];
+        // and the per-tick sensitivities taken from it, as CLOE runs a Jacobian after a trial;
+        // the exact sensitivities from another recording, as CLOE computes them at its stop.
+        let mut t = [vec![], vec![], vec![], vec![], vec![]];
         for _ in 0..repeat {
             let t0 = Instant::now();
             simulate_loop(&cfg, &truth, &exc, None).unwrap();
@@ -93,16 +95,21 @@ fn main() {
             let t0 = Instant::now();
             simulate_loop_from(&cfg_fast, &truth, &exc, &cols, rec).unwrap();
             t[3].push(t0.elapsed().as_secs_f64());
+            let (_, rec) = simulate_loop_recording(&cfg, &truth, &exc).unwrap();
+            let t0 = Instant::now();
+            simulate_loop_from(&cfg, &truth, &exc, &cols, rec).unwrap();
+            t[4].push(t0.elapsed().as_secs_f64());
         }
-        let [s, f, r, g] = t.map(|mut v| {
+        let [s, f, r, g, e] = t.map(|mut v| {
             v.sort_by(f64::total_cmp);
             v[repeat / 2]
         });
         println!(
-            "{secs} s run, {} rayon threads, medians of {repeat}: simulation {s:.3} s; per-tick sensitivities (49) {f:.3} s = {:.2} ×; recording simulation {r:.3} s, per-tick sensitivities from it {g:.3} s = {:.2} ×",
+            "{secs} s run, {} rayon threads, medians of {repeat}: simulation {s:.3} s; per-tick sensitivities (49) {f:.3} s = {:.2} ×; recording simulation {r:.3} s, per-tick sensitivities from it {g:.3} s = {:.2} ×, exact ones from a recording {e:.3} s = {:.2} ×",
             rayon::current_num_threads(),
             f / s,
-            g / s
+            g / s,
+            e / s
         );
         return;
     }
