@@ -63,8 +63,7 @@ fn dynamics_hot_paths_do_not_allocate() {
             sink += fj.d_params[(0, 4)] + fj.d_rates.unwrap()[(1, 1)];
             // The per-tick path: one-sided steps, a column mask.
             let one = JacobianRequest {
-                one_sided: true,
-                h_pose: 1e-7,
+                one_sided_step: Some(1e-7),
                 param_columns: 0x00ff_00ff,
                 ..req
             };

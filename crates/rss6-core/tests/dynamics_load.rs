@@ -421,9 +421,8 @@ const DRIFT_FREE: f64 = 1e-15;
 /// ≈ 3 × the drift measured with gravity (4.7e-13 J; dropping the centripetal term gives 4.5e-6 J).
 const DRIFT_GRAVITY: f64 = 1.5e-12;
 
-/// The state Jacobians with a load and tilted gravity (the χ̇ columns are the force's exact
-/// tangent, the χ columns differences through the IK linearised along the step) against central
-/// differences of the forward dynamics itself (Coulomb off: its sign is held in one and not the
+/// The state Jacobians with a load and tilted gravity (exact tangents, the load's included) against
+/// central differences of the forward dynamics itself (Coulomb off: its sign is held in one and not the
 /// other). At a fixed pose χ̈ is quadratic in χ̇, so the χ̇ reference is exact up to rounding.
 #[test]
 fn state_jacobians_with_load_match_the_forward_dynamics() {
@@ -460,6 +459,7 @@ fn state_jacobians_with_load_match_the_forward_dynamics() {
         }
     }
     println!("with load: ∂χ̈/∂χ {wp:.3e}, ∂χ̈/∂χ̇ {wv:.3e} rel to central differences");
-    // Measured 1.7·10⁻⁹ / 7.6·10⁻¹³ (the print); ≈ 3× that.
-    assert!(wp <= 5e-9 && wv <= 2.5e-12, "{wp:.3e} {wv:.3e}");
+    // Measured 3.1·10⁻⁹ / 7.6·10⁻¹³ (the print; the χ columns are the reference's own error:
+    // 1.7·10⁻⁹ when the call differenced too); ≈ 3× that.
+    assert!(wp <= 1e-8 && wv <= 2.5e-12, "{wp:.3e} {wv:.3e}");
 }

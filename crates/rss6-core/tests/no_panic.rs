@@ -194,11 +194,11 @@ proptest! {
         let _ = l.validate();
         let _ = (l.inertia_about_e(), PlatformLoad::point(l.mass, l.com));
         let _ = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
-        let _ = inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &pdd, &env, h);
+        let _ = inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         let _ = forward_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         for one_sided in [false, true] {
             let req = JacobianRequest {
-                state: true, rate_step: Some(h), h_pose: h, one_sided, param_columns: k.to_bits(),
+                state: true, rate_step: Some(h), one_sided_step: one_sided.then_some(h), param_columns: k.to_bits(),
             };
             let mut fj = ForwardJacobians::default();
             let _ = forward_dynamics_jacobians_with_env(&kp, &dp, &p, &pd, &pdd, &env, &req, &mut fj);

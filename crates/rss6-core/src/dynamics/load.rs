@@ -244,6 +244,44 @@ impl LoadAt {
         Vec6::new(d_f[0], d_f[1], d_f[2], d_n[0], d_n[1], d_n[2])
     }
 
+    /// The tangent of [`force`](Self::force) along a pose direction: the load turned by δφ (c and
+    /// I_c turn with the platform) and the twist and its rate changed by (δv, δv̇).
+    #[inline]
+    pub(super) fn force_pose_tangent(
+        &self,
+        v: &Vec6,
+        v_dot: &Vec6,
+        g: &Vec3,
+        d_phi: &Vec3,
+        d_v: &Vec6,
+        d_v_dot: &Vec6,
+    ) -> Vec6 {
+        let omega = Vec3::new(v[3], v[4], v[5]);
+        let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
+        let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
+        let d_omega = Vec3::new(d_v[3], d_v[4], d_v[5]);
+        let d_e_ddot = Vec3::new(d_v_dot[0], d_v_dot[1], d_v_dot[2]);
+        let d_omega_dot = Vec3::new(d_v_dot[3], d_v_dot[4], d_v_dot[5]);
+        let d_c = d_phi.cross(&self.c);
+        let sx = d_phi.cross_matrix();
+        let d_i = sx * self.i - self.i * sx;
+        let p_ddot = e_ddot + omega_dot.cross(&self.c) + omega.cross(&omega.cross(&self.c));
+        let f = (p_ddot - g) * self.m;
+        let d_p_ddot = d_e_ddot
+            + d_omega_dot.cross(&self.c)
+            + omega_dot.cross(&d_c)
+            + d_omega.cross(&omega.cross(&self.c))
+            + omega.cross(&(d_omega.cross(&self.c) + omega.cross(&d_c)));
+        let d_f = d_p_ddot * self.m;
+        let d_n = d_c.cross(&f)
+            + self.c.cross(&d_f)
+            + d_i * omega_dot
+            + self.i * d_omega_dot
+            + d_omega.cross(&(self.i * omega))
+            + omega.cross(&(d_i * omega + self.i * d_omega));
+        Vec6::new(d_f[0], d_f[1], d_f[2], d_n[0], d_n[1], d_n[2])
+    }
+
     /// G_L = [−m g; −m c × g] (twist coordinates).
     #[inline]
     pub(super) fn gravity(&self, g: &Vec3) -> Vec6 {

@@ -64,6 +64,7 @@ mod integration;
 mod load;
 mod matrices;
 mod newton_euler;
+mod pose_tangent;
 mod rate_tangent;
 mod sensitivity;
 

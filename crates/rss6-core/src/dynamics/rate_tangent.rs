@@ -13,15 +13,18 @@ use crate::params::DynamicParams;
 use crate::pose::{euler_rate_jacobian_dot, twist_jacobian};
 use crate::types::{Mat6, Vec3, Vec6, LEGS};
 
-fn top(u: &Vec6) -> Vec3 {
+/// The linear (first three) entries of a twist-like 6-vector.
+pub(super) fn top(u: &Vec6) -> Vec3 {
     Vec3::new(u[0], u[1], u[2])
 }
 
-fn bottom(u: &Vec6) -> Vec3 {
+/// The angular (last three) entries of a twist-like 6-vector.
+pub(super) fn bottom(u: &Vec6) -> Vec3 {
     Vec3::new(u[3], u[4], u[5])
 }
 
-fn stack(a: &Vec3, b: &Vec3) -> Vec6 {
+/// [a; b].
+pub(super) fn stack(a: &Vec3, b: &Vec3) -> Vec6 {
     Vec6::new(a[0], a[1], a[2], b[0], b[1], b[2])
 }
 

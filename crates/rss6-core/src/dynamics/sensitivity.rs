@@ -24,32 +24,29 @@ use crate::types::{Mat6, Vec6};
 /// What [`forward_dynamics_jacobians_with_env`] computes beyond χ̈, J_θ, ∂χ̈/∂τ_a and ∂χ̈/∂Ξ.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JacobianRequest {
-    /// The state Jacobians ∂χ̈/∂χ, ∂χ̈/∂χ̇ (from the inverse dynamics' derivatives, as
-    /// [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env)
-    /// with step `h_pose`: differences in χ, the exact tangent in χ̇).
+    /// The state Jacobians ∂χ̈/∂χ, ∂χ̈/∂χ̇ (from the inverse dynamics' exact derivatives, as
+    /// [`inverse_dynamics_derivatives_with_env`](super::inverse_dynamics_derivatives_with_env),
+    /// or with forward differences in χ: `one_sided_step`).
     pub state: bool,
     /// With `state`: also ∂(J_ad(χ) ν)/∂χ at ν = v + `rate_step`·v̇ held (v = J_s χ̇ the twist, v̇
     /// its rate at this χ̈): the pose derivative of the joint rates one explicit step of
-    /// `rate_step` s ahead, from the same pose steps (no extra inverse kinematics).
+    /// `rate_step` s ahead, from the same pose tangents or steps (no extra inverse kinematics).
     pub rate_step: Option<f64>,
-    /// Step in χ (m, rad).
-    pub h_pose: f64,
-    /// One-sided (forward) differences in χ instead of central ones: 6 pose steps instead of 12;
-    /// the error grows from O(h²) to O(h), so use a smaller step. (The χ̇ columns are exact
-    /// either way.)
-    pub one_sided: bool,
+    /// Forward differences in χ with this step (m, rad) instead of the exact tangent: as cheap,
+    /// with an O(h) error (the per-tick sensitivities, already approximate, use them). The χ̇
+    /// columns are exact either way.
+    pub one_sided_step: Option<f64>,
     /// The columns of ∂χ̈/∂Ξ wanted, bit k for column k (default: all); the others are zero.
     pub param_columns: u64,
 }
 
 impl Default for JacobianRequest {
-    /// No state Jacobians; central differences with step 10⁻⁶.
+    /// No state Jacobians; exact tangents when requested; all columns.
     fn default() -> Self {
         JacobianRequest {
             state: false,
             rate_step: None,
-            h_pose: 1e-6,
-            one_sided: false,
+            one_sided_step: None,
             param_columns: u64::MAX,
         }
     }
@@ -126,7 +123,10 @@ pub fn forward_dynamics_jacobians_with_env(
     check_state(pose_dot, tau_a)?;
     env.check()?;
     let h_ok = |h: f64| h.is_finite() && h > 0.0;
-    if request.state && !(h_ok(request.h_pose) && request.rate_step.is_none_or(f64::is_finite)) {
+    if request.state
+        && !(request.one_sided_step.is_none_or(h_ok)
+            && request.rate_step.is_none_or(f64::is_finite))
+    {
         return Err(CoreError::InvalidParameter(
             "the finite-difference step must be finite and > 0, the rate step finite",
         ));
@@ -166,8 +166,7 @@ pub fn forward_dynamics_jacobians_with_env(
             pose_dot,
             &f.chi_ddot,
             env,
-            request.h_pose,
-            request.one_sided,
+            request.one_sided_step,
             nu.as_ref(),
         )?;
         out.d_state = Some((-(out.d_torque * dtp), -(out.d_torque * dtv)));

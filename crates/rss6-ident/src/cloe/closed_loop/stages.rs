@@ -129,7 +129,7 @@ impl<'a> StageModel<'a> {
             ..JacobianRequest::default()
         };
         if cfg.state_jacobians == StateJacobians::PerTick {
-            (request.h_pose, request.one_sided) = (PER_TICK_H_POSE, true);
+            request.one_sided_step = Some(PER_TICK_H_POSE);
         }
         forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, fj)
             .map_err(|e| sim_err(t, e))?;
