@@ -333,14 +333,6 @@ pub(super) fn derivatives_at(
     twist: Option<&Vec6>,
 ) -> Result<(Mat6, Mat6, Option<Mat6>)> {
     let pose = &geom.pose;
-    // The geometry at χ + h e_k with the IK linearised along the step (h as taken, after rounding).
-    let stepped = |k: usize, h: f64| -> (Vec6, f64, LegGeometry) {
-        let mut p = *pose;
-        p[k] += h;
-        let h = p[k] - pose[k];
-        let theta = geom.theta + j_theta.column(k) * h;
-        (p, h, LegGeometry::from_pose_and_theta(kp, &p, &theta))
-    };
     let singular = || CoreError::Singular(SingularKind::TypeII);
     let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
     // Columns of ∂f − ∂J_adᵀ τ_rigid (pose), with ∂θ̇ for the viscous term: forward differences
@@ -353,7 +345,12 @@ pub(super) fn derivatives_at(
         let mut d_rates = twist.map(|_| Mat6::zeros());
         let (mut b_pose, mut d_rate_pose) = (Mat6::zeros(), Mat6::zeros());
         for k in 0..6 {
-            let (pp, h, gp) = stepped(k, h_pose);
+            // The geometry at χ + h e_k with the IK linearised along the step (h as taken).
+            let mut pp = *pose;
+            pp[k] += h_pose;
+            let h = pp[k] - pose[k];
+            let gp =
+                LegGeometry::from_pose_and_theta(kp, &pp, &(geom.theta + j_theta.column(k) * h));
             let (fp, tdp, jp) = rigid_forces(&gp, dp, &pp, pose_dot, pose_ddot, env)?;
             b_pose.set_column(k, &((fp - f0 - (jp - j0) * tau0) / h));
             d_rate_pose.set_column(k, &((tdp - td0) / h));
@@ -366,7 +363,8 @@ pub(super) fn derivatives_at(
         // The rigid torque at the state: one Newton–Euler pass and a solve. (Taking τ_a − τ_f of
         // the caller's forward dynamics instead saves ≈ 3 % and moves the result by rounding.)
         let (f0, _, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
-        let tau0 = solve_j_ad_t(&j0, &f0)?;
+        let lu = j0.lu();
+        let tau0 = lu.solve(&f0).ok_or_else(singular)?;
         let (b, d, r) = rigid_pose_tangents(
             geom,
             j_theta,
@@ -378,7 +376,7 @@ pub(super) fn derivatives_at(
             &tau0,
             twist,
         )?;
-        (j0.lu(), b, d, r)
+        (lu, b, d, r)
     };
     // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
     let mut d_pose = lu.solve(&b_pose).ok_or_else(singular)?;
