@@ -383,7 +383,8 @@ def _signature_parallel(
 
 #: Multiples of the score test's one-step estimate tried as starts besides it (a line along it).
 STEP_MULTIPLES = (0.5, 2.0, 4.0)
-#: Quasi-random starts (scrambled Sobol, inside the bounds) tried besides the line.
+#: Quasi-random starts (scrambled Sobol, inside the bounds) tried besides the line, by default
+#: (an effect's ``sobol`` sets its own).
 SOBOL_STARTS = 8
 
 
@@ -398,11 +399,12 @@ def _best_start(
     seed: int,
 ) -> list[dict[str, float]]:
     """The fit's starts with the new (last) effect's values replaced by the best of a small global
-    stage: the one-step estimate, multiples of it (:data:`STEP_MULTIPLES`) and
-    :data:`SOBOL_STARTS` Sobol points inside its bounds, each scored by one replay (the others'
-    values kept). With stick–slip friction the signature at the null is not the effect's large-
-    scale response: a base tilt of (0.3, 0.3) rad on the plant was fitted from its one-step
-    estimate to (0.09, −0.24) (pose residual 6× the noise; 0.3× at the truth)."""
+    stage: the one-step estimate, multiples of it (:data:`STEP_MULTIPLES`), the effect's
+    ``sobol`` Sobol points inside its bounds (default :data:`SOBOL_STARTS`) and its ``scan`` of its
+    first parameter, each scored by one replay (the others' values kept). With stick–slip friction
+    the signature at the null is not the effect's large-scale response: a base tilt of
+    (0.3, 0.3) rad on the plant was fitted from its one-step estimate to (0.09, −0.24) (pose
+    residual 6× the noise; 0.3× at the truth)."""
     from scipy.stats import qmc
 
     e, scope = effs[-1]
@@ -412,8 +414,14 @@ def _best_start(
     null = np.array([p.null for p in e.params])
     one = np.array([starts[-1].get(p.name, p.null) for p in e.params])
     pts = [one] + [np.clip(null + m * (one - null), lo, hi) for m in STEP_MULTIPLES]
-    u = qmc.Sobol(len(e.params), scramble=True, seed=seed).random(SOBOL_STARTS)
+    u = qmc.Sobol(len(e.params), scramble=True, seed=seed).random(e.sobol)
     pts += list(lo + u * (hi - lo))
+    for v in e.scan:
+        # The first parameter on the effect's scan, the others at null and at the one-step start.
+        for rest in (null, one):
+            x = np.array(rest, dtype=np.float64)
+            x[0] = v
+            pts.append(np.clip(x, lo, hi))
 
     def change(x: F64) -> Change:
         c = Change()

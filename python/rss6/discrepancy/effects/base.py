@@ -72,7 +72,12 @@ class EffectDef:
     act on, ``apply(values, scope) -> Change`` (values by parameter name, SI), and how it is
     screened: ``"score"`` (smooth at its null value: signature = the residual Jacobian there) or
     ``"span"`` (not smooth at null, e.g. a dead band: signature = the span of its output changes
-    on ``grid`` values of the first parameter)."""
+    on ``grid`` values of the first parameter). ``scan``: values of the first parameter that the
+    fit's global start stage also tries, the others at their null value and at the one-step
+    estimate's (for an effect whose size the signature at the null does not tell: stick–slip
+    hides a small load, so the one-step estimate of a payload's mass can be 25× too small).
+    ``sobol``: how many quasi-random starts that stage draws inside the bounds (more for an effect
+    whose cost surface has several minima at the benchmark's magnitudes)."""
 
     name: str
     physics: str
@@ -81,6 +86,8 @@ class EffectDef:
     apply_fn: Callable[[Mapping[str, float], Scope], Change]
     screen: str = "score"
     grid: tuple[float, ...] = ()
+    scan: tuple[float, ...] = ()
+    sobol: int = 8  # _steps.SOBOL_STARTS
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -24,4 +24,7 @@ EFFECT = EffectDef(
     ),
     scopes=("base",),
     apply_fn=_apply,
+    # Under stick–slip the tilt's cost has several minima: on the plant a (0.3, 0.25) rad tilt was
+    # fitted to (0.14, −0.02) from the best of 8 Sobol starts, to (0.300, 0.253) from 32.
+    sobol=32,
 )

@@ -28,4 +28,6 @@ EFFECT = EffectDef(
     ),
     scopes=("payload",),
     apply_fn=_apply,
+    # Masses on a doubling grid (the mass bound is 60 kg): where the load moves the stuck joints.
+    scan=(0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0),
 )
