@@ -385,7 +385,7 @@ def _signature_parallel(
 STEP_MULTIPLES = (0.5, 2.0, 4.0)
 #: Quasi-random starts (scrambled Sobol, inside the bounds) tried besides the line, by default
 #: (an effect's ``sobol`` sets its own).
-SOBOL_STARTS = 8
+SOBOL_STARTS = EffectDef.sobol
 
 
 def _best_start(

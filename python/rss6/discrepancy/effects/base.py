@@ -87,7 +87,7 @@ class EffectDef:
     screen: str = "score"
     grid: tuple[float, ...] = ()
     scan: tuple[float, ...] = ()
-    sobol: int = 8  # _steps.SOBOL_STARTS
+    sobol: int = 8
 
     @property
     def names(self) -> tuple[str, ...]:
