@@ -32,6 +32,7 @@ fn main() {
     let implicit = args.iter().any(|a| a == "--implicit");
     let sequential = args.iter().any(|a| a == "--sequential");
     let per_tick_only = args.iter().any(|a| a == "--per-tick-only");
+    let exact_only = args.iter().any(|a| a == "--exact-only");
     let repeat: usize = args
         .iter()
         .position(|a| a == "--repeat")
@@ -76,6 +77,18 @@ fn main() {
     let cols = Consistent::a_columns();
     let mut cfg_fast = cfg.clone();
     cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
+    if exact_only {
+        // Only the exact sensitivities from a recording (for a profiler).
+        let (_, rec) = simulate_loop_recording(&cfg, &truth, &exc).unwrap();
+        let t_e = time(&|| {
+            simulate_loop_from(&cfg, &truth, &exc, &cols, rec.clone()).unwrap();
+        });
+        println!(
+            "exact ones from a recording {t_e:.3} s = {:.2} × one simulation",
+            t_e / t_sim
+        );
+        return;
+    }
     if per_tick_only {
         // Alternating: a plain simulation; the per-tick sensitivities as `simulate_loop` runs
         // them (a primal run first when the stages are evaluated ahead); a recording primal run

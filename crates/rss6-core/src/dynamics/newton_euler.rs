@@ -297,29 +297,53 @@ pub fn inverse_dynamics_derivatives_with_env(
     check_state(pose_dot, pose_ddot)?;
     env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    let (d_pose, d_vel, _) = derivatives_at(
-        kp,
-        &geom,
-        &geom.j_theta()?,
-        dp,
-        pose_dot,
-        pose_ddot,
-        env,
-        None,
-        None,
+    let j_theta = geom.j_theta()?;
+    // The rigid torque at the state: one Newton–Euler pass and a solve.
+    let (f0, _, j0) = rigid_forces(&geom, dp, pose, pose_dot, pose_ddot, env)?;
+    let lu = j0.lu();
+    let singular = || CoreError::Singular(SingularKind::TypeII);
+    let tau0 = lu.solve(&f0).ok_or_else(singular)?;
+    let t = derivatives_at(
+        kp, &geom, &j_theta, dp, pose_dot, pose_ddot, env, &tau0, None, None,
     )?;
+    // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
+    let mut d_pose = lu.solve(&t.pose).ok_or_else(singular)?;
+    let mut d_vel = lu.solve(&t.vel).ok_or_else(singular)?;
+    for i in 0..LEGS {
+        let fv = dp.viscous[i];
+        for k in 0..6 {
+            d_pose[(i, k)] += fv * t.rate_pose[(i, k)];
+            d_vel[(i, k)] += fv * j_theta[(i, k)];
+        }
+    }
+    check_finite(d_pose.as_slice())?;
+    check_finite(d_vel.as_slice())?;
     Ok((d_pose, d_vel))
 }
 
+/// The state derivatives of the rigid bodies' twist-space force balance f = J_adᵀ τ_rigid at one
+/// state, before any map to torques: ∂τ_rigid/∂χ = J_adᵀ⁻¹ `pose`, ∂τ_rigid/∂χ̇ = J_adᵀ⁻¹ `vel`.
+pub(super) struct ForceTangents {
+    /// ∂f − ∂J_adᵀ τ_rigid along each pose direction.
+    pub pose: Mat6,
+    /// ∂f/∂χ̇ (J_adᵀ does not depend on χ̇).
+    pub vel: Mat6,
+    /// ∂θ̇/∂χ at χ̇ held (for the viscous term).
+    pub rate_pose: Mat6,
+    /// ∂(J_ad ν)/∂χ at ν held, if asked for.
+    pub rates: Option<Mat6>,
+}
+
 /// The body of [`inverse_dynamics_derivatives_with_env`] at a known geometry and its J_θ (the state
-/// already checked). With `twist`: also ∂(J_ad(χ) ν)/∂χ at ν = `twist` held (the joint rates'
-/// pose derivative). The pose columns are the exact tangent of `pose_tangent`, or, with
-/// `one_sided_step` h, forward differences from the state (as cheap as the tangent, with an O(h)
-/// error; the per-tick sensitivities use them). A step does not solve the inverse kinematics: the
-/// stepped geometry takes the exact rotation and platform joints of χ + h e_k with the joint angles
-/// θ + h J_θ e_k — the IK linearised along the step, which has the IK's own derivative. With
-/// f = J_adᵀ τ_rigid, ∂τ_rigid = J_adᵀ⁻¹(∂f − ∂J_adᵀ τ_rigid): one LU at the state for every
-/// column. The χ̇ columns are the exact tangent of `rate_tangent`.
+/// already checked), `tau_rigid` = J_adᵀ⁻¹ f the rigid torque at the state. With `twist`: also
+/// ∂(J_ad(χ) ν)/∂χ at ν = `twist` held (the joint rates' pose derivative). The pose columns are
+/// the exact tangent of `pose_tangent`, or, with `one_sided_step` h, forward differences from the
+/// state (as cheap as the tangent, with an O(h) error; the per-tick sensitivities use them). A
+/// step does not solve the inverse kinematics: the stepped geometry takes the exact rotation and
+/// platform joints of χ + h e_k with the joint angles θ + h J_θ e_k — the IK linearised along the
+/// step, which has the IK's own derivative. The χ̇ columns are the exact tangent of
+/// `rate_tangent`. The caller maps the columns (one LU of J_adᵀ, or the forward dynamics' own
+/// factor).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn derivatives_at(
     kp: &KinematicParams,
@@ -329,19 +353,17 @@ pub(super) fn derivatives_at(
     pose_dot: &Vec6,
     pose_ddot: &Vec6,
     env: &Environment,
+    tau_rigid: &Vec6,
     one_sided_step: Option<f64>,
     twist: Option<&Vec6>,
-) -> Result<(Mat6, Mat6, Option<Mat6>)> {
+) -> Result<ForceTangents> {
     let pose = &geom.pose;
-    let singular = || CoreError::Singular(SingularKind::TypeII);
     let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
     // Columns of ∂f − ∂J_adᵀ τ_rigid (pose), with ∂θ̇ for the viscous term: forward differences
     // from the state, or the exact tangent.
-    let (lu, b_pose, d_rate_pose, d_rates) = if let Some(h_pose) = one_sided_step {
+    let (b_pose, d_rate_pose, d_rates) = if let Some(h_pose) = one_sided_step {
         // The state's twist-space force, θ̇ and J_adᵀ, evaluated as the steps are.
         let (f0, td0, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
-        let lu = j0.lu();
-        let tau0 = lu.solve(&f0).ok_or_else(singular)?;
         let mut d_rates = twist.map(|_| Mat6::zeros());
         let (mut b_pose, mut d_rate_pose) = (Mat6::zeros(), Mat6::zeros());
         for k in 0..6 {
@@ -352,20 +374,15 @@ pub(super) fn derivatives_at(
             let gp =
                 LegGeometry::from_pose_and_theta(kp, &pp, &(geom.theta + j_theta.column(k) * h));
             let (fp, tdp, jp) = rigid_forces(&gp, dp, &pp, pose_dot, pose_ddot, env)?;
-            b_pose.set_column(k, &((fp - f0 - (jp - j0) * tau0) / h));
+            b_pose.set_column(k, &((fp - f0 - (jp - j0) * tau_rigid) / h));
             d_rate_pose.set_column(k, &((tdp - td0) / h));
             if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
                 d.set_column(k, &((jp - j0).tr_mul(nu) / h));
             }
         }
-        (lu, b_pose, d_rate_pose, d_rates)
+        (b_pose, d_rate_pose, d_rates)
     } else {
-        // The rigid torque at the state: one Newton–Euler pass and a solve. (Taking τ_a − τ_f of
-        // the caller's forward dynamics instead saves ≈ 3 % and moves the result by rounding.)
-        let (f0, _, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
-        let lu = j0.lu();
-        let tau0 = lu.solve(&f0).ok_or_else(singular)?;
-        let (b, d, r) = rigid_pose_tangents(
+        rigid_pose_tangents(
             geom,
             j_theta,
             dp,
@@ -373,31 +390,20 @@ pub(super) fn derivatives_at(
             pose_dot,
             pose_ddot,
             &env.gravity,
-            &tau0,
+            tau_rigid,
             twist,
-        )?;
-        (lu, b, d, r)
+        )?
     };
-    // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
-    let mut d_pose = lu.solve(&b_pose).ok_or_else(singular)?;
-    // χ̇: the force's exact tangent at this geometry (θ̇ = J_θ χ̇ for the viscous term).
+    // χ̇: the force's exact tangent at this geometry.
     let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
     let (dv, dvd) = twist_rate_directions(pose, pose_dot);
-    let d_force = force_rate_tangents(geom, dp, load.as_ref(), &v, &v_dot, &dv, &dvd)?;
-    let mut d_vel = lu.solve(&d_force).ok_or_else(singular)?;
-    for i in 0..LEGS {
-        let fv = dp.viscous[i];
-        for k in 0..6 {
-            d_pose[(i, k)] += fv * d_rate_pose[(i, k)];
-            d_vel[(i, k)] += fv * j_theta[(i, k)];
-        }
-    }
-    check_finite(d_pose.as_slice())?;
-    check_finite(d_vel.as_slice())?;
-    if let Some(d) = &d_rates {
-        check_finite(d.as_slice())?;
-    }
-    Ok((d_pose, d_vel, d_rates))
+    let vel = force_rate_tangents(geom, dp, load.as_ref(), &v, &v_dot, &dv, &dvd)?;
+    Ok(ForceTangents {
+        pose: b_pose,
+        vel,
+        rate_pose: d_rate_pose,
+        rates: d_rates,
+    })
 }
 
 /// Forward dynamics (eq. 5.14 in χ form): χ̈ (m/s², rad/s²) from the state (χ, χ̇) and actuator
@@ -463,6 +469,8 @@ pub(super) struct ForwardAt {
     pub j_ad_t: Mat6,
     pub js_inv: Mat6,
     pub chol: nalgebra::Cholesky<f64, nalgebra::U6>,
+    /// The rigid bodies' torque τ_a − τ_f (friction at θ̇).
+    pub tau_rigid: Vec6,
 }
 
 /// [`forward_dynamics_with_env`] at a known geometry (the state and environment already checked).
@@ -481,7 +489,8 @@ pub(super) fn forward_at(
         j_ad_t,
         v,
     } = twist_dynamics_at(geom, dp, pose_dot, env)?;
-    let rhs = j_ad_t * (tau_a - joint_friction(dp, &theta_dot)) - bias;
+    let tau_rigid = tau_a - joint_friction(dp, &theta_dot);
+    let rhs = j_ad_t * tau_rigid - bias;
     let chol = m
         .cholesky()
         .ok_or(CoreError::Singular(SingularKind::Matrix))?;
@@ -496,6 +505,7 @@ pub(super) fn forward_at(
         j_ad_t,
         js_inv,
         chol,
+        tau_rigid,
     })
 }
 

@@ -172,63 +172,57 @@ pub(super) fn rigid_pose_tangents(
         let kk = z_triple(&p, &w);
         let jv = stack(&p, &ap) + r * kk;
         let s_f = q_w + z_triple(&w, &f_l);
+        let leg = Leg {
+            w,
+            l,
+            a,
+            s_w,
+            inv_m,
+            al,
+            r,
+            th_d,
+            w_dot,
+            a_dot,
+            l_dot,
+            m_dot,
+            al_dot,
+            num,
+            th_dd,
+            l_acc,
+            inv_l2,
+            omega2,
+            c2,
+            iz,
+            it,
+            s_cw,
+            cw_acc,
+            mass_w: wb.mass,
+            mass_l: lb.mass,
+            f_l,
+            cl,
+            u,
+            p,
+            kk,
+            jv,
+            s_f,
+        };
+        let body = Body {
+            v: &v,
+            v_dot: &v_dot,
+            e_dot,
+            omega,
+            omega_dot,
+            g,
+        };
         for (c, d) in dirs.iter().enumerate() {
-            let (de_dot, d_omega) = (top(&d.v), bottom(&d.v));
-            let (de_ddot, d_omega_dot) = (top(&d.v_dot), bottom(&d.v_dot));
-            let dw = s_w * j_theta[(i, c)];
-            let da = d.phi.cross(&a);
-            let dl = d.e + da - dw;
-            let dm = z_triple(&dw, &l) + z_triple(&w, &dl);
-            let d_inv_m = -dm * inv_m * inv_m;
-            let dal = da.cross(&l) + a.cross(&dl);
-            let dr = stack(&dl, &dal) * inv_m + stack(&l, &al) * d_inv_m;
-            let d_th_d = dr.dot(&v) + r.dot(&d.v);
-            let dw_dot = z_cross(&dw) * th_d + s_w * d_th_d;
-            let da_dot = d_omega.cross(&a) + omega.cross(&da);
-            let dl_dot = de_dot + da_dot - dw_dot;
-            let dm_dot = z_triple(&dw_dot, &l)
-                + z_triple(&w_dot, &dl)
-                + z_triple(&dw, &l_dot)
-                + z_triple(&w, &dl_dot);
-            let dal_dot = da_dot.cross(&l) + a_dot.cross(&dl) + da.cross(&l_dot) + a.cross(&dl_dot);
-            let dnum = dl_dot.dot(&e_dot)
-                + l_dot.dot(&de_dot)
-                + dal_dot.dot(&omega)
-                + al_dot.dot(&d_omega)
-                - dm_dot * th_d
-                - m_dot * d_th_d;
-            let d_th_dd = dr.dot(&v_dot) + r.dot(&d.v_dot) + dnum * inv_m + num * d_inv_m;
-            let dt_acc = z_cross(&dw) * th_dd
-                + s_w * d_th_dd
-                + z_cross(&dw_dot) * th_d
-                + z_cross(&w_dot) * d_th_d;
-            let dl_acc = de_ddot
-                + d_omega_dot.cross(&a)
-                + omega_dot.cross(&da)
-                + d_omega.cross(&a_dot)
-                + omega.cross(&da_dot)
-                - dt_acc;
-            let d_inv_l2 = -2.0 * l.dot(&dl) * inv_l2 * inv_l2;
-            let d_omega2 =
-                (dl.cross(&l_dot) + l.cross(&dl_dot)) * inv_l2 + l.cross(&l_dot) * d_inv_l2;
-            let dc2 =
-                2.0 * (dl.dot(&l_dot) + l.dot(&dl_dot)) * inv_l2 + 2.0 * l.dot(&l_dot) * d_inv_l2;
-            let d_omega2_dot = (dl.cross(&l_acc) + l.cross(&dl_acc)) * inv_l2
-                + l.cross(&l_acc) * d_inv_l2
-                - d_omega2 * c2
-                - omega2 * dc2;
-            let dq_w = wb.mass
-                * (z_cross(&dw).dot(&(cw_acc - g)) * 0.5 + s_cw.dot(&(dt_acc * 0.5)))
-                + iz * d_th_dd;
-            let df_l = (dt_acc + dl_acc * 0.5) * lb.mass;
-            let dn_l = d_omega2_dot * it;
-            let du = (dl * 0.5).cross(&f_l) + cl.cross(&df_l) + dn_l;
-            let dp_ = du.cross(&l) + u.cross(&dl);
-            let dap = da.cross(&p) + a.cross(&dp_);
-            let dkk = z_triple(&dp_, &w) + z_triple(&p, &dw);
-            let djv = stack(&dp_, &dap) + dr * kk + r * dkk;
-            let ds_f = dq_w + z_triple(&dw, &f_l) + z_triple(&w, &df_l);
-            let df = dr * s_f + r * ds_f + djv * inv_l2 + jv * d_inv_l2;
+            // The translations move neither the orientation nor the twist; the yaw turns the
+            // platform at an unchanged twist: their zero terms skipped (the sums are the same).
+            let dth = j_theta[(i, c)];
+            let (df, dr, d_th_d) = match c {
+                0..=2 => leg.direction::<false, false>(&body, d, dth),
+                5 => leg.direction::<true, false>(&body, d, dth),
+                _ => leg.direction::<true, true>(&body, d, dth),
+            };
             let mut col = b.column_mut(c);
             col += df - dr * tau_rigid[i];
             d_theta_dot[(i, c)] = d_th_d;
@@ -238,4 +232,200 @@ pub(super) fn rigid_pose_tangents(
         }
     }
     Ok((b, d_theta_dot, d_rates))
+}
+
+/// The platform's motion at the state, shared by every leg.
+struct Body<'a> {
+    v: &'a Vec6,
+    v_dot: &'a Vec6,
+    e_dot: Vec3,
+    omega: Vec3,
+    omega_dot: Vec3,
+    g: &'a Vec3,
+}
+
+/// One leg's kinematics and forces at the state (the names of [`rigid_pose_tangents`]).
+struct Leg {
+    w: Vec3,
+    l: Vec3,
+    a: Vec3,
+    s_w: Vec3,
+    inv_m: f64,
+    al: Vec3,
+    r: Vec6,
+    th_d: f64,
+    w_dot: Vec3,
+    a_dot: Vec3,
+    l_dot: Vec3,
+    m_dot: f64,
+    al_dot: Vec3,
+    num: f64,
+    th_dd: f64,
+    l_acc: Vec3,
+    inv_l2: f64,
+    omega2: Vec3,
+    c2: f64,
+    iz: f64,
+    it: f64,
+    s_cw: Vec3,
+    cw_acc: Vec3,
+    mass_w: f64,
+    mass_l: f64,
+    f_l: Vec3,
+    cl: Vec3,
+    u: Vec3,
+    p: Vec3,
+    kk: f64,
+    jv: Vec6,
+    s_f: f64,
+}
+
+impl Leg {
+    /// The leg's tangent along `d` (its joint angle moving by `dth`): the change of the
+    /// twist-space force, of the rate row r and of θ̇. `TURN`: the direction turns the platform
+    /// (δφ ≠ 0); `RATE`: it changes the twist or its rate. A term a direction makes zero is
+    /// left out, which changes no sum.
+    #[inline(always)]
+    fn direction<const TURN: bool, const RATE: bool>(
+        &self,
+        body: &Body<'_>,
+        d: &Direction,
+        dth: f64,
+    ) -> (Vec6, Vec6, f64) {
+        let Leg {
+            w,
+            l,
+            a,
+            s_w,
+            inv_m,
+            al,
+            r,
+            th_d,
+            w_dot,
+            a_dot,
+            l_dot,
+            m_dot,
+            al_dot,
+            num,
+            th_dd,
+            l_acc,
+            inv_l2,
+            omega2,
+            c2,
+            iz,
+            it,
+            s_cw,
+            cw_acc,
+            mass_w,
+            mass_l,
+            f_l,
+            cl,
+            u,
+            p,
+            kk,
+            jv,
+            s_f,
+        } = self;
+        let (inv_m, th_d, m_dot, num, th_dd, inv_l2, c2) =
+            (*inv_m, *th_d, *m_dot, *num, *th_dd, *inv_l2, *c2);
+        let Body {
+            v,
+            v_dot,
+            e_dot,
+            omega,
+            omega_dot,
+            g,
+        } = body;
+        let zero = Vec3::zeros();
+        let (de_dot, d_omega) = (top(&d.v), bottom(&d.v));
+        let (de_ddot, d_omega_dot) = (top(&d.v_dot), bottom(&d.v_dot));
+        let dw = s_w * dth;
+        let da = if TURN { d.phi.cross(a) } else { zero };
+        let dl = if TURN { d.e + da - dw } else { d.e - dw };
+        let dm = z_triple(&dw, l) + z_triple(w, &dl);
+        let d_inv_m = -dm * inv_m * inv_m;
+        let dal = if TURN {
+            da.cross(l) + a.cross(&dl)
+        } else {
+            a.cross(&dl)
+        };
+        let dr = stack(&dl, &dal) * inv_m + stack(l, al) * d_inv_m;
+        let mut d_th_d = dr.dot(v);
+        if RATE {
+            d_th_d += r.dot(&d.v);
+        }
+        let dw_dot = z_cross(&dw) * th_d + s_w * d_th_d;
+        let da_dot = match (TURN, RATE) {
+            (true, true) => d_omega.cross(a) + omega.cross(&da),
+            (true, false) => omega.cross(&da),
+            _ => zero,
+        };
+        let dl_dot = match (TURN, RATE) {
+            (true, true) => de_dot + da_dot - dw_dot,
+            (true, false) => da_dot - dw_dot,
+            _ => -dw_dot,
+        };
+        let dm_dot = z_triple(&dw_dot, l)
+            + z_triple(w_dot, &dl)
+            + z_triple(&dw, l_dot)
+            + z_triple(w, &dl_dot);
+        let dal_dot = if TURN {
+            da_dot.cross(l) + a_dot.cross(&dl) + da.cross(l_dot) + a.cross(&dl_dot)
+        } else {
+            a_dot.cross(&dl) + a.cross(&dl_dot)
+        };
+        let mut dnum = dl_dot.dot(e_dot);
+        if RATE {
+            dnum += l_dot.dot(&de_dot);
+        }
+        dnum += dal_dot.dot(omega);
+        if RATE {
+            dnum += al_dot.dot(&d_omega);
+        }
+        dnum = dnum - dm_dot * th_d - m_dot * d_th_d;
+        let mut d_th_dd = dr.dot(v_dot);
+        if RATE {
+            d_th_dd += r.dot(&d.v_dot);
+        }
+        d_th_dd = d_th_dd + dnum * inv_m + num * d_inv_m;
+        let dt_acc = z_cross(&dw) * th_dd
+            + s_w * d_th_dd
+            + z_cross(&dw_dot) * th_d
+            + z_cross(w_dot) * d_th_d;
+        let dl_acc = match (TURN, RATE) {
+            (true, true) => {
+                de_ddot
+                    + d_omega_dot.cross(a)
+                    + omega_dot.cross(&da)
+                    + d_omega.cross(a_dot)
+                    + omega.cross(&da_dot)
+                    - dt_acc
+            }
+            (true, false) => omega_dot.cross(&da) + omega.cross(&da_dot) - dt_acc,
+            _ => -dt_acc,
+        };
+        let d_inv_l2 = -2.0 * l.dot(&dl) * inv_l2 * inv_l2;
+        let d_omega2 = (dl.cross(l_dot) + l.cross(&dl_dot)) * inv_l2 + l.cross(l_dot) * d_inv_l2;
+        let dc2 = 2.0 * (dl.dot(l_dot) + l.dot(&dl_dot)) * inv_l2 + 2.0 * l.dot(l_dot) * d_inv_l2;
+        let d_omega2_dot = (dl.cross(l_acc) + l.cross(&dl_acc)) * inv_l2
+            + l.cross(l_acc) * d_inv_l2
+            - d_omega2 * c2
+            - omega2 * dc2;
+        let dq_w = mass_w * (z_cross(&dw).dot(&(cw_acc - *g)) * 0.5 + s_cw.dot(&(dt_acc * 0.5)))
+            + iz * d_th_dd;
+        let df_l = (dt_acc + dl_acc * 0.5) * *mass_l;
+        let dn_l = d_omega2_dot * *it;
+        let du = (dl * 0.5).cross(f_l) + cl.cross(&df_l) + dn_l;
+        let dp_ = du.cross(l) + u.cross(&dl);
+        let dap = if TURN {
+            da.cross(p) + a.cross(&dp_)
+        } else {
+            a.cross(&dp_)
+        };
+        let dkk = z_triple(&dp_, w) + z_triple(p, &dw);
+        let djv = stack(&dp_, &dap) + dr * *kk + r * dkk;
+        let ds_f = dq_w + z_triple(&dw, f_l) + z_triple(w, &df_l);
+        let df = dr * *s_f + r * ds_f + djv * inv_l2 + jv * d_inv_l2;
+        (df, dr, d_th_d)
+    }
 }

@@ -11,9 +11,9 @@
 //! Cholesky factor of the twist-space M the forward dynamics already has (through the 6 × 6
 //! K = J_s⁻¹M⁻¹, one product per column of Ξ, and only for the columns requested).
 
-use super::check_state;
 use super::load::Environment;
 use super::newton_euler::{derivatives_at, forward_at};
+use super::{check_finite, check_state};
 use crate::error::{CoreError, Result};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
@@ -158,7 +158,7 @@ pub fn forward_dynamics_jacobians_with_env(
     (out.d_state, out.d_rates) = (None, None);
     if request.state {
         let nu = request.rate_step.map(|h| f.v + f.v_dot * h);
-        let (dtp, dtv, d_rates) = derivatives_at(
+        let t = derivatives_at(
             kp,
             &geom,
             &out.j_theta,
@@ -166,11 +166,27 @@ pub fn forward_dynamics_jacobians_with_env(
             pose_dot,
             &f.chi_ddot,
             env,
+            &f.tau_rigid,
             request.one_sided_step,
             nu.as_ref(),
         )?;
-        out.d_state = Some((-(out.d_torque * dtp), -(out.d_torque * dtv)));
-        out.d_rates = d_rates;
+        // ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ_a/∂x with ∂τ_a/∂x = J_adᵀ⁻¹ ∂f/∂x + f_v ∂θ̇/∂x: the force
+        // columns through K = M̃⁻¹J_θᵀJ_adᵀ⁻¹ directly, no factor of J_adᵀ; the viscous ones
+        // (if any) through M̃⁻¹J_θᵀ.
+        let mut d_pose = -(k * t.pose);
+        let mut d_vel = -(k * t.vel);
+        if dp.viscous.iter().any(|&fv| fv != 0.0) {
+            let fv = Mat6::from_diagonal(&Vec6::from(dp.viscous));
+            d_pose -= out.d_torque * (fv * t.rate_pose);
+            d_vel -= out.d_torque * (fv * out.j_theta);
+        }
+        check_finite(d_pose.as_slice())?;
+        check_finite(d_vel.as_slice())?;
+        if let Some(d) = &t.rates {
+            check_finite(d.as_slice())?;
+        }
+        out.d_state = Some((d_pose, d_vel));
+        out.d_rates = t.rates;
     }
     Ok(())
 }
