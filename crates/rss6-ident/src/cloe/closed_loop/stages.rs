@@ -2,7 +2,7 @@
 
 use super::super::config::{LoopConfig, StateJacobians};
 use super::super::friction::{central_jacobians, sim_err, Sens, COULOMB};
-use super::super::sens_state::{mul_add, SensState};
+use super::super::sens_state::SensState;
 use crate::error::{IdentError, Result};
 use rss6_core::{
     forward_dynamics_jacobians_with_env, forward_dynamics_with_env, jacobian_theta,
@@ -231,10 +231,19 @@ pub(super) fn propagate(s: &mut SensState, stages: [&Stage; 4], s_tau: &Sens, dt
     let (sp0, sv0) = (&s.p, &s.v);
     let stage_da = |da: &mut Sens, st: &Stage, sp: &Sens, sv: &Sens| match &st.jac {
         Some(j) => {
-            da.copy_from(&j.fxi);
-            mul_add(da, &j.fp, sp);
-            mul_add(da, &j.fv, sv);
-            mul_add(da, &j.ft, s_tau);
+            // Column by column in one pass (the products of `mul_add`, the same sums).
+            let cols = da.column_iter_mut().zip(j.fxi.column_iter());
+            let cols = cols.zip(
+                sp.column_iter()
+                    .zip(sv.column_iter())
+                    .zip(s_tau.column_iter()),
+            );
+            for ((mut d, x), ((p, v), t)) in cols {
+                d.copy_from(&x);
+                d += j.fp * p;
+                d += j.fv * v;
+                d += j.ft * t;
+            }
         }
         None => da.fill(0.0),
     };
