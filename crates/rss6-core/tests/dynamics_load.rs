@@ -42,6 +42,19 @@ fn env_of(load: PlatformLoad, g: Vec3) -> Environment {
     Environment::with_gravity(g).with_load(load)
 }
 
+/// Case k of the random-load tests: robot k / 2, the nominal Ξ on even k and a random one on odd,
+/// a random load, gravity tilted on every third case.
+fn loaded_case(k: usize, r: &mut ChaCha8Rng) -> (KinematicParams, DynamicParams, Environment) {
+    let kp = robot(k / 2, r);
+    let dp = if k % 2 == 0 {
+        DynamicParams::nominal()
+    } else {
+        random_xi(r)
+    };
+    let env = env_of(random_load(r), if k % 3 == 0 { tilted() } else { GRAVITY });
+    (kp, dp, env)
+}
+
 #[test]
 fn load_validation_is_typed() {
     assert!(offset_load().validate().is_ok());
@@ -224,16 +237,7 @@ fn forward_and_inverse_round_trip_with_load() {
     let mut r = rng(43);
     let (mut w1, mut w2): (f64, f64) = (0.0, 0.0);
     for k in 0..40 {
-        let kp = robot(k / 2, &mut r);
-        let dp = if k % 2 == 0 {
-            DynamicParams::nominal()
-        } else {
-            random_xi(&mut r)
-        };
-        let env = env_of(
-            random_load(&mut r),
-            if k % 3 == 0 { tilted() } else { GRAVITY },
-        );
+        let (kp, dp, env) = loaded_case(k, &mut r);
         let (p, pd, pdd) = (random_pose(&mut r), random_rate(&mut r), random_acc(&mut r));
         let tau = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env).unwrap();
         let acc = forward_dynamics_with_env(&kp, &dp, &p, &pd, &tau, &env).unwrap();
@@ -429,17 +433,8 @@ fn state_jacobians_with_load_match_the_forward_dynamics() {
     let mut r = rng(47);
     let (mut wp, mut wv): (f64, f64) = (0.0, 0.0);
     for k in 0..40 {
-        let kp = robot(k / 2, &mut r);
-        let mut dp = if k % 2 == 0 {
-            DynamicParams::nominal()
-        } else {
-            random_xi(&mut r)
-        };
+        let (kp, mut dp, env) = loaded_case(k, &mut r);
         dp.coulomb = [0.0; 6];
-        let env = env_of(
-            random_load(&mut r),
-            if k % 3 == 0 { tilted() } else { GRAVITY },
-        );
         let (p, pd) = (random_pose(&mut r), random_rate(&mut r));
         let tau = Vec6::from_fn(|_, _| r.random_range(-3.0..3.0));
         let req = JacobianRequest {
