@@ -13,6 +13,8 @@
 //! only, alternating, a simulation, the per-tick sensitivities, the per-tick sensitivities
 //! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler), and
 //! the exact sensitivities from a recorded run, as CLOE computes them at its stop.
+//! `--exact-only`: one simulation, then only the exact sensitivities from one recorded run (for a
+//! profiler, or with `RAYON_NUM_THREADS=1` for the CPU time without the threads' scheduling).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
