@@ -11,7 +11,14 @@ largest |ρ| of the pair's Fisher information ≤ 0.9 on that excitation), namin
 the right answer by the issue's own rule; the script prints each case's verdict, its ambiguous
 sets with their |ρ| and what was named, then the counts.
 
+``--hidden friction``: the other pair the grids found, on the rapier plant (the grid's setting:
+the implicit stick–slip law at 48 solver iterations, replays driven by the recorded commands):
+Coulomb + viscous friction on all joints at ``--magnitude`` × the camera noise against the drive
+gains. With the commands held, viscous friction and the derivative gain differ only by l_d θ̇_cmd;
+the plant grids reported this case ambiguous at 5× on both seeds.
+
     python benches/python/discrepancy_confounded.py [--seeds 10] [--workers 2] [--mass 20]
+        [--hidden payload|gains|friction] [--magnitude 5] [--excitation SEED]
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ from typing import Any
 
 PAYLOAD = "payload (payload)"
 GAINS = "pid_gains (drive)"
+FRICTION = "joint_friction (all joints)"
 
 
 def _case(spec: dict[str, Any]) -> dict[str, Any]:
@@ -40,12 +48,13 @@ def main() -> None:
     ap.add_argument("--mass", type=float, default=20.0, help="the hidden payload (kg)")
     ap.add_argument(
         "--hidden",
-        choices=("payload", "gains"),
+        choices=("payload", "gains", "friction"),
         default="payload",
         help="hide the payload, or its mimic: a drive-gain change whose output is --magnitude ×\n"
-        "the camera noise (the mimic must not be named a payload either)",
+        "the camera noise (the mimic must not be named a payload either); friction: friction\n"
+        "on all joints on the rapier plant, against the drive gains",
     )
-    ap.add_argument("--magnitude", type=float, default=5.0, help="with --hidden gains")
+    ap.add_argument("--magnitude", type=float, default=5.0, help="with --hidden gains or friction")
     ap.add_argument(
         "--excitation",
         type=int,
@@ -56,15 +65,24 @@ def main() -> None:
     args = ap.parse_args()
     # Each worker runs its loops on one thread (the workers already use every core).
     os.environ["RAYON_NUM_THREADS"] = "1"
+    hidden_spec: dict[str, Any] = {
+        "payload": {
+            "effect": "payload",
+            "params": {"mass": args.mass, "x": 0.0, "y": 0.0, "z": 0.0},
+            "commands": "simulated",
+        },
+        "gains": {"effect": "pid_gains", "magnitude": args.magnitude, "commands": "simulated"},
+        "friction": {
+            "effect": "joint_friction@all joints",
+            "magnitude": args.magnitude,
+            "robot": "plant",
+            "friction_law": "implicit",
+        },
+    }[args.hidden]
     specs = [
         {
             "spec_id": f"confounded-{s}",
-            **(
-                {"effect": "payload", "params": {"mass": args.mass, "x": 0.0, "y": 0.0, "z": 0.0}}
-                if args.hidden == "payload"
-                else {"effect": "pid_gains", "magnitude": args.magnitude}
-            ),
-            "commands": "simulated",
+            **hidden_spec,
             "seed": s,
             **({} if args.excitation is None else {"excitation": args.excitation}),
         }
@@ -73,18 +91,19 @@ def main() -> None:
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:
         records = list(pool.map(_case, specs))
-    truth = PAYLOAD if args.hidden == "payload" else GAINS
-    flagged = named_payload = named_other = nearly = faulted = 0
+    truth = {"payload": PAYLOAD, "gains": GAINS, "friction": FRICTION}[args.hidden]
+    pair = (FRICTION, GAINS) if args.hidden == "friction" else (PAYLOAD, GAINS)
+    flagged = named_truth = named_other = nearly = faulted = 0
     for r in records:
         if r.get("kind") == "faulted":
             faulted += 1
             print(f"seed {r['seed']:3d}  {r['verdict']}")
             continue
         sets = r["ambiguous_sets"]
-        both = any(PAYLOAD in s and GAINS in s for s in sets.split("; "))
+        both = any(pair[0] in s and pair[1] in s for s in sets.split("; "))
         flagged += both
         named = r["named"]
-        named_payload += named.startswith(truth)
+        named_truth += named.startswith(truth)
         named_other += named != "none" and not named.startswith(truth)
         nearly += named != "none" and "nearly ambiguous" in r["verdict"]
         mimic = re.search(r"round 1: (.+?)'s closest mimic (.+?), \|ρ\| ([0-9.]+)", r["notes"])
@@ -94,23 +113,24 @@ def main() -> None:
             f"  closest mimic (round 1): {closest}"
         )
     n = len(records) - faulted
-    what = (
-        f"{args.mass:g} kg payload at the origin"
-        if args.hidden == "payload"
-        else f"drive gains at {args.magnitude:g}× the camera noise"
-    )
+    what = {
+        "payload": f"{args.mass:g} kg payload at the origin, own-loop replays",
+        "gains": f"drive gains at {args.magnitude:g}× the camera noise, own-loop replays",
+        "friction": f"friction on all joints at {args.magnitude:g}× the camera noise, rapier plant,"
+        " recorded commands",
+    }[args.hidden]
     print(
-        f"\nhidden: {what}, own-loop replays, {n} cases "
+        f"\nhidden: {what}, {n} cases "
         + (
             "(two excitations each) "
             if args.excitation is None
             else f"(excitation {args.excitation}) "
         )
         + f"({faulted} faulted), {time.perf_counter() - t0:.0f} s on {args.workers} workers:\n"
-        f"  payload and drive gains flagged ambiguous (|ρ| > 0.9): {flagged}/{n}\n"
-        f"  {truth} named first: {named_payload}/{n}; another effect named: {named_other}/{n}\n"
+        f"  {pair[0]} and {pair[1]} flagged ambiguous (|ρ| > 0.9): {flagged}/{n}\n"
+        f"  {truth} named first: {named_truth}/{n}; another effect named: {named_other}/{n}\n"
         f"  named with the verdict's 'nearly ambiguous' (closest mimic |ρ| ≥ 0.85): {nearly}/"
-        f"{named_payload + named_other}\n"
+        f"{named_truth + named_other}\n"
         f"  flagged or nearly: {flagged + nearly}/{n}"
     )
 
