@@ -327,6 +327,44 @@ def test_diagnose_simulate_none_on_the_twin_says_nothing_is_missing(tmp_path: Pa
     assert "no missing effect" in (tmp_path / "r" / "report.md").read_text(encoding="utf-8")
 
 
+def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model(
+    monkeypatch: Any, capsys: Any
+) -> None:
+    """`rss6 diagnose --simulate` on the rapier plant defaults to the shared stick–slip law (with
+    tanh in the model the plant's own friction is a discrepancy of its own: a hidden 2× latency,
+    seed 11, was reported "named: payload; unexplained"), on the model twin to tanh; an explicit
+    `--friction-law` wins."""
+    from rss6.cli import main
+    from rss6.discrepancy import benchmark
+
+    specs: list[dict[str, Any]] = []
+
+    def fake(spec: dict[str, Any], progress: Any = None) -> Any:
+        specs.append(dict(spec))
+        raise rss6.InvalidInputError("stopped before collecting")
+
+    monkeypatch.setattr(benchmark, "hidden_case", fake)
+    base = ["diagnose", "--simulate", "camera_latency", "--quiet"]
+    for extra in ([], ["--plant", "model"], ["--friction-law", "tanh"]):
+        assert main([*base, *extra]) == 1
+    assert [s["friction_law"] for s in specs] == ["implicit", "tanh", "tanh"]
+    assert "stopped before collecting" in capsys.readouterr().err
+
+
+def test_a_run_the_robot_left_the_loop_in_is_refused_naming_the_run(truth: Any) -> None:
+    """A hidden effect can drive the robot out of its working branch (the visual PID faults):
+    the error says which of the two runs it was."""
+    import dataclasses
+
+    robot = _robot(truth, 23, None)
+    run = _collect(robot, identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5))
+    faulted = dataclasses.replace(run, fault=(1.25, "pose outside the working branch"))
+    with pytest.raises(
+        rss6.InvalidInputError, match=r"^the validation run: .* faulted at t = 1\.250"
+    ):
+        discrepancy.diagnose(run, _model(truth, robot), validation=faulted)
+
+
 def test_a_payload_com_offset_is_estimated_with_the_right_direction(
     truth: Any, excitation: identify.Excitation
 ) -> None:

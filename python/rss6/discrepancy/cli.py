@@ -62,8 +62,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--friction-law",
         choices=("tanh", "implicit"),
-        default="tanh",
-        help="robot and model friction: smoothed (tanh, default) or the shared stick–slip law",
+        default=None,
+        help="robot and model friction: the shared stick–slip law (implicit; default on the rapier "
+        "plant, which follows the model only with it) or smoothed (tanh; default on the model twin)",
     )
     p.add_argument(
         "--commands",
@@ -113,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         spec.update(
             seed=args.seed,
             robot="plant" if args.plant == "rapier" else "twin",
-            friction_law=args.friction_law,
+            friction_law=args.friction_law or ("implicit" if args.plant == "rapier" else "tanh"),
             commands=args.commands,
         )
         if spec["robot"] == "plant":

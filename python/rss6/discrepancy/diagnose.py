@@ -154,13 +154,13 @@ def diagnose(
     if replicates < 8:
         raise InvalidInputError(f"replicates must be >= 8 (got {replicates})")
     pool = library(candidates)
-    run = run_of(measured, kinematics=model.kinematics, commands=commands)
+    run = _named_run("measured", measured, model, commands)
     n = len(run.t)
     if validation is None:
         fit_part = _Part(run, slice(0, n // 2))
         held = _Part(run, slice(n // 2, n))
     else:
-        vrun = run_of(validation, kinematics=model.kinematics, commands=commands)
+        vrun = _named_run("validation", validation, model, commands)
         if vrun.width != run.width:
             raise InvalidInputError(
                 f"the validation run has {vrun.width} channels, the measured run {run.width}"
@@ -192,6 +192,14 @@ def diagnose(
         )
     finally:
         sim.close()
+
+
+def _named_run(what: str, data: Any, model: Model, commands: str) -> Any:
+    """:func:`run_of`, its errors saying which run ("measured" or "validation") they are about."""
+    try:
+        return run_of(data, kinematics=model.kinematics, commands=commands)
+    except InvalidInputError as e:
+        raise type(e)(f"the {what} run: {e}") from None
 
 
 def _gravity_load(model: Model, ref: F64) -> F64:
