@@ -365,6 +365,38 @@ def test_a_run_the_robot_left_the_loop_in_is_refused_naming_the_run(truth: Any) 
         discrepancy.diagnose(run, _model(truth, robot), validation=faulted)
 
 
+def test_a_logged_run_that_did_not_finish_or_faulted_is_refused(truth: Any, tmp_path: Path) -> None:
+    """An MCAP run is read as the run it was: a truncated file (no footer), a run that ended on an
+    exception (Ctrl-C) and a run whose visual PID faulted are refused with the reason — before,
+    the faulted one was diagnosed as if whole and the truncated one failed as an "infeasible
+    exciting trajectory" (the reference refitted on its first 0.3 s)."""
+    from rss6 import logs
+
+    short = identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5)
+    _collect(_robot(truth, 23, None), short, mcap=tmp_path / "whole.mcap")
+    assert run_of(tmp_path / "whole.mcap").t.shape[0] > 0
+    whole = (tmp_path / "whole.mcap").read_bytes()
+    (tmp_path / "cut.mcap").write_bytes(whole[: len(whole) // 2])
+    with pytest.raises(rss6.TruncatedLogError, match=r"did not finish .* camera frames end at t ="):
+        run_of(tmp_path / "cut.mcap")
+
+    class Stop(Exception):
+        pass
+
+    def stop_soon(*_: Any) -> None:
+        raise Stop
+
+    with pytest.raises(Stop):
+        _collect(_robot(truth, 24, None), short, mcap=tmp_path / "stopped.mcap", progress=stop_soon)
+    with pytest.raises(rss6.InvalidInputError, match=r"did not finish .*status 'failed: Stop"):
+        run_of(tmp_path / "stopped.mcap")
+    log = logs.read_log(tmp_path / "whole.mcap")
+    fault = "t = 1.250 s: pose outside the working branch"
+    logs.write_run(tmp_path / "faulted.mcap", log.streams, {**log.metadata, "fault": fault})
+    with pytest.raises(rss6.InvalidInputError, match=r"faulted at t = 1\.250 s \(pose outside"):
+        run_of(tmp_path / "faulted.mcap")
+
+
 def test_a_payload_com_offset_is_estimated_with_the_right_direction(
     truth: Any, excitation: identify.Excitation
 ) -> None:

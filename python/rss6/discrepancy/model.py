@@ -42,7 +42,7 @@ else:  # pragma: no cover - Python < 3.11
     import tomli as tomllib
 from rss6 import identify
 from rss6.discrepancy.effects import Change, get
-from rss6.errors import InvalidInputError, ShapeError
+from rss6.errors import InvalidInputError, ShapeError, TruncatedLogError
 
 __all__ = [
     "CHANNELS",
@@ -301,6 +301,19 @@ def _run_from_mcap(path: Path, kinematics: Any, commands: str) -> Run:
         raise InvalidInputError(f"{path} lacks {e.args[0]!r} (not a complete run?)") from None
     if len(t_f) == 0:
         raise InvalidInputError(f"{path} has no camera frames")
+    # A run that did not finish (its writer stopped: no footer; or it ended on an exception, e.g.
+    # Ctrl-C) holds only its first part: refused, whatever the length of that part.
+    status = str(meta.get("status", "finished"))
+    if log.truncated or status.startswith("failed"):
+        what = log.truncation if log.truncated else f"status {status!r}"
+        msg = (
+            f"{path}: the run did not finish ({what}): its camera frames end at "
+            f"t = {float(t_f[-1]):.3f} s of its {duration:g} s; diagnose needs whole runs"
+        )
+        if log.truncated:
+            raise TruncatedLogError(msg)
+        raise InvalidInputError(msg)
+    fault = _logged_fault(meta.get("fault"))
     # The reference is a Fourier series of f0 with n harmonics (eq. 5.11): refit its coefficients
     # exactly, on basis functions evaluated by the series itself (unit coefficients).
     tick_t = np.asarray(tick_t, dtype=np.float64)
@@ -329,8 +342,21 @@ def _run_from_mcap(path: Path, kinematics: Any, commands: str) -> Run:
         tick_t=np.asarray(tick_t, dtype=np.float64),
         kappa=np.asarray(kappa, dtype=np.float64),
         theta_cmd=np.asarray(theta_cmd, dtype=np.float64),
+        fault=fault,
     )
     return run_of(data, commands=commands)
+
+
+def _logged_fault(text: Any) -> tuple[float, str] | None:
+    """The visual PID's first fault as ``identify.collect`` logs it ("t = 4.323 s: reason")."""
+    if text is None:
+        return None
+    head, sep, reason = str(text).partition(" s: ")
+    try:
+        t = float(head.removeprefix("t = "))
+    except ValueError:
+        t = float("nan")
+    return (t, reason) if sep else (t, str(text))
 
 
 def dynamics_with(dp: Any, change: Change) -> Any:
