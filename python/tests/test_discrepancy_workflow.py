@@ -397,6 +397,33 @@ def test_a_logged_run_that_did_not_finish_or_faulted_is_refused(truth: Any, tmp_
         run_of(tmp_path / "faulted.mcap")
 
 
+def test_a_named_parameter_on_its_bound_is_noted(truth: Any) -> None:
+    """A 5× tilt of (0.3, 0.3) rad on the plant (seed 6) was named at pitch 0.3, the library's
+    bound, with nothing saying the data might want more; friction may not take the model's own
+    below 0 (the physical bound)."""
+    from rss6.discrepancy._steps import on_bounds
+    from rss6.discrepancy.report import NamedEffect
+
+    model = _model(truth, _robot(truth, 1, None))
+    fc0 = float(np.min(model.dynamics.coulomb))
+
+    def named(name: str, scope: str, params: dict[str, float]) -> NamedEffect:
+        return NamedEffect(name, scope, params, {}, 1e-9, np.zeros(6))
+
+    notes = on_bounds(
+        [
+            named("base_tilt", "base", {"roll": 0.2904, "pitch": 0.3}),
+            named("joint_friction", "all joints", {"coulomb": -fc0, "viscous": 0.5}),
+            named("camera_latency", "sensor", {"latency": 0.0175}),
+        ],
+        model,
+    )
+    assert len(notes) == 2, notes
+    assert notes[0].startswith("base_tilt (base): pitch = 0.3 rad on its upper bound (0.3)")
+    assert notes[1].startswith("joint_friction (all joints): coulomb = ")
+    assert "lower bound" in notes[1]
+
+
 def test_a_payload_com_offset_is_estimated_with_the_right_direction(
     truth: Any, excitation: identify.Excitation
 ) -> None:

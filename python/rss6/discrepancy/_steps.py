@@ -17,6 +17,7 @@ from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, si
 from rss6.discrepancy.noise import NoiseModel
 from rss6.discrepancy.report import (
     CandidateRow,
+    NamedEffect,
 )
 from rss6.discrepancy.search import (
     Calibration,
@@ -442,3 +443,27 @@ def _best_start(
     costs = sim.many([partial(cost, x) for x in pts])
     best = pts[int(np.argmin(costs))]
     return [*starts[:-1], {p.name: float(v) for p, v in zip(e.params, best, strict=True)}]
+
+
+def on_bounds(named: Sequence[NamedEffect], model: Model) -> list[str]:
+    """Notes on named effects' parameters that ended on a bound of the fit (the library's or the
+    physical one, within 10⁻³ of the parameter's scale): the data may want a value beyond it, and
+    the estimate and its interval are clipped there."""
+    notes = []
+    for ne in named:
+        e = _def(ne.name)
+        narrow = _physical(model, e, ne.scope)
+        for p in e.params:
+            v = ne.params.get(p.name)
+            if v is None:
+                continue
+            lo = max(p.bounds[0], narrow.get(p.name, p.bounds)[0])
+            hi = min(p.bounds[1], narrow.get(p.name, p.bounds)[1])
+            for side, b in (("lower", lo), ("upper", hi)):
+                if abs(v - b) <= 1e-3 * p.scale:
+                    notes.append(
+                        f"{ne.name} ({ne.scope}): {p.name} = {v:.4g} {p.unit} on its {side} bound "
+                        f"({b:.4g}): the data may want a value beyond it (estimate and interval "
+                        "clipped there)"
+                    )
+    return notes

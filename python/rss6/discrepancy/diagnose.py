@@ -47,6 +47,7 @@ from rss6.discrepancy._steps import (
     _tell,
     fit_se,
     intervals,
+    on_bounds,
 )
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
@@ -518,7 +519,7 @@ def _diagnose(
     held_named = held.measured - current_held[held.rows]
     held_after = held_named
     after_model = final_model
-    notes = list(dropped) + notes_fit
+    notes = list(dropped) + notes_fit + on_bounds(named, base_model)
     notes.append(
         "replays driven by the run's recorded commands"
         if fit.run.commands is not None
