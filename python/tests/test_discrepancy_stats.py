@@ -334,6 +334,12 @@ def test_report_saves_markdown_and_figures(
     assert all(f.stat().st_size > 1000 for f in files)
     md = (tmp_path / "report" / "report.md").read_text(encoding="utf-8")
     assert rep.verdict in md and "![xcorr](xcorr.png)" in md
+    assert "after re-identification." in md
+    # Not re-identified: no "re-identified" curve (it drew the named model's under that label).
+    plain = dataclasses.replace(rep, held_out=discrepancy.HeldOut(t, r, after, None))
+    plain.save(tmp_path / "plain")
+    md = (tmp_path / "plain" / "report.md").read_text(encoding="utf-8")
+    assert "(not re-identified)." in md and "after re-identification" not in md
 
 
 # the real closed loop ------------------------------------------------------------------------------

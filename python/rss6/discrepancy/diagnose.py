@@ -518,6 +518,7 @@ def _diagnose(
     final_model = base_model.with_effects(named_effects)
     held_named = held.measured - current_held[held.rows]
     held_after = held_named
+    reidentified = False
     after_model = final_model
     notes = list(dropped) + notes_fit + on_bounds(named, base_model)
     notes.append(
@@ -549,6 +550,7 @@ def _diagnose(
         try:
             after_model, note = _reidentify(final_model, data, reidentify)
             held_after = held.measured - held.baseline(replay(after_model, held.run))[held.rows]
+            reidentified = True
             notes.append(note)
         except (InvalidInputError, rss6.IdentificationError) as e:
             notes.append(f"not re-identified: {e}")
@@ -574,6 +576,11 @@ def _diagnose(
         model=after_model,
         candidates=rows,
         notes=notes,
-        held_out=HeldOut(held.t, held_before[:, :6], held_named[:, :6], held_after[:, :6]),
+        held_out=HeldOut(
+            held.t,
+            held_before[:, :6],
+            held_named[:, :6],
+            held_after[:, :6] if reidentified else None,
+        ),
         signatures=sig,
     )

@@ -305,8 +305,12 @@ class DiscrepancyReport:
             files["overlay"] = out / "overlay.png"
             figures.overlay(self.held_out.time, curves, self.noise_floor, files["overlay"])
         files["gaps"] = out / "gaps.png"
+        reidentified = self.held_out is not None and self.held_out.after is not None
+        gap_rows = {"before": self.gap_before, "named": self.gap_named}
+        if reidentified:
+            gap_rows["re-identified"] = self.gap_after
         figures.gaps(
-            {"before": self.gap_before, "named": self.gap_named, "after": self.gap_after},
+            gap_rows,
             self.noise_floor,
             files["gaps"],
             "the held-out run" if self.held_out is not None else "the fitting run",
@@ -316,7 +320,8 @@ class DiscrepancyReport:
             "binned": "Residual binned by velocity sign, gravity load, workspace region.",
             "acf": "Autocorrelation of the prewhitened residual, 99 % band.",
             "xcorr": "Cross-correlation with the physical signatures, 99 % band.",
-            "overlay": "Held-out run: residual of the original model, with the named effects, after re-identification.",
+            "overlay": "Held-out run: residual of the original model, with the named effects"
+            + (", after re-identification." if reidentified else " (not re-identified)."),
             "gaps": "Residual RMS per axis on the held-out run beside the noise floor.",
         }
         md = [
