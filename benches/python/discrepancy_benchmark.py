@@ -30,7 +30,12 @@ def main() -> int:
     ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
     ap.add_argument("--null", type=int, default=100)
     ap.add_argument("--friction", default="table", choices=("table", "none"))
-    ap.add_argument("--friction-law", default="tanh", choices=("tanh", "implicit"))
+    ap.add_argument(
+        "--friction-law",
+        default=None,
+        choices=("tanh", "implicit"),
+        help="default: implicit on the plant, tanh on the twin",
+    )
     ap.add_argument("--commands", default="recorded", choices=("recorded", "simulated"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])

@@ -333,7 +333,7 @@ def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model
     """`rss6 diagnose --simulate` on the rapier plant defaults to the shared stick–slip law (with
     tanh in the model the plant's own friction is a discrepancy of its own: a hidden 2× latency,
     seed 11, was reported "named: payload; unexplained"), on the model twin to tanh; an explicit
-    `--friction-law` wins."""
+    `--friction-law` wins. The benchmark's specs default the same way."""
     from rss6.cli import main
     from rss6.discrepancy import benchmark
 
@@ -347,7 +347,10 @@ def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model
     base = ["diagnose", "--simulate", "camera_latency", "--quiet"]
     for extra in ([], ["--plant", "model"], ["--friction-law", "tanh"]):
         assert main([*base, *extra]) == 1
-    assert [s["friction_law"] for s in specs] == ["implicit", "tanh", "tanh"]
+    assert [benchmark.friction_law_of(s) for s in specs] == ["implicit", "tanh", "tanh"]
+    # The benchmark's specs too (the documented `benchmark_case({... "robot": "plant"})`).
+    assert benchmark.friction_law_of({"robot": "plant"}) == "implicit"
+    assert benchmark.cases(robot="plant", n_null=1)[0]["friction_law"] == "implicit"
     assert "stopped before collecting" in capsys.readouterr().err
 
 

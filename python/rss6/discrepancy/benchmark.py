@@ -12,9 +12,10 @@ optional: its first), a list of them (a pair), or an out-of-library discrepancy 
 x); ``magnitude``: output effect as a multiple of the camera noise RMS (default 2) or ``params``:
 the effect's parameters; ``seed``; ``robot``: "twin" (default) or "plant"; ``replicates``
 (default 16); ``friction``: "table" (Table 5.2's, default) or "none" (robot and model without joint
-friction); ``friction_law``: "tanh" (default: robot twin and model with f_c tanh(θ̇/ε), ε = 1 rad/s;
-the plant keeps its sticking motor, 35–160 µm from the model open loop) or "implicit" (robot and
-model with the shared stick–slip law, the plant at 48 solver iterations: ≈ 1.5 µm from the model);
+friction); ``friction_law``: "tanh" (default on the twin: robot twin and model with f_c tanh(θ̇/ε),
+ε = 1 rad/s; the plant keeps its sticking motor, 35–160 µm from the model open loop) or "implicit"
+(default on the plant: robot and model with the shared stick–slip law, the plant at 48 solver
+iterations: ≈ 1.5 µm from the model);
 ``commands``: "recorded" (default: replays driven by the robot's per-tick commands; an effect's
 magnitude is then its size with the commands held) or "simulated" (replays close the model's loop);
 ``excitation``: the seed of one random excitation both runs follow (default: seeds 1000 + seed and
@@ -75,6 +76,15 @@ _T_F, _EPS = 5e-3, 1.0
 #: follow the twin to ≈ 1.5 µm under Table 5.2's friction (the velocity projection to ≈ 4 µm at a
 #: ninth of the cost, but with a 0.05 mrad frictionless floor).
 _PLANT_IMPLICIT: dict[str, Any] = {"solver_iterations": 48}
+
+
+def friction_law_of(spec: Mapping[str, Any]) -> str:
+    """The spec's friction law: given, or by robot — "implicit" on the rapier plant (which follows
+    the model only with the shared law), "tanh" on the twin."""
+    law = spec.get("friction_law")
+    if law is None:
+        return "implicit" if spec.get("robot", "twin") == "plant" else "tanh"
+    return str(law)
 
 
 def _split(name: str) -> tuple[EffectDef, str]:
@@ -163,7 +173,7 @@ def hidden_case(
     extra = [n for n in names if n in OUT_OF_LIBRARY]
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
-    law = str(spec.get("friction_law", "tanh"))
+    law = friction_law_of(spec)
     if law not in ("tanh", "implicit"):
         raise InvalidInputError(f"friction_law must be 'tanh' or 'implicit', got {law!r}")
     implicit = law == "implicit"
@@ -326,7 +336,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "spec_id": str(spec.get("spec_id", "")),
         "robot": robot_kind,
         "friction": str(spec.get("friction", "table")),
-        "friction_law": str(spec.get("friction_law", "tanh")),
+        "friction_law": friction_law_of(spec),
         "commands": str(spec.get("commands", "recorded")),
         "seed": seed,
         "kind": "none"
@@ -388,7 +398,7 @@ def cases(
     n_null: int = 100,
     robot: str = "twin",
     friction: str = "table",
-    friction_law: str = "tanh",
+    friction_law: str | None = None,
     commands: str = "recorded",
     solver_iterations: int | None = None,
 ) -> list[dict[str, Any]]:
@@ -398,6 +408,7 @@ def cases(
     kind (+ "-implicit" with the implicit friction law, + "-loop" for replays that close the
     model's loop, ``commands="simulated"``, + "-itN" for the plant at N solver iterations instead of
     the implicit law's 48, ``solver_iterations=N``)."""
+    friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
         tag += "-loop"

@@ -114,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         spec.update(
             seed=args.seed,
             robot="plant" if args.plant == "rapier" else "twin",
-            friction_law=args.friction_law or ("implicit" if args.plant == "rapier" else "tanh"),
+            friction_law=args.friction_law,
             commands=args.commands,
         )
         if spec["robot"] == "plant":
