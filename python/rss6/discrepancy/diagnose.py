@@ -52,7 +52,7 @@ from rss6.discrepancy._steps import (
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.effects import candidates as library
-from rss6.discrepancy.model import AppliedEffect, Model, replay, run_of
+from rss6.discrepancy.model import AppliedEffect, Model, Run, replay, run_of
 from rss6.discrepancy.reidentify import _reidentify
 from rss6.discrepancy.report import (
     AMBIGUOUS,
@@ -195,7 +195,7 @@ def diagnose(
         sim.close()
 
 
-def _named_run(what: str, data: Any, model: Model, commands: str) -> Any:
+def _named_run(what: str, data: Any, model: Model, commands: str) -> Run:
     """:func:`run_of`, its errors saying which run ("measured" or "validation") they are about."""
     try:
         return run_of(data, kinematics=model.kinematics, commands=commands)
