@@ -418,13 +418,17 @@ def test_a_named_parameter_on_its_bound_is_noted(truth: Any) -> None:
             named("base_tilt", "base", {"roll": 0.2904, "pitch": 0.3}),
             named("joint_friction", "all joints", {"coulomb": -fc0, "viscous": 0.5}),
             named("camera_latency", "sensor", {"latency": 0.0175}),
+            named("backlash", "all joints", {"width": 1.45e-22}),
         ],
         model,
     )
-    assert len(notes) == 2, notes
+    assert len(notes) == 3, notes
     assert notes[0].startswith("base_tilt (base): pitch = 0.3 rad on its upper bound (0.3)")
     assert notes[1].startswith("joint_friction (all joints): coulomb = ")
     assert "lower bound" in notes[1]
+    # A backlash of width 0 (plant, 2×, seed 13) is named for its rotor and gear mesh.
+    assert notes[2].startswith("backlash (all joints): width = 1.45e-22 rad at its null value")
+    assert notes[2].endswith("the effect is named for what it changes besides width")
 
 
 def test_a_payload_com_offset_is_estimated_with_the_right_direction(

@@ -460,10 +460,19 @@ def on_bounds(named: Sequence[NamedEffect], model: Model) -> list[str]:
             lo = max(p.bounds[0], narrow.get(p.name, p.bounds)[0])
             hi = min(p.bounds[1], narrow.get(p.name, p.bounds)[1])
             for side, b in (("lower", lo), ("upper", hi)):
-                if abs(v - b) <= 1e-3 * p.scale:
+                if abs(v - b) > 1e-3 * p.scale:
+                    continue
+                at = f"{ne.name} ({ne.scope}): {p.name} = {v:.4g} {p.unit}"
+                if b == p.null:
+                    # Only an effect that is not null at its null value can be named there
+                    # (backlash: its rotor and gear mesh at width 0).
                     notes.append(
-                        f"{ne.name} ({ne.scope}): {p.name} = {v:.4g} {p.unit} on its {side} bound "
-                        f"({b:.4g}): the data may want a value beyond it (estimate and interval "
-                        "clipped there)"
+                        f"{at} at its null value, the {side} bound: the effect is named for what "
+                        f"it changes besides {p.name}"
+                    )
+                else:
+                    notes.append(
+                        f"{at} on its {side} bound ({b:.4g}): the data may want a value beyond "
+                        "it (estimate and interval clipped there)"
                     )
     return notes
