@@ -1,7 +1,6 @@
-"""Dynamic identification (thesis ch. 5): exciting trajectories (§5.4, :mod:`rss6.excitation`,
-re-exported here), the identification loop of Fig. 5.1 on a robot (:func:`collect`) and on the model
-(:func:`simulate`), CLOE (§5.3, :func:`cloe`) and validation on fresh trajectories (§5.5,
-:func:`validate`).
+"""Dynamic identification (thesis ch. 5): exciting trajectories (§5.4, :mod:`rss6.excitation`), the
+identification loop of Fig. 5.1 on a robot (:func:`collect`; its logs: :mod:`rss6.identify_log`)
+and on the model (:func:`simulate`), CLOE (§5.3, :func:`cloe`), validation (§5.5, :func:`validate`).
 """
 
 from __future__ import annotations
@@ -14,13 +13,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rss6 import _rss6, identify_hops
-from rss6.errors import (
-    IdentificationError,
-    InvalidInputError,
-    NonFiniteError,
-    ShapeError,
-)
+from rss6 import _rss6, identify_hops, identify_log
+from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, ShapeError
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
     SETTLE_STEPS,
@@ -199,6 +193,11 @@ class IdentificationData:
         if not (np.isfinite(dur) and dur > tt[-1]):
             raise InvalidInputError(f"duration must exceed the last frame time, got {dur}")
         return cls(t=tt, reference=reference, measured=m, duration=dur, dt=float(dt))
+
+    @classmethod
+    def from_mcap(cls, path: str | Path, **options: Any) -> IdentificationData:
+        """The run :func:`collect` logged at ``path`` (``mcap=``): :func:`rss6.identify_log.read`."""
+        return identify_log.read(path, **options)
 
 
 def collect(

@@ -136,15 +136,28 @@ pub(crate) fn identification_run<'py>(
     spec.commands = commands.map(|c| rows6(c, "commands")).transpose()?;
     spec.gains = self::outer_gains(outer_gains)?;
     let mut log = match &mcap {
-        Some(path) => Some(create_log(
-            path,
-            &[
+        Some(path) => {
+            // Everything `IdentificationData.from_mcap` needs to rebuild the run exactly: the
+            // reference's coefficients (row per pose axis) and the visual PID's gains.
+            let coefficients = exc
+                .coefficients()
+                .iter()
+                .flatten()
+                .map(|c| format!("{c:?}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let mut meta = vec![
                 ("kind", "rss6.identify.collect".to_string()),
                 ("f0", format!("{f0:?}")),
                 ("harmonics", exc.harmonics().to_string()),
                 ("duration", format!("{duration:?}")),
-            ],
-        )?),
+                ("coefficients", coefficients),
+            ];
+            if let Some((kp, ki, kd)) = outer_gains {
+                meta.push(("outer_gains", format!("{kp:?}, {ki:?}, {kd:?}")));
+            }
+            Some(create_log(path, &meta)?)
+        }
         None => None,
     };
     let mut coll = Collector {

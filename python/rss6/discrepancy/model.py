@@ -34,7 +34,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 import rss6
-from rss6 import _rss6
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -42,7 +41,7 @@ else:  # pragma: no cover - Python < 3.11
     import tomli as tomllib
 from rss6 import identify
 from rss6.discrepancy.effects import Change, get
-from rss6.errors import InvalidInputError, ShapeError, TruncatedLogError
+from rss6.errors import InvalidInputError, ShapeError
 
 __all__ = [
     "CHANNELS",
@@ -281,82 +280,8 @@ def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> 
 
 
 def _run_from_mcap(path: Path, kinematics: Any, commands: str) -> Run:
-    from rss6 import logs
-
-    if not path.is_file():
-        raise InvalidInputError(f"no such MCAP file: {path}")
-    log = logs.read_log(path)
-    meta = log.metadata
-    if meta.get("kind") != "rss6.identify.collect":
-        raise InvalidInputError(
-            f"{path} is not an identification run (metadata kind {meta.get('kind')!r})"
-        )
-    try:
-        f0, n, duration = float(meta["f0"]), int(meta["harmonics"]), float(meta["duration"])
-        t_f, frames = log.streams["camera_pose"]
-        tick_t, desired = log.streams["desired_pose"]
-        _, kappa = log.streams["kappa"]
-        _, theta_cmd = log.streams["theta_cmd"]
-    except KeyError as e:
-        raise InvalidInputError(f"{path} lacks {e.args[0]!r} (not a complete run?)") from None
-    if len(t_f) == 0:
-        raise InvalidInputError(f"{path} has no camera frames")
-    # A run that did not finish (its writer stopped: no footer; or it ended on an exception, e.g.
-    # Ctrl-C) holds only its first part: refused, whatever the length of that part.
-    status = str(meta.get("status", "finished"))
-    if log.truncated or status.startswith("failed"):
-        what = log.truncation if log.truncated else f"status {status!r}"
-        msg = (
-            f"{path}: the run did not finish ({what}): its camera frames end at "
-            f"t = {float(t_f[-1]):.3f} s of its {duration:g} s; diagnose needs whole runs"
-        )
-        if log.truncated:
-            raise TruncatedLogError(msg)
-        raise InvalidInputError(msg)
-    fault = _logged_fault(meta.get("fault"))
-    # The reference is a Fourier series of f0 with n harmonics (eq. 5.11): refit its coefficients
-    # exactly, on basis functions evaluated by the series itself (unit coefficients).
-    tick_t = np.asarray(tick_t, dtype=np.float64)
-    desired = np.asarray(desired, dtype=np.float64)
-    pick = np.unique(np.linspace(0, len(tick_t) - 1, min(len(tick_t), 600)).astype(int))
-    basis = np.empty((len(pick), 2 * n + 1))
-    for j in range(2 * n + 1):
-        unit = np.zeros((6, 2 * n + 1))
-        unit[0, j] = 1.0
-        basis[:, j] = [_rss6.excitation_at(f0, unit, float(t))[0][0] for t in tick_t[pick]]
-    coef, *_ = np.linalg.lstsq(basis, desired[pick], rcond=None)
-    err = float(np.max(np.abs(basis @ coef - desired[pick])))
-    if err > 1e-9:
-        raise InvalidInputError(
-            f"{path}: the logged reference is not a Fourier series of f0 = {f0} Hz with {n} "
-            f"harmonics (refit error {err:.3g})"
-        )
-    kp = kinematics if kinematics is not None else rss6.KinematicParams.nominal()
-    exc = identify.Excitation.from_coefficients(kp, coef.T, f0)
-    data = identify.IdentificationData(
-        t=np.asarray(t_f, dtype=np.float64),
-        reference=exc,
-        measured=np.asarray(frames, dtype=np.float64),
-        duration=duration,
-        dt=float(tick_t[1] - tick_t[0]) if len(tick_t) > 1 else 1e-3,
-        tick_t=np.asarray(tick_t, dtype=np.float64),
-        kappa=np.asarray(kappa, dtype=np.float64),
-        theta_cmd=np.asarray(theta_cmd, dtype=np.float64),
-        fault=fault,
-    )
+    data = identify.IdentificationData.from_mcap(path, kinematics=kinematics)
     return run_of(data, commands=commands)
-
-
-def _logged_fault(text: Any) -> tuple[float, str] | None:
-    """The visual PID's first fault as ``identify.collect`` logs it ("t = 4.323 s: reason")."""
-    if text is None:
-        return None
-    head, sep, reason = str(text).partition(" s: ")
-    try:
-        t = float(head.removeprefix("t = "))
-    except ValueError:
-        t = float("nan")
-    return (t, reason) if sep else (t, str(text))
 
 
 def dynamics_with(dp: Any, change: Change) -> Any:
