@@ -24,6 +24,7 @@ where joints break away, so a closed-loop replay wanders from the robot by up to
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -412,7 +413,14 @@ def simulate(
         implicit_friction=model.implicit_friction,
         **quiet,
     )
-    periods = max(1, round(run.duration / run.reference.duration))
+    # Whole periods covering the run (a run read in part ends inside one); recorded commands are
+    # held at their last value past the run's end, where no frame is compared.
+    periods = max(1, math.ceil(run.duration / run.reference.duration - 1e-9))
+    commands = run.commands
+    if commands is not None:
+        need = round(periods * run.reference.duration / run.dt)
+        if commands.shape[0] < need:
+            commands = np.vstack([commands, np.repeat(commands[-1:], need - len(commands), 0)])
     data = identify.collect(
         twin,
         run.reference,
@@ -420,7 +428,7 @@ def simulate(
         sensor_in_base=model.sensor_in_base,
         target_in_effector=model.target_in_effector,
         periods=periods,
-        commands=run.commands,
+        commands=commands,
     )
     if data.fault is not None:
         raise rss6.IdentificationError(
