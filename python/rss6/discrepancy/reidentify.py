@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6.discrepancy.model import Model
-from rss6.errors import InvalidInputError
+from rss6.errors import IdentificationError, InvalidInputError
 
 F64 = NDArray[np.float64]
 
@@ -69,22 +69,38 @@ def _reidentify(model: Model, data: Any, which: bool | Sequence[str]) -> tuple[M
     dynamics and gains, the other effects kept) and a note."""
     from rss6 import identify
 
-    chosen: Sequence[str] = REIDENTIFY_DEFAULT if isinstance(which, bool) else which
-    names = list(chosen)
+    default = isinstance(which, bool)
+    names = list(REIDENTIFY_DEFAULT) if isinstance(which, bool) else list(which)
     dp, pid, kw = loop_effects(model)
-    res = identify.cloe(
-        data,
-        model.kinematics,
-        dp,
-        pid,
-        parameters=names,
-        derivative_filter=model.derivative_filter,
-        friction_smoothing=model.friction_smoothing,
-        implicit_friction=model.implicit_friction,
-        commands="recorded" if getattr(data, "theta_cmd", None) is not None else "simulated",
-        torque_limit=model.torque_limit,
-        **kw,
-    )
+
+    def cloe(names: list[str]) -> Any:
+        return identify.cloe(
+            data,
+            model.kinematics,
+            dp,
+            pid,
+            parameters=names,
+            derivative_filter=model.derivative_filter,
+            friction_smoothing=model.friction_smoothing,
+            implicit_friction=model.implicit_friction,
+            commands="recorded" if getattr(data, "theta_cmd", None) is not None else "simulated",
+            torque_limit=model.torque_limit,
+            **kw,
+        )
+
+    held = ""
+    try:
+        res = cloe(names)
+    except IdentificationError as e:
+        # The default set asks for every friction coefficient and gain; one the fitting run cannot
+        # identify (a joint that hardly moves) is held at the model's value, and said so. Names
+        # the caller chose are not dropped.
+        missing = [n for n in getattr(e, "names", []) if n in names]
+        if not default or not missing or len(missing) == len(names):
+            raise
+        names = [n for n in names if n not in missing]
+        held = f" ({', '.join(missing)} not identifiable from the fitting run: held)"
+        res = cloe(names)
     kept = [a for a in model.applied() if a.name not in ("joint_friction", "pid_gains")]
     out = model.with_effects(kept).with_dynamics(res.dynamics, res.pid)
-    return out, f"re-identified {len(names)} quantities in {res.iterations} CLOE iterations"
+    return out, f"re-identified {len(names)} quantities in {res.iterations} CLOE iterations{held}"
