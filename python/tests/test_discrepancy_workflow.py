@@ -368,38 +368,6 @@ def test_a_run_the_robot_left_the_loop_in_is_refused_naming_the_run(truth: Any) 
         discrepancy.diagnose(run, _model(truth, robot), validation=faulted)
 
 
-def test_a_logged_run_that_did_not_finish_or_faulted_is_refused(truth: Any, tmp_path: Path) -> None:
-    """An MCAP run is read as the run it was: a truncated file (no footer), a run that ended on an
-    exception (Ctrl-C) and a run whose visual PID faulted are refused with the reason — before,
-    the faulted one was diagnosed as if whole and the truncated one failed as an "infeasible
-    exciting trajectory" (the reference refitted on its first 0.3 s)."""
-    from rss6 import logs
-
-    short = identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5)
-    _collect(_robot(truth, 23, None), short, mcap=tmp_path / "whole.mcap")
-    assert run_of(tmp_path / "whole.mcap").t.shape[0] > 0
-    whole = (tmp_path / "whole.mcap").read_bytes()
-    (tmp_path / "cut.mcap").write_bytes(whole[: len(whole) // 2])
-    with pytest.raises(rss6.TruncatedLogError, match=r"did not finish .* camera frames end at t ="):
-        run_of(tmp_path / "cut.mcap")
-
-    class Stop(Exception):
-        pass
-
-    def stop_soon(*_: Any) -> None:
-        raise Stop
-
-    with pytest.raises(Stop):
-        _collect(_robot(truth, 24, None), short, mcap=tmp_path / "stopped.mcap", progress=stop_soon)
-    with pytest.raises(rss6.InvalidInputError, match=r"did not finish .*status 'failed: Stop"):
-        run_of(tmp_path / "stopped.mcap")
-    log = logs.read_log(tmp_path / "whole.mcap")
-    fault = "t = 1.250 s: pose outside the working branch"
-    logs.write_run(tmp_path / "faulted.mcap", log.streams, {**log.metadata, "fault": fault})
-    with pytest.raises(rss6.InvalidInputError, match=r"faulted at t = 1\.250 s \(pose outside"):
-        run_of(tmp_path / "faulted.mcap")
-
-
 def test_a_named_parameter_on_its_bound_is_noted(truth: Any) -> None:
     """A 5× tilt of (0.3, 0.3) rad on the plant (seed 6) was named at pitch 0.3, the library's
     bound, with nothing saying the data might want more; friction may not take the model's own
@@ -431,23 +399,90 @@ def test_a_named_parameter_on_its_bound_is_noted(truth: Any) -> None:
     assert notes[2].endswith("the effect is named for what it changes besides width")
 
 
+def _held_out_costs(note: str) -> tuple[float, float]:
+    import re
+
+    m = re.search(r"held-out whitened cost ([0-9.e+-]+) → ([0-9.e+-]+)", note)
+    assert m is not None, note
+    return float(m.group(1)), float(m.group(2))
+
+
 def test_reidentification_is_kept_only_if_the_held_out_run_agrees(
     truth: Any, excitation: identify.Excitation
 ) -> None:
     """`reidentify=True` with the truth model and a hidden latency: the default set's f_v4 is not
     identifiable from this fitting run — held, and said so (before, CLOE refused the whole set:
     "not re-identified") — and the re-identified friction and gains, which can only move away from
-    the truth, make the held-out gap grow (Σ(RMS/σ)² 6.534 → 6.551), so the model with the named
-    effects is kept."""
+    the truth, raise the held-out run's whitened cost, so the model with the named effects is
+    kept."""
     rep = _diagnose(truth, excitation, {"camera_latency": {"latency": 0.01}}, reidentify=True)
     assert rep.verdict == "named: camera_latency (sensor)", rep.table()
     note = next(n for n in rep.notes if n.startswith("re-identified"))
     assert "fv4 not identifiable from the fitting run: held" in note, note
-    g_named = float(np.sum((rep.gap_named / rep.noise_floor) ** 2))
-    g_after = float(np.sum((rep.gap_after / rep.noise_floor) ** 2))
-    assert g_after > g_named and "not kept" in note, note
+    c_named, c_after = _held_out_costs(note)
+    assert c_after > c_named and "not kept" in note, note
     assert np.array_equal(rep.model.dynamics.coulomb, truth[0].coulomb)
     assert [a.name for a in rep.model.applied()] == ["camera_latency"]
+
+
+def test_a_latency_is_named_when_the_models_friction_is_a_few_percent_off(
+    truth: Any, excitation: identify.Excitation
+) -> None:
+    """The model is never exact: Coulomb friction 3 % and viscous 8 % off per joint (what CLOE
+    leaves) move the potentiometers enough that joint friction ranks first on every scope, though
+    it hardly moves the pose (each refused: the held-out gap shrinks < 2 % of the floor). Before
+    2026-11-28 the search stopped after 3 such refusals and reported "unexplained"; it now goes
+    on, reusing its fits, and names the hidden 10 ms latency (9 refusals). Re-identification's loop
+    takes its latency from the measured frames (10 ms, named 8.9 ms; before: "no usable camera
+    frames")."""
+    rng = np.random.default_rng(1)
+    hidden = {"camera_latency": {"latency": 0.01}}
+    fit, val = _robot(truth, 11, hidden), _robot(truth, 12, hidden)
+    model = _model(truth, fit)
+    d = model.dynamics.to_dict()
+    d["coulomb"] = np.asarray(d["coulomb"]) * (1 + 0.03 * rng.standard_normal(6))
+    d["viscous"] = np.asarray(d["viscous"]) * (1 + 0.08 * rng.standard_normal(6))
+    model = model.with_dynamics(rss6.DynamicParams.from_dict(d), model.pid)
+    rep = discrepancy.diagnose(
+        _collect(fit, excitation), model, validation=_collect(val, excitation), reidentify=True
+    )
+    assert rep.verdict == "named: camera_latency (sensor)", rep.table()
+    assert sum("shrinks the held-out gap by" in n for n in rep.notes) >= 3, rep.notes
+    lo, hi = rep.named[0].ci["latency"]
+    assert lo <= 0.01 <= hi, rep.named[0]
+    # Re-identification runs (its loop's latency on the measured frames) but CLOE fits the poses
+    # alone, which hardly see the friction: the potentiometers of the held-out run disagree
+    # (whitened cost 5892 → 144 246), so the model with the named effects is kept.
+    note = next(n for n in rep.notes if n.startswith("re-identified"))
+    assert "the loop's latency 10 ms, the first frame's time" in note, note
+    c_named, c_after = _held_out_costs(note)
+    assert c_after > c_named and "not kept" in note, note
+    assert np.array_equal(rep.model.dynamics.coulomb, model.dynamics.coulomb)
+
+
+def test_the_reidentified_model_is_kept_only_if_the_held_out_cost_does_not_grow(
+    truth: Any, monkeypatch: Any
+) -> None:
+    """The rule of `reidentify_on` alone (CLOE and the replay stubbed)."""
+    from types import SimpleNamespace
+
+    from rss6.discrepancy import reidentify as R
+
+    model = _model(truth, _robot(truth, 1, None))
+    other = model.with_dynamics(truth[0], (400.0, 2000.0, 5.0))
+    monkeypatch.setattr(R, "_reidentify", lambda m, data, which: (other, "re-identified 3"))
+    run = SimpleNamespace(reference=identify.random_excitation(KP, seed=1), dt=1e-3, commands=None)
+    fit = SimpleNamespace(t=np.arange(5) / 30.0, run=run, measured=np.zeros((5, 12)))
+    held = SimpleNamespace(
+        measured=np.ones((5, 12)), baseline=lambda x: x, rows=slice(None), run=run
+    )
+    named = np.full((5, 12), 0.5)  # the held-out residual with the named effects: cost 15
+    cost = lambda r: float(np.sum(r**2))  # noqa: E731
+    for fitted, kept in ((0.9, True), (0.5, True), (0.2, False)):
+        monkeypatch.setattr(R, "replay", lambda m, r, v=fitted: np.full((5, 12), v))
+        out, resid, note = R.reidentify_on(model, fit, held, cost, named, True)
+        assert resid is not None and (out is other) == kept, note
+        assert ("not kept" in note) != kept and "held-out whitened cost 15 →" in note, note
 
 
 def test_a_payload_com_offset_is_estimated_with_the_right_direction(

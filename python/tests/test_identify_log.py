@@ -72,6 +72,10 @@ def test_a_run_that_did_not_finish_is_refused_or_read_in_part(tmp_path: Path) ->
     (tmp_path / "cut.mcap").write_bytes(raw[: len(raw) // 2])
     with pytest.raises(rss6.TruncatedLogError, match=r"did not finish .* partial=True"):
         identify.IdentificationData.from_mcap(tmp_path / "cut.mcap")
+    # The discrepancy workflow reads MCAP runs the same way (before: the truncated one failed as
+    # an "infeasible exciting trajectory", its reference refitted on its first 0.3 s).
+    with pytest.raises(rss6.TruncatedLogError, match=r"camera frames end at t ="):
+        run_of(tmp_path / "cut.mcap")
 
     class Stop(Exception):
         pass
@@ -114,6 +118,9 @@ def test_a_logged_fault_and_bad_metadata_are_read_as_such(tmp_path: Path) -> Non
     logs.write_run(tmp_path / "fault.mcap", log.streams, fault)
     back = identify.IdentificationData.from_mcap(tmp_path / "fault.mcap")
     assert back.fault == (1.25, "pose outside the working branch")
+    # The discrepancy workflow refuses it (before, a logged fault was not read: diagnosed as whole).
+    with pytest.raises(rss6.InvalidInputError, match=r"faulted at t = 1\.250 s \(pose outside"):
+        run_of(tmp_path / "fault.mcap")
     assert dataclasses.replace(back, fault=None).frames == data.frames
     bad = {**log.metadata, "coefficients": "1.0, nan"}
     logs.write_run(tmp_path / "bad.mcap", log.streams, bad)
