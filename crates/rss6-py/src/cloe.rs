@@ -19,7 +19,7 @@ use crate::calib::ident_err;
 use crate::convert::{exact, out1, out_rows6, rows6, vec6, vecn};
 use crate::errors::{invalid, make, shape, Attr};
 use crate::exp::{create_log, finish_log, Interrupt};
-use crate::identify::excitation;
+use crate::identify::{collect_metadata, excitation};
 use crate::params::{PyDynamicParams, PyKinematicParams};
 use crate::plant::with_robot;
 
@@ -136,28 +136,10 @@ pub(crate) fn identification_run<'py>(
     spec.commands = commands.map(|c| rows6(c, "commands")).transpose()?;
     spec.gains = self::outer_gains(outer_gains)?;
     let mut log = match &mcap {
-        Some(path) => {
-            // Everything `IdentificationData.from_mcap` needs to rebuild the run exactly: the
-            // reference's coefficients (row per pose axis) and the visual PID's gains.
-            let coefficients = exc
-                .coefficients()
-                .iter()
-                .flatten()
-                .map(|c| format!("{c:?}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let mut meta = vec![
-                ("kind", "rss6.identify.collect".to_string()),
-                ("f0", format!("{f0:?}")),
-                ("harmonics", exc.harmonics().to_string()),
-                ("duration", format!("{duration:?}")),
-                ("coefficients", coefficients),
-            ];
-            if let Some((kp, ki, kd)) = outer_gains {
-                meta.push(("outer_gains", format!("{kp:?}, {ki:?}, {kd:?}")));
-            }
-            Some(create_log(path, &meta)?)
-        }
+        Some(path) => Some(create_log(
+            path,
+            &collect_metadata(&exc, f0, duration, outer_gains),
+        )?),
         None => None,
     };
     let mut coll = Collector {

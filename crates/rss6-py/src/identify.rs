@@ -29,6 +29,33 @@ pub(crate) fn excitation(f0: f64, coeffs: &Bound<'_, PyAny>) -> PyResult<Excitat
     Excitation::from_coefficients(f0, coefficients(coeffs)?).map_err(|e| invalid(e.to_string()))
 }
 
+/// The metadata of an identification run's log (`rss6.identify.collect(mcap=)`): everything
+/// `IdentificationData.from_mcap` needs to rebuild the run — the reference's f0, harmonics and
+/// coefficients (row per pose axis), the duration and the visual PID's gains when given.
+pub(crate) fn collect_metadata(
+    exc: &Excitation,
+    f0: f64,
+    duration: f64,
+    outer_gains: Option<(f64, f64, f64)>,
+) -> Vec<(&'static str, String)> {
+    let coefficients = exc
+        .coefficients()
+        .iter()
+        .flatten()
+        .map(|c| format!("{c:?}"));
+    let mut meta = vec![
+        ("kind", "rss6.identify.collect".to_string()),
+        ("f0", format!("{f0:?}")),
+        ("harmonics", exc.harmonics().to_string()),
+        ("duration", format!("{duration:?}")),
+        ("coefficients", coefficients.collect::<Vec<_>>().join(", ")),
+    ];
+    if let Some((kp, ki, kd)) = outer_gains {
+        meta.push(("outer_gains", format!("{kp:?}, {ki:?}, {kd:?}")));
+    }
+    meta
+}
+
 fn out_coefficients<'py>(py: Python<'py>, e: &Excitation) -> Bound<'py, PyArray2<f64>> {
     let rows: Vec<Vec<f64>> = e.coefficients().to_vec();
     PyArray2::from_vec2(py, &rows).unwrap_or_else(|_| PyArray2::zeros(py, [6, 0], false))
