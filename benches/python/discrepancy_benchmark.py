@@ -5,7 +5,8 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
 
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
-        [--commands recorded|simulated] [--solver-iterations 48] [--out out/discrepancy_benchmark.csv]
+        [--commands recorded|simulated] [--solver-iterations 48] [--hold-nominal]
+        [--out out/discrepancy_benchmark.csv]
 """
 
 from __future__ import annotations
@@ -46,6 +47,11 @@ def main() -> int:
         default=None,
         help="the plant's solver iterations with the implicit law (default 48)",
     )
+    ap.add_argument(
+        "--hold-nominal",
+        action="store_true",
+        help="hold the model's friction and gains (default: refitted inside NOMINAL_SPREAD)",
+    )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
     specs = cases(
@@ -57,6 +63,7 @@ def main() -> int:
         friction_law=args.friction_law,
         commands=args.commands,
         solver_iterations=args.solver_iterations,
+        hold_nominal=args.hold_nominal,
     )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

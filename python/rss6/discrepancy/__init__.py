@@ -15,6 +15,8 @@ and the workflow itself:
 * :mod:`~rss6.discrepancy.effects` — the effect library, one file per effect (:data:`CANDIDATES`);
 * :mod:`~rss6.discrepancy.model` — :class:`Model` (with its effects, saved as TOML),
   :class:`Run`, :func:`replay` (the model twin in the run's closed loop);
+* :mod:`~rss6.discrepancy.nominal` — the model's friction and drive gains refitted inside its
+  uncertainty (:data:`NOMINAL_SPREAD`) before the search and after each named effect;
 * :func:`diagnose` — detect, name, add, show the gap shrink on a held-out run
   (:mod:`~rss6.discrepancy.diagnose`, numerics in :mod:`~rss6.discrepancy.search`).
 """
@@ -40,6 +42,7 @@ from rss6.discrepancy.noise import (
     noise_from_periods,
     noise_from_repeats,
 )
+from rss6.discrepancy.nominal import NOMINAL_NAMES, NOMINAL_SPREAD
 from rss6.discrepancy.report import (
     AMBIGUOUS,
     NEARLY_AMBIGUOUS,
@@ -60,6 +63,8 @@ __all__ = [
     "CANDIDATES",
     "EFFECTS",
     "NEARLY_AMBIGUOUS",
+    "NOMINAL_NAMES",
+    "NOMINAL_SPREAD",
     "Ambiguity",
     "AppliedEffect",
     "CandidateRow",

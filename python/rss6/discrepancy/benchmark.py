@@ -39,6 +39,7 @@ from rss6.discrepancy._steps import Z95
 from rss6.discrepancy.diagnose import diagnose
 from rss6.discrepancy.effects import Change, EffectDef, get
 from rss6.discrepancy.model import Model, Run, replay, run_of
+from rss6.discrepancy.nominal import NOMINAL_SPREAD
 from rss6.errors import InvalidInputError
 
 __all__ = [
@@ -322,6 +323,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         replicates=int(spec.get("replicates", 16)),
         seed=7919 + seed,
         commands=str(spec.get("commands", "recorded")),
+        nominal=spec.get("nominal", NOMINAL_SPREAD),
     )
     names = case.hidden
     library = case.library
@@ -401,13 +403,15 @@ def cases(
     friction_law: str | None = None,
     commands: str = "recorded",
     solver_iterations: int | None = None,
+    hold_nominal: bool = False,
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
     out-of-library discrepancies at each magnitude, and two pairs. Spec ids start with the robot
     kind (+ "-implicit" with the implicit friction law, + "-loop" for replays that close the
     model's loop, ``commands="simulated"``, + "-itN" for the plant at N solver iterations instead of
-    the implicit law's 48, ``solver_iterations=N``)."""
+    the implicit law's 48, ``solver_iterations=N``, + "-held" with the model's friction and gains
+    held instead of refitted, ``hold_nominal=True``)."""
     friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
@@ -421,6 +425,9 @@ def cases(
     if solver_iterations is not None:
         tag += f"-it{solver_iterations}"
         common["solver_iterations"] = solver_iterations
+    if hold_nominal:
+        tag += "-held"
+        common["nominal"] = None
     effs = (
         list(effects)
         if effects is not None

@@ -22,7 +22,7 @@ from typing import Any
 
 from rss6.errors import InvalidInputError
 
-__all__ = ["add_arguments", "parse_effect", "run"]
+__all__ = ["add_arguments", "nominal_of", "parse_effect", "run"]
 
 
 def parse_effect(text: str) -> tuple[str, dict[str, float]]:
@@ -43,6 +43,17 @@ def parse_effect(text: str) -> tuple[str, dict[str, float]]:
         except ValueError:
             raise InvalidInputError(f"effect parameter {key!r} = {val!r} is not a number") from None
     return (f"{name}@{scope}" if scope else name), params
+
+
+def nominal_of(text: str | None) -> dict[str, float] | None:
+    """``--nominal``: None → the default spreads, "none" → None (held), "k=v,..." → the spreads."""
+    from rss6.discrepancy.nominal import NOMINAL_SPREAD
+
+    if text is None:
+        return dict(NOMINAL_SPREAD)
+    if text.strip().lower() == "none":
+        return None
+    return parse_effect(":" + text)[1]
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -75,6 +86,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--alpha", type=float, default=0.01)
     p.add_argument("--reidentify", action="store_true", help="re-identify friction and gains")
+    p.add_argument(
+        "--nominal",
+        default=None,
+        metavar="SPREADS",
+        help="relative half-widths inside which the model's friction and drive gains are refitted, "
+        "e.g. 'coulomb=0.1,viscous=0.25,gains=0.05' (the default) or 'fc2=0.2'; 'none' holds them",
+    )
     p.add_argument("--out", default="out-diagnose", help="report directory (default out-diagnose/)")
     p.add_argument("--quiet", action="store_true")
 
@@ -145,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
         reidentify=bool(args.reidentify),
         progress=progress,
         commands=args.commands,
+        nominal=nominal_of(args.nominal),
     )
     out = Path(args.out)
     files = rep.save(out)

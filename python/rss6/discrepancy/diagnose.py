@@ -18,23 +18,26 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from functools import partial
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-import rss6
 from rss6.discrepancy import stats
 from rss6.discrepancy._steps import (
+    MAX_MIMICS,
     MIN_FRAMES,
+    MIN_SHRINK,
     Progress,
     _best_start,
     _calibrate,
     _conflicts,
     _consistency,
     _def,
+    _gravity_load,
+    _named_run,
     _Part,
     _physical,
     _pose_noise,
@@ -52,7 +55,8 @@ from rss6.discrepancy._steps import (
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.effects import candidates as library
-from rss6.discrepancy.model import AppliedEffect, Model, Run, replay, run_of
+from rss6.discrepancy.model import AppliedEffect, Model, replay
+from rss6.discrepancy.nominal import NOMINAL_SPREAD, refit_step, spreads
 from rss6.discrepancy.reidentify import reidentify_on
 from rss6.discrepancy.report import (
     AMBIGUOUS,
@@ -81,18 +85,6 @@ __all__ = [
     "MIN_TRANSFER",
     "diagnose",
 ]
-
-MAX_MIMICS = 0
-"""Candidates rejected as mimics (held-out consistency) that the search tries past; 0: it stops at
-the first. Measured on the rapier plant (backlash at 5×, whose plant–model gap the library cannot
-express): going on past 3 mimics named a spurious offset drift; stopping reports "unexplained"."""
-
-MIN_SHRINK = 0.02
-"""Least shrink of the held-out gap (on its best pose axis, as a fraction of the noise floor) for
-an effect to be named: an effect of 0.2× the noise shrinks it by 2 %, one of 1× by ≈ 40 %. Measured
-on the rapier plant without a hidden effect (replays driven by recorded commands): 3/20 runs named
-an offset drift on all joints whose held-out claim passed (p ≈ 0.001) but which shrank the gap by
-0.15 % of the floor at most — statistically there, practically nil (the plant is not the twin)."""
 
 MAX_WORSEN = 0.02
 """Most a named effect may make any pose axis's held-out gap worse, as a fraction of its noise
@@ -136,6 +128,7 @@ def diagnose(
     workers: int = 2,
     seed: int = 1_000_003,
     commands: str = "recorded",
+    nominal: Mapping[str, float] | None = NOMINAL_SPREAD,
 ) -> DiscrepancyReport:
     """Finds where ``model`` disagrees with the ``measured`` run, names the missing effects from
     the library, adds them and shows the gap on the held-out run (module docs).
@@ -153,12 +146,17 @@ def diagnose(
     "recorded" (default) drives every replay with the run's own per-tick joint commands when it
     has them (a run from poses alone is replayed in the model's closed loop); "simulated" closes
     the model's visual PID on its own frames and compares the commands too
-    (:func:`~rss6.discrepancy.model.run_of`)."""
+    (:func:`~rss6.discrepancy.model.run_of`). ``nominal``: relative half-widths of the box inside
+    which the model's friction and drive gains are refitted before the search and after each
+    named effect — the candidates are screened against that model, and it is the final model's
+    (:mod:`rss6.discrepancy.nominal`; keys "coulomb", "viscous", "gains" or CLOE names; None or
+    {} holds them: the model taken as exact)."""
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     if replicates < 8:
         raise InvalidInputError(f"replicates must be >= 8 (got {replicates})")
     pool = library(candidates)
+    spread = spreads(nominal)
     run = _named_run("measured", measured, model, commands)
     n = len(run.t)
     if validation is None:
@@ -194,29 +192,10 @@ def diagnose(
             reidentify,
             sim,
             seed,
+            spread,
         )
     finally:
         sim.close()
-
-
-def _named_run(what: str, data: Any, model: Model, commands: str) -> Run:
-    """:func:`run_of`, its errors saying which run ("measured" or "validation") they are about."""
-    try:
-        return run_of(data, kinematics=model.kinematics, commands=commands)
-    except InvalidInputError as e:
-        raise type(e)(f"the {what} run: {e}") from None
-
-
-def _gravity_load(model: Model, ref: F64) -> F64:
-    """The gravity load along the reference (N,): RMS over the joints of the static actuator torques
-    (the model's inverse dynamics at rest), about its mean — in χ coordinates gravity is constant
-    along a trajectory, in joint space it is not."""
-    zero = np.zeros(6)
-    tau = np.array(
-        [rss6.inverse_dynamics(model.kinematics, model.dynamics, p, zero, zero) for p in ref]
-    )
-    load = np.sqrt(np.mean(tau * tau, axis=1))
-    return np.asarray(load - load.mean(), dtype=np.float64)
 
 
 def _diagnose(
@@ -232,6 +211,7 @@ def _diagnose(
     reidentify: bool | Sequence[str],
     sim: _Sim,
     seed: int,
+    spread: F64,
 ) -> DiscrepancyReport:
     _tell(progress, "noisy replays", 0, 1)
     clean_fit, clean_held = _calibrate([fit, held], model, k, sim, seed)
@@ -254,7 +234,23 @@ def _diagnose(
     excluded: set[tuple[str, str]] = set()
     dropped: list[str] = []
     notes_fit: list[str] = []
+    # The nominal refit (module nominal): its model and baselines, for the screening and the
+    # final model; fits and held-out claims are on the model as given with the named effects.
+    nom: tuple[list[AppliedEffect], Model, F64, F64] | None = None
 
+    def refit_nominal_now() -> None:
+        nonlocal nom
+        m, nf, nh, text = refit_step(
+            base_model.with_effects(named_effects), model, spread, fit, held, current_held, sim.many
+        )
+        if text:
+            notes_fit.append(text)
+        nom = None if nf is None or nh is None else (list(named_effects), m, nf, nh)
+
+    if spread.any():
+        _tell(progress, "nominal refit", 0, 1)
+        refit_nominal_now()
+        _tell(progress, "nominal refit", 1, 1)
     mimics = nil = 0
     # Fits against the current residual, kept while nothing is named: after a refusal the next
     # round's candidates were mostly fitted already.
@@ -271,9 +267,12 @@ def _diagnose(
         if not cands:
             break
         cur = base_model.with_effects(named_effects)
-        resid = fit.measured - current_fit[fit.rows]
-        rw = cal.whitener.vec(resid)
-        screens = _screen_all(cands, cur, fit, current_fit, rw, cal, sim, progress, round_)
+        rw = cal.whitener.vec(fit.measured - current_fit[fit.rows])
+        # Screened against the refitted nominal quantities: model error inside the model's
+        # uncertainty does not rank a candidate first.
+        s_model, s_fit = (cur, current_fit) if nom is None else (nom[1], nom[2])
+        rw_s = rw if nom is None else cal.whitener.vec(fit.measured - s_fit[fit.rows])
+        screens = _screen_all(cands, s_model, fit, s_fit, rw_s, cal, sim, progress, round_)
         pvals = np.array([s.p_value for s in screens])
         passed, p_adj = stats.holm(pvals, alpha)
         order = [i for i in np.argsort(-np.array([s.t2 for s in screens])) if passed[i]]
@@ -522,6 +521,8 @@ def _diagnose(
         fit_cache.clear()
         current_held = new_held
         current_fit = fit.baseline(replay(cand_model, fit.run))
+        if spread.any():
+            refit_nominal_now()
         _tell(progress, f"named {s.effect.name} ({s.scope})", round_ + 1, max_effects)
 
     # Backward check on the held-out run: an effect named early may only have mimicked part of one
@@ -538,6 +539,10 @@ def _diagnose(
             current_held = without
             named = [ne for ne in named if (ne.name, ne.scope) != (a.name, a.scope)]
             dropped.append(f"{a.name} ({a.scope}): held-out p = {p_drop:.3g} beside the others")
+    if spread.any() and (nom is None or nom[0] != named_effects):
+        refit_nominal_now()  # an effect was dropped: refit with those that stay
+    if nom is not None and nom[0] == named_effects:
+        base_model, current_held = nom[1].with_effects(base_model.applied()), nom[3]
     final_model = base_model.with_effects(named_effects)
     held_named = held.measured - current_held[held.rows]
     held_after = held_named

@@ -1,0 +1,247 @@
+"""The nominal parameters refitted inside the model's own uncertainty (issue 14, step 3: "adding
+effects forward and refitting the nominal parameters each time").
+
+An identified model is never exact: CLOE leaves the friction a few per cent off (docs/
+identification.md). Such an error moves the potentiometers and the commands far more than the
+poses, so without a refit the friction candidates rank first on every scope and hide a real
+effect behind a chain of refusals. Here the model's Coulomb and viscous coefficients per joint and
+its three drive gains are refitted to the fitting run by bounded least squares, each inside a box
+of relative half-width ``spread`` around its value (what the identification vouches for, e.g. 3×
+its relative σ). What is left outside the box is a missing effect; what is inside is the model's
+own uncertainty. The refit decides what the search screens (the residual against the refitted
+model ranks the candidates) and enters the final model; the candidates are fitted, and their
+claims made, on the model as given with the named effects (a refit before anything is named takes
+up part of a real effect: a 15 kg payload was fitted as 9.6 kg beside a drive-gain change when
+its fit started from the refitted model)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+import rss6
+from rss6.discrepancy.model import Model, replay
+from rss6.errors import InvalidInputError, Rss6Error
+
+F64 = NDArray[np.float64]
+
+__all__ = [
+    "NOMINAL_NAMES",
+    "NOMINAL_SPREAD",
+    "PRIOR_SIGMAS",
+    "NominalFit",
+    "refit_nominal",
+    "refit_step",
+    "spreads",
+]
+
+NOMINAL_NAMES: tuple[str, ...] = (
+    *(f"fc{i}" for i in range(1, 7)),
+    *(f"fv{i}" for i in range(1, 7)),
+    "lp",
+    "li",
+    "ld",
+)
+"""The refitted quantities, in CLOE's names (:func:`rss6.identify.parameter_names`)."""
+
+PRIOR_SIGMAS = 3.0
+"""The box's half-width in prior standard deviations: the refit is the maximum a posteriori under a
+Gaussian prior N(model's value, (spread/3)²) per quantity, inside the box."""
+
+NOMINAL_SPREAD: dict[str, float] = {"coulomb": 0.10, "viscous": 0.25, "gains": 0.05}
+"""Default relative half-widths of the box: ≈ 3× the relative σ CLOE reports on the plant
+(Coulomb ≤ 3 %, viscous ≤ 8 %; docs/identification.md) and the 5 % the gains are identified to."""
+
+
+def spreads(nominal: Mapping[str, float] | None) -> F64:
+    """The 15 relative half-widths from ``nominal``: keys "coulomb", "viscous", "gains" (every
+    joint / gain) or CLOE names ("fc3", "lp", …), the latter overriding; missing ones are 0
+    (held). Raises :class:`rss6.InvalidInputError` for an unknown key or a width outside [0, 1)."""
+    out = np.zeros(len(NOMINAL_NAMES))
+    if not nominal:
+        return out
+    groups = {"coulomb": range(6), "viscous": range(6, 12), "gains": range(12, 15)}
+    for key in sorted(nominal, key=lambda k: k in NOMINAL_NAMES):
+        w = float(nominal[key])
+        if not np.isfinite(w) or not 0.0 <= w < 1.0:
+            raise InvalidInputError(f"nominal spread {key!r} must be in [0, 1), got {w}")
+        if key in groups:
+            out[list(groups[key])] = w
+        elif key in NOMINAL_NAMES:
+            out[NOMINAL_NAMES.index(key)] = w
+        else:
+            raise InvalidInputError(
+                f"unknown nominal quantity {key!r}: use coulomb, viscous, gains or one of "
+                + ", ".join(NOMINAL_NAMES)
+            )
+    return out
+
+
+def _values(model: Model) -> F64:
+    return np.concatenate(
+        [
+            np.asarray(model.dynamics.coulomb, dtype=np.float64),
+            np.asarray(model.dynamics.viscous, dtype=np.float64),
+            np.asarray([float(g) for g in model.pid], dtype=np.float64),
+        ]
+    )
+
+
+def _with_values(model: Model, v: F64) -> Model:
+    d = model.dynamics.to_dict()
+    d["coulomb"], d["viscous"] = np.array(v[:6]), np.array(v[6:12])
+    return model.with_dynamics(rss6.DynamicParams.from_dict(d), tuple(float(g) for g in v[12:]))
+
+
+@dataclass(frozen=True)
+class NominalFit:
+    """The refit: the model with the refitted quantities, their relative changes (15, in
+    :data:`NOMINAL_NAMES` order; 0 where held), which ended on their box, the fitting run's
+    whitened cost before and after, whether the last step still lowered the cost by less than
+    10⁻³ of it (else the iterations ran out) and how many quantities were free."""
+
+    model: Model
+    relative: F64
+    at_bound: NDArray[np.bool_]
+    cost_before: float
+    cost_after: float
+    converged: bool
+    n_free: int
+
+    def summary(self, threshold: float = 1e-3) -> str:
+        """The quantities that moved (relative change above ``threshold``), those on their box
+        marked."""
+        moved = [
+            f"{n} {100 * r:+.2g} %" + (" (on its box)" if b else "")
+            for n, r, b in zip(NOMINAL_NAMES, self.relative, self.at_bound, strict=True)
+            if abs(r) > threshold
+        ]
+        return ", ".join(moved) if moved else "nothing moved"
+
+
+def refit_nominal(
+    model: Model,
+    original: Model,
+    spread: F64,
+    residual: Callable[[Model], F64],
+    many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
+    *,
+    held: Sequence[int] = (),
+    iterations: int = 2,
+) -> NominalFit:
+    """Bounded least squares of the whitened ``residual(model)`` and a Gaussian prior
+    N(``original``'s value, (box/:data:`PRIOR_SIGMAS`)²) over the nominal quantities of ``model``
+    inside ``original``'s values × (1 ± ``spread``) (``held`` indices and zero widths stay at
+    ``model``'s values); the costs reported are the residual's alone.
+
+    Gauss–Newton from ``model``'s values, at most ``iterations`` steps: the Jacobian by forward
+    differences at a tenth of each box (the replays run together through ``many``), the step the
+    bounded linear least squares inside the box (``scipy.optimize.lsq_linear``), halved up to
+    twice if the cost does not fall. The problem is nearly linear inside the box: 15 + 1 replays a
+    step, where a trust-region solver spent ≈ 6 Jacobians. Converged when a step lowers the cost
+    by less than 10⁻³ of it or cannot lower it."""
+    from scipy.optimize import lsq_linear
+
+    v0 = _values(model)
+    ref = _values(original)
+    width = np.abs(ref) * spread
+    free = np.flatnonzero((width > 0) & ~np.isin(np.arange(len(v0)), list(held)))
+    r0 = residual(model)
+    c0 = float(r0 @ r0)
+    if free.size == 0:
+        return NominalFit(model, np.zeros(len(v0)), np.zeros(len(v0), bool), c0, c0, True, 0)
+    lo, hi = ref[free] - width[free], ref[free] + width[free]
+    h = 0.1 * width[free]
+    # The prior: each quantity N(original, (box/3)²) — directions the run hardly sees stay at the
+    # model's values instead of wandering to the box's edges.
+    sigma = width[free] / PRIOR_SIGMAS
+
+    def full(x: F64) -> F64:
+        v = v0.copy()
+        v[free] = x
+        return v
+
+    def res(x: F64) -> F64:
+        return np.concatenate([residual(_with_values(model, full(x))), (x - ref[free]) / sigma])
+
+    x = np.clip(v0[free], lo, hi)
+    try:
+        r = res(x) if np.any(x != v0[free]) else np.concatenate([r0, (x - ref[free]) / sigma])
+        cost = float(r @ r)
+        converged = False
+        for _ in range(max(1, iterations)):
+            steps = np.where(x + h <= hi, h, -h)
+            pts = [x + np.eye(len(x))[i] * steps[i] for i in range(len(x))]
+            cols = many([partial(res, p) for p in pts])
+            jac = np.column_stack([(c - r) / st for c, st in zip(cols, steps, strict=True)])
+            d = lsq_linear(jac, -r, bounds=(lo - x, hi - x), method="bvls").x
+            for t in (1.0, 0.5, 0.25):
+                xn = np.clip(x + t * d, lo, hi)
+                rn = res(xn)
+                cn = float(rn @ rn)
+                if cn < cost:
+                    break
+            else:
+                converged = True  # no step lowers the cost: at the optimum within the box
+                break
+            x, r, fell, cost = xn, rn, cost - cn, cn
+            if fell < 1e-3 * cost:
+                converged = True
+                break
+    except Rss6Error as err:
+        raise InvalidInputError(f"the nominal refit could not replay the model: {err}") from err
+    v = full(x)
+    n_data = len(r0)
+    tol = 1e-3 * width[free]
+    at = np.zeros(len(v0), dtype=bool)
+    at[free] = (x <= lo + tol) | (x >= hi - tol)
+    rel = np.where(ref != 0, v / np.where(ref != 0, ref, 1.0) - 1.0, 0.0)
+    c_data = float(r[:n_data] @ r[:n_data])
+    return NominalFit(_with_values(model, v), rel, at, c0, c_data, converged, int(free.size))
+
+
+def refit_step(
+    model: Model,
+    original: Model,
+    spread: F64,
+    fit: Any,
+    held: Any,
+    current_held: F64,
+    many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
+) -> tuple[Model, F64 | None, F64 | None, str]:
+    """One refit of the nominal quantities of ``model`` (with its named effects), from
+    ``original``'s values, on the fitting part ``fit``, judged on the held-out part ``held`` like a re-identification: kept only if the
+    held-out whitened cost over every channel does not grow against ``current_held`` (its current
+    baseline). Returns the model to keep, its new fitting and held-out baselines (None if not
+    kept) and a note."""
+    cal, hcal = fit.calibration, held.calibration
+
+    def residual(m: Model) -> F64:
+        return np.asarray(
+            cal.whitener.vec(fit.measured - fit.baseline(replay(m, fit.run))[fit.rows])
+        )
+
+    try:
+        # From the model's own values: what an earlier refit took up of an effect named since
+        # (the first refit runs before anything is named) is given back.
+        start = _with_values(model, _values(original))
+        nf = refit_nominal(start, original, spread, residual, many)
+    except (InvalidInputError, Rss6Error) as err:
+        return model, None, None, f"nominal quantities not refitted: {err}"
+    if nf.n_free == 0:
+        return model, None, None, ""
+    new_held = held.baseline(replay(nf.model, held.run))
+    c_old = float(np.sum(hcal.whitener.vec(held.measured - current_held[held.rows]) ** 2))
+    c_new = float(np.sum(hcal.whitener.vec(held.measured - new_held[held.rows]) ** 2))
+    text = (
+        f"nominal refit inside the model's uncertainty ({nf.summary()}): fitting cost "
+        f"{nf.cost_before:.6g} → {nf.cost_after:.6g}, held-out {c_old:.6g} → {c_new:.6g}"
+    )
+    if c_new > c_old:
+        return model, None, None, text + "; not kept (the held-out run does not agree)"
+    return nf.model, fit.baseline(replay(nf.model, fit.run)), new_held, text

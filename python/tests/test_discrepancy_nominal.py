@@ -1,0 +1,149 @@
+"""The nominal quantities (the model's friction and drive gains) refitted inside the model's own
+uncertainty before the discrepancy search and after each named effect
+(:mod:`rss6.discrepancy.nominal`)."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+import pytest
+import rss6
+from rss6 import discrepancy, identify
+from rss6.discrepancy.nominal import (
+    NOMINAL_NAMES,
+    refit_nominal,
+    spreads,
+)
+from rss6.errors import InvalidInputError
+from twin_case import KP
+from twin_case import collect as _collect
+from twin_case import held_out_costs as _held_out_costs
+from twin_case import model as _model
+from twin_case import robot as _robot
+
+
+@pytest.fixture(scope="module")
+def truth() -> tuple[Any, tuple[float, float, float]]:
+    return identify.table_5_2_truth()
+
+
+@pytest.fixture(scope="module")
+def excitation() -> identify.Excitation:
+    return identify.random_excitation(KP, seed=1)
+
+
+def _values(m: Any) -> np.ndarray:
+    return np.concatenate(
+        [np.asarray(m.dynamics.coulomb), np.asarray(m.dynamics.viscous), np.asarray(m.pid)]
+    )
+
+
+def test_spreads_read_groups_and_names_and_refuse_nonsense() -> None:
+    w = spreads({"coulomb": 0.1, "fc3": 0.3, "gains": 0.05})
+    assert w[NOMINAL_NAMES.index("fc1")] == 0.1 and w[NOMINAL_NAMES.index("fc3")] == 0.3
+    assert np.all(w[6:12] == 0.0) and np.all(w[12:] == 0.05)
+    assert not spreads(None).any() and not spreads({}).any()
+    with pytest.raises(InvalidInputError, match="unknown nominal quantity 'mass'"):
+        spreads({"mass": 0.1})
+    with pytest.raises(InvalidInputError, match=r"must be in \[0, 1\)"):
+        spreads({"viscous": 1.5})
+    with pytest.raises(InvalidInputError, match=r"must be in \[0, 1\)"):
+        spreads({"lp": float("nan")})
+
+
+def test_the_command_line_reads_the_spreads() -> None:
+    from rss6.discrepancy.cli import nominal_of
+
+    assert nominal_of(None) == discrepancy.NOMINAL_SPREAD
+    assert nominal_of("none") is None and nominal_of(" None ") is None
+    assert nominal_of("fc2=0.2,gains=0.1") == {"fc2": 0.2, "gains": 0.1}
+    with pytest.raises(InvalidInputError, match="not name=value"):
+        nominal_of("fc2")
+
+
+def test_the_refit_recovers_an_error_inside_its_box_and_stops_on_the_box(truth: Any) -> None:
+    """A residual linear in the quantities (no replay): a target inside the box is reached, one
+    outside ends on the box and is flagged, a held quantity does not move and one the data do not
+    see stays at the model's value (the prior; without it fc3–fc5 wandered to their box's edges
+    on a real run)."""
+    model = _model(truth, _robot(truth, 0, None))
+    v0 = _values(model)
+    target = v0 * (1 + np.array([0.05, -0.08, 0.3, 0, 0.05, 0, 0.2, 0, 0, 0, 0, -0.4, 0.03, 0, 0]))
+    # Orthogonal columns scaled to the values (a held or clipped quantity cannot leak into others),
+    # informative far beyond the prior — except fc5's, which the data do not see.
+    q = np.linalg.qr(np.random.default_rng(0).standard_normal((60, 15)))[0]
+    a = q * (1e5 / v0)
+    a[:, 4] = 0.0
+
+    def residual(m: Any) -> np.ndarray:
+        return np.asarray(a @ (_values(m) - target))
+
+    w = spreads({"coulomb": 0.1, "viscous": 0.25, "gains": 0.05})
+    nf = refit_nominal(model, model, w, residual, lambda jobs: [j() for j in jobs], held=[1])
+    v = _values(nf.model)
+    assert nf.n_free == 14 and nf.converged
+    # Inside the box: reached to 1e-8 relative (the prior's pull) in two Gauss–Newton steps.
+    for i in (0, 6, 12):
+        assert v[i] == pytest.approx(target[i], rel=3e-8), NOMINAL_NAMES[i]
+    assert v[2] == pytest.approx(v0[2] * 1.1, rel=1e-6) and nf.at_bound[2]  # beyond: on the box
+    assert v[11] == pytest.approx(v0[11] * 0.75, rel=1e-6) and nf.at_bound[11]
+    assert v[1] == v0[1] and not nf.at_bound[1]  # held
+    assert v[4] == pytest.approx(v0[4], rel=1e-9)  # unseen: the prior keeps it at the model's value
+    assert not nf.at_bound[[0, 4, 6, 12]].any()
+    # The cost left is the held and clipped quantities' (measured within 3e-15 relative).
+    best = target.copy()
+    best[1], best[2], best[4], best[11] = v0[1], v0[2] * 1.1, v0[4], v0[11] * 0.75
+    r = a @ (best - target)
+    assert nf.cost_after == pytest.approx(float(r @ r), rel=1e-12)
+    assert "fc3 +10 % (on its box)" in nf.summary() and "fc2" not in nf.summary()
+
+
+def _refit_notes(notes: list[str]) -> list[str]:
+    return [n for n in notes if n.startswith("nominal refit")]
+
+
+def test_a_latency_is_named_when_the_models_friction_is_a_few_percent_off(
+    truth: Any, excitation: identify.Excitation
+) -> None:
+    """The model is never exact: Coulomb friction 3 % and viscous 8 % off per joint (what CLOE
+    leaves) move the potentiometers enough that, with the model held, joint friction ranked first
+    on every scope though it hardly moves the pose: 9 candidates were refused (held-out gap shrunk
+    < 2 % of the floor) before the hidden 10 ms latency was named (until 2026-11-28 the search
+    stopped after 3 and said "unexplained"). With the nominal refit inside the model's uncertainty
+    the latency is named first (0 refusals). The refit takes the viscous error per joint from
+    3.5 % RMS to 1.3 % (Coulomb, which this run hardly sees, stays near the model by the prior).
+    Re-identification (CLOE, poses alone) is run, its loop's latency taken from the measured
+    frames, and not kept: the held-out potentiometers disagree (whitened cost 3484 → 144 348)."""
+    rng = np.random.default_rng(1)
+    hidden = {"camera_latency": {"latency": 0.01}}
+    fit, val = _robot(truth, 11, hidden), _robot(truth, 12, hidden)
+    model = _model(truth, fit)
+    d = model.dynamics.to_dict()
+    d["coulomb"] = np.asarray(d["coulomb"]) * (1 + 0.03 * rng.standard_normal(6))
+    d["viscous"] = np.asarray(d["viscous"]) * (1 + 0.08 * rng.standard_normal(6))
+    model = model.with_dynamics(rss6.DynamicParams.from_dict(d), model.pid)
+    rep = discrepancy.diagnose(
+        _collect(fit, excitation), model, validation=_collect(val, excitation), reidentify=True
+    )
+    assert rep.verdict == "named: camera_latency (sensor)", rep.table()
+    assert not any(" not named" in n for n in rep.notes), rep.notes
+    lo, hi = rep.named[0].ci["latency"]
+    assert lo <= 0.01 <= hi, rep.named[0]
+    first = _refit_notes(rep.notes)[0]
+    assert "not kept" not in first, first
+    costs = re.search(r"fitting cost ([0-9.e+-]+) → ([0-9.e+-]+)", first)
+    assert costs is not None and float(costs.group(2)) < 0.8 * float(costs.group(1)), first
+
+    def viscous_error(m: Any) -> float:
+        e = np.asarray(m.dynamics.viscous) / np.asarray(truth[0].viscous) - 1
+        return float(np.sqrt(np.mean(e * e)))
+
+    assert viscous_error(rep.model) < 0.6 * viscous_error(model)
+    rel = np.asarray(rep.model.dynamics.viscous) / np.asarray(model.dynamics.viscous) - 1
+    assert np.all(np.abs(rel) <= discrepancy.NOMINAL_SPREAD["viscous"] + 1e-9)
+    note = next(n for n in rep.notes if n.startswith("re-identified"))
+    assert "the loop's latency 10 ms, the first frame's time" in note, note
+    c_named, c_after = _held_out_costs(note)
+    assert c_after > c_named and "not kept" in note, note
