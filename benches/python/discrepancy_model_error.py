@@ -1,7 +1,8 @@
 """The discrepancy workflow with a model that is a few per cent off: a hidden effect in the model
 twin (default a 10 ms camera latency), and the model's Coulomb and viscous friction scaled per
 joint by 1 + σ·N(0, 1) (default σ 3 % and 8 %, what CLOE leaves on the plant). Prints per draw the
-verdict, the number of candidates refused on the way and the wall time.
+verdict, the number of candidates refused on the way, the wall time, the friction error of the
+model given and of the report's model against the truth, and the nominal refit's notes.
 
     python benches/python/discrepancy_model_error.py [--draws 1 2 3] [--coulomb 0.03]
         [--viscous 0.08] [--latency 0.01] [--reidentify] [--hold-nominal]
@@ -87,6 +88,18 @@ def main() -> int:
         )
         print(
             f"draw {draw}: {rep.verdict} ({refused} refused; {time.perf_counter() - t0:.0f} s) {est}",
+            flush=True,
+        )
+
+        def rms_error(m: discrepancy.Model, what: str) -> float:
+            e = np.asarray(getattr(m.dynamics, what)) / np.asarray(getattr(dp, what)) - 1
+            return 100 * float(np.sqrt(np.mean(e * e)))
+
+        print(
+            "  friction error against the truth, RMS over the joints: Coulomb "
+            f"{rms_error(model, 'coulomb'):.2f} % → {rms_error(rep.model, 'coulomb'):.2f} %, viscous "
+            f"{rms_error(model, 'viscous'):.2f} % → {rms_error(rep.model, 'viscous'):.2f} % "
+            "(the model given → the report's model)",
             flush=True,
         )
         for n in rep.notes:

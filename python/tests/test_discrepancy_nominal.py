@@ -84,7 +84,7 @@ def test_the_refit_recovers_an_error_inside_its_box_and_stops_on_the_box(truth: 
     nf = refit_nominal(model, model, w, residual, lambda jobs: [j() for j in jobs], held=[1])
     v = _values(nf.model)
     assert nf.n_free == 14 and nf.converged
-    # Inside the box: reached to 1e-8 relative (the prior's pull) in two Gauss–Newton steps.
+    # Inside the box: reached to 1e-8 relative (the prior's pull) in one Gauss–Newton step.
     for i in (0, 6, 12):
         assert v[i] == pytest.approx(target[i], rel=3e-8), NOMINAL_NAMES[i]
     assert v[2] == pytest.approx(v0[2] * 1.1, rel=1e-6) and nf.at_bound[2]  # beyond: on the box
