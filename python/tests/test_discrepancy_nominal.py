@@ -17,21 +17,10 @@ from rss6.discrepancy.nominal import (
     spreads,
 )
 from rss6.errors import InvalidInputError
-from twin_case import KP
 from twin_case import collect as _collect
 from twin_case import held_out_costs as _held_out_costs
 from twin_case import model as _model
 from twin_case import robot as _robot
-
-
-@pytest.fixture(scope="module")
-def truth() -> tuple[Any, tuple[float, float, float]]:
-    return identify.table_5_2_truth()
-
-
-@pytest.fixture(scope="module")
-def excitation() -> identify.Excitation:
-    return identify.random_excitation(KP, seed=1)
 
 
 def _values(m: Any) -> np.ndarray:

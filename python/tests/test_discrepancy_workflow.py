@@ -23,17 +23,6 @@ from twin_case import held_out_costs as _held_out_costs
 from twin_case import model as _model
 from twin_case import robot as _robot
 
-
-@pytest.fixture(scope="module")
-def truth() -> tuple[Any, tuple[float, float, float]]:
-    return identify.table_5_2_truth()
-
-
-@pytest.fixture(scope="module")
-def excitation() -> identify.Excitation:
-    return identify.random_excitation(KP, seed=1)
-
-
 # the library -------------------------------------------------------------------------------------
 
 

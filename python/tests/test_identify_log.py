@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 import rss6
 from rss6 import identify, logs
 from rss6.discrepancy import Model, replay, run_of
+from twin_case import collect
 
 KP = rss6.KinematicParams.nominal()
 GAINS = (0.45, 1.6, 0.002)
@@ -24,19 +26,9 @@ TRUTH = _robot().truth()
 MODEL = Model(KP, DP, PID, TRUTH["sensor_in_base"], TRUTH["target_in_effector"])
 
 
-def _collect(path: Path, **kw: object) -> identify.IdentificationData:
-    robot = _robot()
-    tr = TRUTH
+def _collect(path: Path, **kw: Any) -> identify.IdentificationData:
     exc = identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5)
-    return identify.collect(
-        robot,
-        exc,
-        kp_model=KP,
-        sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
-        mcap=path,
-        **kw,  # type: ignore[arg-type]
-    )
+    return collect(_robot(), exc, mcap=path, **kw)
 
 
 def test_a_logged_run_reads_back_as_the_run_collect_returned(tmp_path: Path) -> None:
