@@ -52,6 +52,13 @@ on the rapier plant without a hidden effect (replays driven by recorded commands
 an offset drift on all joints whose held-out claim passed (p ≈ 0.001) but which shrank the gap by
 0.15 % of the floor at most — statistically there, practically nil (the plant is not the twin)."""
 
+MAX_WORSEN = 0.02
+"""Most a named effect may make any pose axis's held-out gap worse, as a fraction of its noise
+floor. Measured on the twin grid (205 cases) and the plant: 82 correctly named effects worsened an
+axis by 0.011 of the floor at most; a camera drift on x named an offset drift of joint 4 or 1
+(which moves z and the angles too) worsened one by 0.016–0.025 at 1×, 0.055–0.078 at 2× and
+0.28–0.34 at 5×."""
+
 
 #: Mean square of the whitened √K·b̂ above which the noisy replays' mean is the baseline.
 BIAS_THRESHOLD = 2.0

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from rss6.discrepancy import stats
 from rss6.discrepancy._steps import (
     MAX_MIMICS,
+    MAX_WORSEN,
     MIN_FRAMES,
     MIN_SHRINK,
     Progress,
@@ -85,13 +86,6 @@ __all__ = [
     "MIN_TRANSFER",
     "diagnose",
 ]
-
-MAX_WORSEN = 0.02
-"""Most a named effect may make any pose axis's held-out gap worse, as a fraction of its noise
-floor. Measured on the twin grid (205 cases) and the plant: 82 correctly named effects worsened an
-axis by 0.011 of the floor at most; a camera drift on x named an offset drift of joint 4 or 1
-(which moves z and the angles too) worsened one by 0.016–0.025 at 1×, 0.055–0.078 at 2× and
-0.28–0.34 at 5×."""
 
 MIN_TRANSFER = 0.95
 """Share of the held-out run's own cost reduction that the fitting run's parameters must reach for
@@ -241,7 +235,13 @@ def _diagnose(
     def refit_nominal_now() -> None:
         nonlocal nom
         m, nf, nh, text = refit_step(
-            base_model.with_effects(named_effects), model, spread, fit, held, current_held, sim.many
+            base_model.with_effects(named_effects),
+            model,
+            spread,
+            fit,
+            held,
+            (current_fit, current_held),
+            sim.many,
         )
         if text:
             notes_fit.append(text)

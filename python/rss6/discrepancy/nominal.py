@@ -216,25 +216,33 @@ def refit_step(
     spread: F64,
     fit: Any,
     held: Any,
-    current_held: F64,
+    current: tuple[F64, F64],
     many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
 ) -> tuple[Model, F64 | None, F64 | None, str]:
     """One refit of the nominal quantities of ``model`` (with its named effects), from
-    ``original``'s values, on the fitting part ``fit``, judged on the held-out part ``held`` like a re-identification: kept only if the
-    held-out whitened cost over every channel does not grow against ``current_held`` (its current
-    baseline). Returns the model to keep, its new fitting and held-out baselines (None if not
-    kept) and a note."""
+    ``original``'s values, on the fitting part ``fit``, judged on the held-out part ``held`` like
+    a re-identification: kept only if the held-out whitened cost over every channel does not grow
+    against the current baselines ``current`` (fitting run, held-out run: ``model``'s replays).
+    Returns the model to keep, its new fitting and held-out baselines (None if not kept) and a
+    note."""
     cal, hcal = fit.calibration, held.calibration
+    current_fit, current_held = current
+    # From the model's own values: what an earlier refit took up of an effect named since (the
+    # first refit runs before anything is named) is given back.
+    start = _with_values(model, _values(original))
+    # Replays by the quantities' values: the start's is the current baseline when the model holds
+    # the original's values, and the accepted step's is the new one.
+    baselines: dict[bytes, F64] = {}
+    if np.array_equal(_values(model), _values(original)):
+        baselines[_values(start).tobytes()] = current_fit
 
     def residual(m: Model) -> F64:
-        return np.asarray(
-            cal.whitener.vec(fit.measured - fit.baseline(replay(m, fit.run))[fit.rows])
-        )
+        key = _values(m).tobytes()
+        if key not in baselines:
+            baselines[key] = fit.baseline(replay(m, fit.run))
+        return np.asarray(cal.whitener.vec(fit.measured - baselines[key][fit.rows]))
 
     try:
-        # From the model's own values: what an earlier refit took up of an effect named since
-        # (the first refit runs before anything is named) is given back.
-        start = _with_values(model, _values(original))
         nf = refit_nominal(start, original, spread, residual, many)
     except (InvalidInputError, Rss6Error) as err:
         return model, None, None, f"nominal quantities not refitted: {err}"
@@ -249,4 +257,7 @@ def refit_step(
     )
     if c_new > c_old:
         return model, None, None, text + "; not kept (the held-out run does not agree)"
-    return nf.model, fit.baseline(replay(nf.model, fit.run)), new_held, text
+    new_fit = baselines.get(_values(nf.model).tobytes())
+    if new_fit is None:
+        new_fit = fit.baseline(replay(nf.model, fit.run))
+    return nf.model, new_fit, new_held, text
