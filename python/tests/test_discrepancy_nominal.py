@@ -42,6 +42,18 @@ def test_spreads_read_groups_and_names_and_refuse_nonsense() -> None:
         spreads({"lp": float("nan")})
 
 
+def test_the_spreads_follow_an_identifications_sigma() -> None:
+    from types import SimpleNamespace
+
+    result = SimpleNamespace(identified=("platform.m", "fc1", "lp"), relative_std=[0.01, 0.02, 0.3])
+    w = discrepancy.nominal_from(result)
+    assert w["fc1"] == pytest.approx(0.06) and w["lp"] == 0.5  # 3σ, capped at 0.5
+    assert w["fc2"] == 0.1 and w["fv1"] == 0.25 and w["ld"] == 0.05  # not identified: defaults
+    assert set(w) == set(NOMINAL_NAMES) and spreads(w)[0] == pytest.approx(0.06)
+    with pytest.raises(InvalidInputError, match="2 relative σ"):
+        discrepancy.nominal_from(SimpleNamespace(identified=("fc1",), relative_std=[0.1, 0.2]))
+
+
 def test_the_command_line_reads_the_spreads() -> None:
     from rss6.discrepancy.cli import nominal_of
 

@@ -42,7 +42,7 @@ from rss6.discrepancy.noise import (
     noise_from_periods,
     noise_from_repeats,
 )
-from rss6.discrepancy.nominal import NOMINAL_NAMES, NOMINAL_SPREAD
+from rss6.discrepancy.nominal import NOMINAL_NAMES, NOMINAL_SPREAD, nominal_from
 from rss6.discrepancy.report import (
     AMBIGUOUS,
     NEARLY_AMBIGUOUS,
@@ -86,6 +86,7 @@ __all__ = [
     "noise_from_differences",
     "noise_from_periods",
     "noise_from_repeats",
+    "nominal_from",
     "reference_signatures",
     "replay",
     "run_of",

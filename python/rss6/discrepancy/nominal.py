@@ -35,6 +35,7 @@ __all__ = [
     "NOMINAL_SPREAD",
     "PRIOR_SIGMAS",
     "NominalFit",
+    "nominal_from",
     "refit_nominal",
     "refit_step",
     "spreads",
@@ -79,6 +80,32 @@ def spreads(nominal: Mapping[str, float] | None) -> F64:
                 f"unknown nominal quantity {key!r}: use coulomb, viscous, gains or one of "
                 + ", ".join(NOMINAL_NAMES)
             )
+    return out
+
+
+def nominal_from(
+    result: Any, *, sigmas: float = PRIOR_SIGMAS, cap: float = 0.5
+) -> dict[str, float]:
+    """The spreads from an identification (:class:`rss6.identify.IdentificationResult`): ``sigmas``
+    × the relative σ CLOE reports for each quantity it identified (at most ``cap``), and
+    :data:`NOMINAL_SPREAD`'s group value for those it did not (held at the guess, or not asked
+    for)."""
+    if not 0 < cap < 1 or not sigmas > 0:
+        raise InvalidInputError(f"need sigmas > 0 and cap in (0, 1); got {sigmas}, {cap}")
+    identified = tuple(getattr(result, "identified", ()))
+    std = np.asarray(getattr(result, "relative_std", ()), dtype=np.float64)
+    if len(identified) != len(std):
+        raise InvalidInputError(
+            f"the result names {len(identified)} quantities but gives {len(std)} relative σ"
+        )
+    out: dict[str, float] = {}
+    for i, name in enumerate(NOMINAL_NAMES):
+        group = "coulomb" if i < 6 else "viscous" if i < 12 else "gains"
+        if name in identified:
+            w = float(std[identified.index(name)]) * sigmas
+            out[name] = min(w, cap) if np.isfinite(w) else NOMINAL_SPREAD[group]
+        else:
+            out[name] = NOMINAL_SPREAD[group]
     return out
 
 
