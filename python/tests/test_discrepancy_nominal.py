@@ -101,6 +101,23 @@ def test_the_refit_recovers_an_error_inside_its_box_and_stops_on_the_box(truth: 
     assert "fc3 +10 % (on its box)" in nf.summary() and "fc2" not in nf.summary()
 
 
+def test_a_refit_whose_steps_run_out_says_so(truth: Any) -> None:
+    """A residual the linear model does not predict (cubic in fc1): one step does not settle it,
+    and the refit does not count itself converged; with more steps it does."""
+    model = _model(truth, _robot(truth, 0, None))
+    v0 = _values(model)
+
+    def residual(m: Any) -> np.ndarray:
+        u = (_values(m)[0] - 1.08 * v0[0]) / (0.01 * v0[0])
+        return np.array([u + 0.5 * u**3])
+
+    w = spreads({"fc1": 0.1})
+    one = refit_nominal(model, model, w, residual, lambda jobs: [j() for j in jobs], iterations=1)
+    assert not one.converged and one.cost_after < one.cost_before
+    many = refit_nominal(model, model, w, residual, lambda jobs: [j() for j in jobs], iterations=8)
+    assert many.converged and many.cost_after < one.cost_after
+
+
 def _refit_notes(notes: list[str]) -> list[str]:
     return [n for n in notes if n.startswith("nominal refit")]
 

@@ -170,8 +170,8 @@ def refit_nominal(
     differences at a tenth of each box (the replays run together through ``many``), the step the
     bounded linear least squares inside the box (``scipy.optimize.lsq_linear``), halved up to
     twice if the cost does not fall. The problem is nearly linear inside the box: 15 + 1 replays a
-    step, where a trust-region solver spent ≈ 6 Jacobians. Converged when a full step lowers the
-    cost by what the linear model predicted (within 10 %), by less than 10⁻³ of it, or not at all
+    step, where a trust-region solver spent ≈ 6 Jacobians. Converged when a full step ends at the
+    cost the linear model predicted (within 10⁻³ of it), lowers it by less than 10⁻³, or not at all
     (on the twin: one step, ``benches/python/nominal_refit.py``)."""
     from scipy.optimize import lsq_linear
 
@@ -209,7 +209,7 @@ def refit_nominal(
             jac = np.column_stack([(c - r) / st for c, st in zip(cols, steps, strict=True)])
             d = lsq_linear(jac, -r, bounds=(lo - x, hi - x), method="bvls").x
             lin = r + jac @ d
-            predicted = cost - float(lin @ lin)
+            predicted = float(lin @ lin)  # the cost the linear model expects after the full step
             for t in (1.0, 0.5, 0.25):
                 xn = np.clip(x + t * d, lo, hi)
                 rn = res(xn)
@@ -220,9 +220,9 @@ def refit_nominal(
                 converged = True  # no step lowers the cost: at the optimum within the box
                 break
             x, r, fell, cost = xn, rn, cost - cn, cn
-            # Done when the step hardly lowers the cost, or lowers it as the linear model said
-            # (the problem is linear there).
-            if fell < 1e-3 * cost or (t == 1.0 and abs(fell - predicted) <= 0.1 * predicted):
+            # Done when the step hardly lowers the cost, or ends where the linear model said (the
+            # problem is linear there: the optimum of the linear model is the refit's).
+            if fell < 1e-3 * cost or (t == 1.0 and abs(cn - predicted) <= 1e-3 * cn):
                 converged = True
                 break
     except Rss6Error as err:
@@ -282,6 +282,8 @@ def refit_step(
         f"nominal refit inside the model's uncertainty ({nf.summary()}): fitting cost "
         f"{nf.cost_before:.6g} → {nf.cost_after:.6g}, held-out {c_old:.6g} → {c_new:.6g}"
     )
+    if not nf.converged:
+        text += " (its steps ran out before the cost settled)"
     if c_new > c_old:
         return model, None, None, text + "; not kept (the held-out run does not agree)"
     new_fit = baselines.get(_values(nf.model).tobytes())
