@@ -6,6 +6,7 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
         [--commands recorded|simulated] [--solver-iterations 48] [--hold-nominal]
+        [--model-error]
         [--out out/discrepancy_benchmark.csv]
 """
 
@@ -52,6 +53,12 @@ def main() -> int:
         action="store_true",
         help="hold the model's friction and gains (default: refitted inside NOMINAL_SPREAD)",
     )
+    ap.add_argument(
+        "--model-error",
+        action="store_true",
+        help="the model's friction and gains drawn from the nominal refit's prior around the\n"
+        "truth (default: the model is the truth)",
+    )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
     specs = cases(
@@ -64,6 +71,7 @@ def main() -> int:
         commands=args.commands,
         solver_iterations=args.solver_iterations,
         hold_nominal=args.hold_nominal,
+        model_error=args.model_error,
     )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

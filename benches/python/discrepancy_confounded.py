@@ -18,7 +18,8 @@ gains. With the commands held, viscous friction and the derivative gain differ o
 the plant grids reported this case ambiguous at 5× on both seeds.
 
     python benches/python/discrepancy_confounded.py [--seeds 10] [--workers 2] [--mass 20]
-        [--hidden payload|gains|friction] [--magnitude 5] [--excitation SEED]
+        [--hidden payload|gains|friction] [--magnitude 5] [--excitation SEED] [--harmonics 5]
+        [--commands simulated|recorded] [--robot twin|plant]
 """
 
 from __future__ import annotations
@@ -62,16 +63,39 @@ def main() -> None:
         help="one random excitation (seed) for both runs of every case, the noise drawn per seed\n"
         "(the test's is 1); default: two excitations per seed",
     )
+    ap.add_argument(
+        "--harmonics",
+        type=int,
+        default=5,
+        help="harmonics of the random excitations (2: a slow, nearly quasi-static motion, under\n"
+        "which the payload and the drive gains leave nearly the same signature)",
+    )
+    ap.add_argument(
+        "--commands",
+        choices=("simulated", "recorded"),
+        default="simulated",
+        help="payload or gains: replays in the model's own loop (default) or driven by the\n"
+        "recorded commands",
+    )
+    ap.add_argument(
+        "--robot",
+        choices=("twin", "plant"),
+        default="twin",
+        help="payload or gains: the robot (the plant with the shared stick–slip law)",
+    )
     args = ap.parse_args()
     # Each worker runs its loops on one thread (the workers already use every core).
     os.environ["RAYON_NUM_THREADS"] = "1"
+    robot: dict[str, Any] = {"commands": args.commands, "robot": args.robot}
+    if args.robot == "plant":
+        robot["friction_law"] = "implicit"
     hidden_spec: dict[str, Any] = {
         "payload": {
             "effect": "payload",
             "params": {"mass": args.mass, "x": 0.0, "y": 0.0, "z": 0.0},
-            "commands": "simulated",
+            **robot,
         },
-        "gains": {"effect": "pid_gains", "magnitude": args.magnitude, "commands": "simulated"},
+        "gains": {"effect": "pid_gains", "magnitude": args.magnitude, **robot},
         "friction": {
             "effect": "joint_friction@all joints",
             "magnitude": args.magnitude,
@@ -84,6 +108,7 @@ def main() -> None:
             "spec_id": f"confounded-{s}",
             **hidden_spec,
             "seed": s,
+            "harmonics": args.harmonics,
             **({} if args.excitation is None else {"excitation": args.excitation}),
         }
         for s in range(args.seeds)
@@ -113,9 +138,13 @@ def main() -> None:
             f"  closest mimic (round 1): {closest}"
         )
     n = len(records) - faulted
+    loop = "own-loop replays" if args.commands == "simulated" else "replays driven by the commands"
+    on = f"{'rapier plant' if args.robot == 'plant' else 'model twin'}, {loop}"
+    if args.harmonics != 5:
+        on += f", {args.harmonics} harmonics"
     what = {
-        "payload": f"{args.mass:g} kg payload at the origin, own-loop replays",
-        "gains": f"drive gains at {args.magnitude:g}× the camera noise, own-loop replays",
+        "payload": f"{args.mass:g} kg payload at the origin, {on}",
+        "gains": f"drive gains at {args.magnitude:g}× the camera noise, {on}",
         "friction": f"friction on all joints at {args.magnitude:g}× the camera noise, rapier plant,"
         " recorded commands",
     }[args.hidden]

@@ -19,7 +19,11 @@ iterations: ≈ 1.5 µm from the model);
 ``commands``: "recorded" (default: replays driven by the robot's per-tick commands; an effect's
 magnitude is then its size with the commands held) or "simulated" (replays close the model's loop);
 ``excitation``: the seed of one random excitation both runs follow (default: seeds 1000 + seed and
-2000 + seed, two excitations).
+2000 + seed, two excitations); ``model_error``: the model's friction and drive gains drawn around the truth ("prior": from the
+nominal refit's prior; or relative σ per group "coulomb", "viscous", "gains"; default None: the
+model is the truth); ``harmonics``: of the random excitations (default 5; 2 is a slow,
+nearly quasi-static motion, under which a payload and a drive-gain change leave nearly the same
+signature).
 """
 
 from __future__ import annotations
@@ -35,11 +39,11 @@ from numpy.typing import NDArray
 
 import rss6
 from rss6 import identify
-from rss6.discrepancy._steps import Z95
+from rss6.discrepancy.benchmark_summary import summary
 from rss6.discrepancy.diagnose import diagnose
 from rss6.discrepancy.effects import Change, EffectDef, get
 from rss6.discrepancy.model import Model, Run, replay, run_of
-from rss6.discrepancy.nominal import NOMINAL_SPREAD
+from rss6.discrepancy.nominal import NOMINAL_SPREAD, PRIOR_SIGMAS
 from rss6.errors import InvalidInputError
 
 __all__ = [
@@ -185,7 +189,10 @@ def hidden_case(
         d["coulomb"], d["viscous"] = np.zeros(6), np.zeros(6)
         dp = rss6.DynamicParams.from_dict(d)
     same = spec.get("excitation")
-    exc = identify.random_excitation(kp, seed=1000 + seed if same is None else int(same))
+    harmonics = int(spec.get("harmonics", 5))
+    exc = identify.random_excitation(
+        kp, seed=1000 + seed if same is None else int(same), harmonics=harmonics
+    )
 
     def make(
         hidden: Mapping[str, Mapping[str, float]] | None,
@@ -277,13 +284,39 @@ def hidden_case(
     # else fits it differently.
     val = collect(
         robot(2 * seed + 2),
-        exc if same is not None else identify.random_excitation(kp, seed=2000 + seed),
+        exc
+        if same is not None
+        else identify.random_excitation(kp, seed=2000 + seed, harmonics=harmonics),
     )
     for kind in extra:
         fit = _with_camera(fit, _camera_additive(kind, fit.t, multiple))
         val = _with_camera(val, _camera_additive(kind, val.t, multiple))
         reached.append(multiple)
+    # The model given to the workflow: the truth, or drawn around it (the effect's size was the
+    # truth's).
+    model = _with_model_error(model, spec.get("model_error"), seed)
     return HiddenCase(fit, val, model, applied_names + extra, truths, reached, library)
+
+
+def _with_model_error(model: Model, how: Any, seed: int) -> Model:
+    """``model`` with its friction and drive gains drawn around the truth: each scaled by
+    1 + σ·N(0, 1), σ per group from ``how`` ({"coulomb", "viscous", "gains"}: relative σ, or
+    "prior": the nominal refit's prior, :data:`NOMINAL_SPREAD` / :data:`PRIOR_SIGMAS`); None: the
+    model as the truth."""
+    if how is None:
+        return model
+    sig = {k: v / PRIOR_SIGMAS for k, v in NOMINAL_SPREAD.items()} if how == "prior" else dict(how)
+    unknown = set(sig) - {"coulomb", "viscous", "gains"}
+    if unknown:
+        raise InvalidInputError(f"model_error: unknown groups {sorted(unknown)}")
+    rng = np.random.default_rng(7000 + seed)
+    d = model.dynamics.to_dict()
+    for k in ("coulomb", "viscous"):
+        d[k] = np.asarray(d[k], dtype=np.float64) * (1 + sig.get(k, 0.0) * rng.standard_normal(6))
+    g = np.asarray(model.pid, dtype=np.float64) * (
+        1 + sig.get("gains", 0.0) * rng.standard_normal(3)
+    )
+    return model.with_dynamics(rss6.DynamicParams.from_dict(d), tuple(float(x) for x in g))
 
 
 def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
@@ -379,6 +412,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     record["ci"] = json.dumps({k: list(v) for k, v in mine.ci.items()} if mine else {})
     record["se"] = json.dumps(mine.se if mine else {})
     record["heldout"] = json.dumps({k: list(v) for k, v in mine.heldout.items()} if mine else {})
+    record["nominal_se"] = json.dumps(mine.nominal_se if mine else {})
     for i, a in enumerate("xyzabg"):
         record[f"gap_before_{a}"] = float(rep.gap_before[i])
         record[f"gap_named_{a}"] = float(rep.gap_named[i])
@@ -404,6 +438,7 @@ def cases(
     commands: str = "recorded",
     solver_iterations: int | None = None,
     hold_nominal: bool = False,
+    model_error: bool = False,
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
@@ -411,7 +446,8 @@ def cases(
     kind (+ "-implicit" with the implicit friction law, + "-loop" for replays that close the
     model's loop, ``commands="simulated"``, + "-itN" for the plant at N solver iterations instead of
     the implicit law's 48, ``solver_iterations=N``, + "-held" with the model's friction and gains
-    held instead of refitted, ``hold_nominal=True``)."""
+    held instead of refitted, ``hold_nominal=True``, + "-uncertain" with the model's friction and
+    gains drawn from the nominal refit's prior around the truth, ``model_error=True``)."""
     friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
@@ -428,6 +464,9 @@ def cases(
     if hold_nominal:
         tag += "-held"
         common["nominal"] = None
+    if model_error:
+        tag += "-uncertain"
+        common["model_error"] = "prior"
     effs = (
         list(effects)
         if effects is not None
@@ -477,108 +516,3 @@ def cases(
             }
         )
     return out
-
-
-def _truthy(v: Any) -> bool:
-    return v is True or str(v) == "True"
-
-
-def summary(records: Sequence[Mapping[str, Any]]) -> str:
-    """The benchmark's figures from its records (dicts, or rows read back from CSV): the confusion
-    matrix (hidden effect → first named effect, "ambiguous", "unexplained", "none"), and per target
-    of issue 14: false alarms on no-effect runs, right effect and scope first at each magnitude,
-    95 % interval coverage and relative error of the named parameters, out-of-library handling,
-    held-out gap at 5× against the noise floor."""
-    lines: list[str] = []
-    every = list(records)
-    rows = [r for r in every if r.get("kind") != "faulted"]
-    if len(rows) < len(every):
-        lines.append(f"runs where the robot faulted (not counted): {len(every) - len(rows)}")
-    null = [r for r in rows if r["hidden"] == "none"]
-    if null:
-        fa = sum(r["verdict"] != "no missing effect" for r in null)
-        named = sum(r["named"] != "none" for r in null)
-        lines.append(
-            f"no-effect runs: {len(null)}; any discrepancy reported {fa} ({100 * fa / len(null):.1f} %),"
-            f" a library effect named {named} ({100 * named / len(null):.1f} %)"
-        )
-    lib = [r for r in rows if r["kind"] == "library"]
-    for m in sorted({float(r["magnitude"]) for r in lib}):
-        rs = [r for r in lib if float(r["magnitude"]) == m]
-        right = sum(_truthy(r["first_right"]) for r in rs)
-        lines.append(
-            f"library effect at {m:g}× noise: right effect and scope first {right}/{len(rs)} "
-            f"({100 * right / len(rs):.0f} %)"
-        )
-    cover = total = cover_fit = cover_held = n_fit = n_held = 0
-    rel5: list[float] = []
-    for r in lib:
-        if r["hidden"] not in str(r["named"]).split("+"):
-            continue  # not named in its own scope: no estimate of the truth (older records had one)
-        truth, est, ci = (json.loads(r[k]) for k in ("truth", "estimate", "ci"))
-        se, held = (json.loads(r.get(k) or "{}") for k in ("se", "heldout"))
-        for k, v in truth.items():
-            if k in ci and k in est:
-                total += 1
-                cover += ci[k][0] <= v <= ci[k][1]
-                # The fitting run's interval alone, and the held-out run's own (bounds aside:
-                # the truth is inside them).
-                if k in se:
-                    n_fit += 1
-                    cover_fit += abs(est[k] - v) <= Z95 * se[k]
-                if k in held:
-                    n_held += 1
-                    cover_held += abs(held[k][0] - v) <= Z95 * held[k][1]
-                if float(r["magnitude"]) == 5.0 and abs(v) > 0:
-                    rel5.append(abs(est[k] - v) / abs(v))
-    if total:
-        # The two runs' own intervals only where the records carry their errors (records
-        # written before the sixth session, or by a study that did not keep them, do not).
-        alone = f"; the fitting run's alone {cover_fit}/{n_fit}" if n_fit else ""
-        own = f", the held-out run's own {cover_held}/{n_held}" if n_held else ""
-        lines.append(
-            f"95 % intervals containing the truth: {cover}/{total} ({100 * cover / total:.0f} %)"
-            + alone
-            + own
-        )
-    if rel5:
-        lines.append(
-            f"relative error of named parameters at 5×: median {100 * float(np.median(rel5)):.1f} %,"
-            f" ≤ 10 % in {sum(e <= 0.1 for e in rel5)}/{len(rel5)}"
-        )
-    ool = [r for r in rows if r["kind"] == "out_of_library"]
-    if ool:
-        un = sum(_truthy(r["unexplained"]) for r in ool)
-        nm = sum(r["named"] != "none" for r in ool)
-        lines.append(
-            f"out-of-library: unexplained {un}/{len(ool)} ({100 * un / len(ool):.0f} %), given a "
-            f"library name {nm}/{len(ool)} ({100 * nm / len(ool):.0f} %)"
-        )
-    five = [r for r in lib if float(r["magnitude"]) == 5.0]
-    if five:
-        ok = sum(
-            all(float(r[f"gap_named_{a}"]) <= 1.1 * float(r[f"noise_{a}"]) for a in "xyzabg")
-            for r in five
-        )
-        lines.append(f"held-out gap within 10 % of the noise floor at 5×: {ok}/{len(five)}")
-
-    # Confusion matrix: hidden effect (name) → first named effect, or what was said instead.
-    def first(r: Mapping[str, Any]) -> str:
-        if r["named"] != "none":
-            return str(r["named"]).split("+")[0].split(" (")[0]
-        if _truthy(r["ambiguous"]):
-            return "ambiguous"
-        return "unexplained" if _truthy(r["unexplained"]) else "none"
-
-    hidden = sorted({str(r["hidden"]).split(" (")[0] for r in rows if r["kind"] != "pair"})
-    said = sorted({first(r) for r in rows})
-    lines.append("")
-    lines.append("confusion (rows: hidden; columns: first named, or what was said):")
-    lines.append(f"{'':24s}" + "".join(f"{c[:12]:>13s}" for c in said))
-    for h in hidden:
-        rs = [r for r in rows if r["kind"] != "pair" and str(r["hidden"]).split(" (")[0] == h]
-        lines.append(f"{h:24s}" + "".join(f"{sum(first(r) == c for r in rs):13d}" for c in said))
-    pairs = [r for r in rows if r["kind"] == "pair"]
-    for r in pairs:
-        lines.append(f"pair {r['hidden']} (seed {r['seed']}): {r['verdict']}")
-    return "\n".join(lines)

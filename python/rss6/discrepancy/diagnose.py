@@ -28,9 +28,11 @@ from numpy.typing import NDArray
 from rss6.discrepancy import stats
 from rss6.discrepancy._steps import (
     MAX_MIMICS,
+    MAX_NIL,
     MAX_WORSEN,
     MIN_FRAMES,
     MIN_SHRINK,
+    MIN_TRANSFER,
     Progress,
     _best_start,
     _calibrate,
@@ -52,12 +54,13 @@ from rss6.discrepancy._steps import (
     fit_se,
     intervals,
     on_bounds,
+    with_nominal,
 )
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.effects import candidates as library
 from rss6.discrepancy.model import AppliedEffect, Model, replay
-from rss6.discrepancy.nominal import NOMINAL_SPREAD, refit_step, spreads
+from rss6.discrepancy.nominal import NOMINAL_SPREAD, NominalFit, refit_step, spreads
 from rss6.discrepancy.reidentify import reidentify_on
 from rss6.discrepancy.report import (
     AMBIGUOUS,
@@ -86,23 +89,6 @@ __all__ = [
     "MIN_TRANSFER",
     "diagnose",
 ]
-
-MIN_TRANSFER = 0.95
-"""Share of the held-out run's own cost reduction that the fitting run's parameters must reach for
-an effect whose two fits differ beyond the noise to be named all the same (the model is never the
-robot: the difference is then model error, not mimicry). Measured on the rapier plant at 5× (its
-model differs from it by 0.1–0.6× the noise with the true effect): the true friction, drive gains
-and offset drift transferred 0.989–0.9996 and were rejected by T² (p ≤ 2e-4); mimics — a base tilt
-fitted into a wrong minimum, a tilt standing in for a payload — transferred −2.6 and −0.7."""
-
-MAX_NIL = 10
-"""Candidates rejected for a practically nil held-out shrink (:data:`MIN_SHRINK`), or whose
-predicted change the held-out run does not show, that the search tries past (their fits are kept
-while nothing is named, so each try costs one new fit). Measured on the model twin in its own
-loop: a 5× backlash was hidden behind an offset drift of joint 1 that shrank the held-out gap by
-1.7 % of the floor (2 sufficed). With the model's friction a few per cent off (Coulomb 3 %, viscous
-8 %, as CLOE leaves it) the potentiometers rank joint friction first on every scope although it
-hardly moves the pose: a hidden 10 ms latency was named after 9 such refusals (2026-11-28)."""
 
 F64 = NDArray[np.float64]
 
@@ -231,10 +217,11 @@ def _diagnose(
     # The nominal refit (module nominal): its model and baselines, for the screening and the
     # final model; fits and held-out claims are on the model as given with the named effects.
     nom: tuple[list[AppliedEffect], Model, F64, F64] | None = None
+    last: list[NominalFit | None] = [None]  # the latest refit: the model's uncertainty
 
     def refit_nominal_now() -> None:
         nonlocal nom
-        m, nf, nh, text = refit_step(
+        m, nf, nh, text, last[0] = refit_step(
             base_model.with_effects(named_effects),
             model,
             spread,
@@ -523,6 +510,7 @@ def _diagnose(
         current_fit = fit.baseline(replay(cand_model, fit.run))
         if spread.any():
             refit_nominal_now()
+            named = with_nominal(named, defs, best, se_fit, heldout, last[0])
         _tell(progress, f"named {s.effect.name} ({s.scope})", round_ + 1, max_effects)
 
     # Backward check on the held-out run: an effect named early may only have mimicked part of one

@@ -36,6 +36,7 @@ __all__ = [
     "PRIOR_SIGMAS",
     "NominalFit",
     "nominal_from",
+    "nominal_variance",
     "refit_nominal",
     "refit_step",
     "spreads",
@@ -130,7 +131,9 @@ class NominalFit:
     """The refit: the model with the refitted quantities, their relative changes (15, in
     :data:`NOMINAL_NAMES` order; 0 where held), which ended on their box, the fitting run's
     whitened cost before and after, whether the last step still lowered the cost by less than
-    10⁻³ of it (else the iterations ran out) and how many quantities were free."""
+    10⁻³ of it (else the iterations ran out) and how many quantities were free; ``sensitivity``
+    (whitened data rows × 15: the residual's Jacobian at the start, 0 for held quantities) and
+    ``prior_sigma`` (15: the prior's σ, 0 where held) — what :func:`nominal_variance` needs."""
 
     model: Model
     relative: F64
@@ -139,6 +142,8 @@ class NominalFit:
     cost_after: float
     converged: bool
     n_free: int
+    sensitivity: F64 | None = None
+    prior_sigma: F64 | None = None
 
     def summary(self, threshold: float = 1e-3) -> str:
         """The quantities that moved (relative change above ``threshold``), those on their box
@@ -202,11 +207,15 @@ def refit_nominal(
         r = res(x) if np.any(x != v0[free]) else np.concatenate([r0, (x - ref[free]) / sigma])
         cost = float(r @ r)
         converged = False
+        sens: F64 | None = None
         for _ in range(max(1, iterations)):
             steps = np.where(x + h <= hi, h, -h)
             pts = [x + np.eye(len(x))[i] * steps[i] for i in range(len(x))]
             cols = many([partial(res, p) for p in pts])
             jac = np.column_stack([(c - r) / st for c, st in zip(cols, steps, strict=True)])
+            if sens is None:
+                sens = np.zeros((len(r0), len(v0)))
+                sens[:, free] = jac[: len(r0)]
             d = lsq_linear(jac, -r, bounds=(lo - x, hi - x), method="bvls").x
             lin = r + jac @ d
             predicted = float(lin @ lin)  # the cost the linear model expects after the full step
@@ -234,7 +243,43 @@ def refit_nominal(
     at[free] = (x <= lo + tol) | (x >= hi - tol)
     rel = np.where(ref != 0, v / np.where(ref != 0, ref, 1.0) - 1.0, 0.0)
     c_data = float(r[:n_data] @ r[:n_data])
-    return NominalFit(_with_values(model, v), rel, at, c0, c_data, converged, int(free.size))
+    prior = np.zeros(len(v0))
+    prior[free] = sigma
+    return NominalFit(
+        _with_values(model, v), rel, at, c0, c_data, converged, int(free.size), sens, prior
+    )
+
+
+def nominal_variance(j_effect: F64, nf: NominalFit | None, residual: F64 | None = None) -> F64:
+    """What the model's own uncertainty adds to the variance of effect parameters fitted on the
+    model as given (the nominal quantities held at the model's values). With J_e the fit's
+    whitened Jacobian (M, n), r its whitened residual and J_n the nominal quantities' (``nf
+    .sensitivity``) under their prior N(0, diag(``nf.prior_sigma``²)), the linearised joint fit
+    of (effect, nominal) has covariance [J_eᵀJ_e, J_eᵀJ_n; J_nᵀJ_e, J_nᵀJ_n + Σ⁻¹]⁻¹: its effect
+    block less (J_eᵀJ_e)⁻¹ — the variance a direction of the effect shares with the nominal
+    quantities, as much of the prior as the data do not pin down — plus the square of the joint
+    fit's one step from the estimate, Δ (what the nominal quantities the data do see would move it:
+    the estimate is not corrected, its interval holds the correction). Friction on a joint beside
+    the model's own friction of it carries the prior's σ; an effect the nominal quantities cannot
+    mimic keeps its interval. Zeros (n,) when there is no refit or the layouts differ."""
+    n = j_effect.shape[1]
+    if nf is None or nf.sensitivity is None or nf.prior_sigma is None:
+        return np.zeros(n)
+    jn, sig = nf.sensitivity, nf.prior_sigma
+    keep = sig > 0
+    if not keep.any() or jn.shape[0] != j_effect.shape[0]:
+        return np.zeros(n)
+    jn = jn[:, keep]
+    a = j_effect.T @ j_effect
+    b = j_effect.T @ jn
+    info = np.block([[a, b], [b.T, jn.T @ jn + np.diag(1.0 / sig[keep] ** 2)]])
+    cov = np.linalg.pinv(info)
+    shared = np.maximum(np.diag(cov)[:n] - np.diag(np.linalg.pinv(a)), 0.0)
+    if residual is None or residual.shape[0] != j_effect.shape[0]:
+        return np.asarray(shared)
+    # Gauss–Newton on ‖r + J_e Δ + J_n δ‖² + ‖δ/σ‖² (the Jacobians are the residual's).
+    step = -(cov @ np.concatenate([j_effect.T @ residual, jn.T @ residual]))[:n]
+    return np.asarray(shared + step * step)
 
 
 def refit_step(
@@ -245,13 +290,14 @@ def refit_step(
     held: Any,
     current: tuple[F64, F64],
     many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
-) -> tuple[Model, F64 | None, F64 | None, str]:
+) -> tuple[Model, F64 | None, F64 | None, str, NominalFit | None]:
     """One refit of the nominal quantities of ``model`` (with its named effects), from
     ``original``'s values, on the fitting part ``fit``, judged on the held-out part ``held`` like
     a re-identification: kept only if the held-out whitened cost over every channel does not grow
     against the current baselines ``current`` (fitting run, held-out run: ``model``'s replays).
-    Returns the model to keep, its new fitting and held-out baselines (None if not kept) and a
-    note."""
+    Returns the model to keep, its new fitting and held-out baselines (None if not kept), a note
+    and the refit itself (None if it could not run), whose sensitivities give the intervals the
+    model's uncertainty (:func:`nominal_variance`) whether or not it is kept."""
     cal, hcal = fit.calibration, held.calibration
     current_fit, current_held = current
     # From the model's own values: what an earlier refit took up of an effect named since (the
@@ -272,9 +318,9 @@ def refit_step(
     try:
         nf = refit_nominal(start, original, spread, residual, many)
     except (InvalidInputError, Rss6Error) as err:
-        return model, None, None, f"nominal quantities not refitted: {err}"
+        return model, None, None, f"nominal quantities not refitted: {err}", None
     if nf.n_free == 0:
-        return model, None, None, ""
+        return model, None, None, "", None
     new_held = held.baseline(replay(nf.model, held.run))
     c_old = float(np.sum(hcal.whitener.vec(held.measured - current_held[held.rows]) ** 2))
     c_new = float(np.sum(hcal.whitener.vec(held.measured - new_held[held.rows]) ** 2))
@@ -285,8 +331,8 @@ def refit_step(
     if not nf.converged:
         text += " (its steps ran out before the cost settled)"
     if c_new > c_old:
-        return model, None, None, text + "; not kept (the held-out run does not agree)"
+        return model, None, None, text + "; not kept (the held-out run does not agree)", nf
     new_fit = baselines.get(_values(nf.model).tobytes())
     if new_fit is None:
         new_fit = fit.baseline(replay(nf.model, fit.run))
-    return nf.model, new_fit, new_held, text
+    return nf.model, new_fit, new_held, text, nf

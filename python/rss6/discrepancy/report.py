@@ -57,7 +57,9 @@ class NamedEffect:
     when it could not run (``ci`` combines the two runs: docs/discrepancy.md, "Intervals");
     ``closest_mimic`` (label, |ρ|): of the candidates that also passed the round's screen, the one
     whose signature it shares most (None when it passed alone) — at |ρ| ≥
-    :data:`NEARLY_AMBIGUOUS` the verdict says so: a second excitation would confirm the name."""
+    :data:`NEARLY_AMBIGUOUS` the verdict says so: a second excitation would confirm the name;
+    ``nominal_se`` {name: standard error}: what the model's own uncertainty (the nominal refit's
+    prior) adds to ``ci``, empty when the nominal quantities are held."""
 
     name: str
     scope: str
@@ -68,6 +70,7 @@ class NamedEffect:
     se: dict[str, float] = field(default_factory=dict)
     heldout: dict[str, tuple[float, float]] = field(default_factory=dict)
     closest_mimic: tuple[str, float] | None = None
+    nominal_se: dict[str, float] = field(default_factory=dict)
 
     @property
     def nearly_ambiguous(self) -> bool:
@@ -255,14 +258,20 @@ class DiscrepancyReport:
             lines += [
                 "",
                 (
-                    "named (estimate on the fitting run, 95 % interval from both runs; the "
-                    "held-out run's own refit in brackets):"
+                    "named (estimate on the fitting run, 95 % interval from both runs and the "
+                    "model's own uncertainty; in brackets the held-out run's own refit and what "
+                    "the model's uncertainty alone spans, ±1.96σ):"
                 ),
             ]
             for e in self.named:
                 est = ", ".join(
                     f"{k}={v:.4g} [{e.ci[k][0]:.4g}, {e.ci[k][1]:.4g}]"
                     + (f" (held-out {e.heldout[k][0]:.4g})" if k in e.heldout else "")
+                    + (
+                        f" (model ±{1.96 * e.nominal_se[k]:.2g})"
+                        if e.nominal_se.get(k, 0.0) > 0
+                        else ""
+                    )
                     if k in e.ci
                     else f"{k}={v:.4g}"
                     for k, v in e.params.items()

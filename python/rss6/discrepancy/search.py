@@ -35,6 +35,7 @@ __all__ = [
     "heldout_test",
     "hotelling",
     "mimicry",
+    "per_effect",
     "robust_se",
     "signature",
 ]
@@ -338,11 +339,16 @@ def robust_se(
         s_local += w * (gh + gh.T)
     a = np.linalg.pinv(j.T @ j)
     var = np.maximum(np.diag(a @ s @ a), np.diag(a @ s_local @ a))
-    se_all = np.sqrt(np.maximum(var, 0.0))
+    return per_effect(np.sqrt(np.maximum(var, 0.0)), fit.se)
+
+
+def per_effect(flat: F64, like: Sequence[dict[str, float]]) -> list[dict[str, float]]:
+    """``flat`` (one value per fitted parameter, in the fit's order) as one dict per effect with
+    the names and layout of ``like`` (e.g. :attr:`Fit.se`)."""
     out: list[dict[str, float]] = []
     k = 0
-    for d in fit.se:
-        out.append({name: float(se_all[k + i]) for i, name in enumerate(d)})
+    for d in like:
+        out.append({name: float(flat[k + i]) for i, name in enumerate(d)})
         k += len(d)
     return out
 
