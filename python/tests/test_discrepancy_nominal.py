@@ -176,6 +176,33 @@ def test_the_models_uncertainty_widens_what_it_can_mimic(truth: Any) -> None:
     assert not nominal_variance(je[:10], nf).any()
 
 
+def test_an_interval_without_the_models_uncertainty_says_so(
+    truth: Any, excitation: identify.Excitation, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """When the nominal refit cannot run, a named effect's interval cannot hold the model's own
+    uncertainty: the report must say it is conditional on the model, not pass it off as the
+    usual one."""
+    import importlib
+
+    dg = importlib.import_module("rss6.discrepancy.diagnose")
+
+    def failing(model: Any, *args: Any) -> Any:
+        return model, None, None, "nominal quantities not refitted: (test)", None
+
+    monkeypatch.setattr(dg, "refit_step", failing)
+    hidden = {"camera_latency": {"latency": 0.02}}
+    fit, val = _robot(truth, 11, hidden), _robot(truth, 12, hidden)
+    rep = discrepancy.diagnose(
+        _collect(fit, excitation),
+        _model(truth, fit),
+        validation=_collect(val, excitation),
+        candidates=["camera_latency", "pid_gains"],
+    )
+    assert [e.name for e in rep.named] == ["camera_latency"], rep.table()
+    assert not any(rep.named[0].nominal_se.values())  # nothing from the model: 0
+    assert any("its interval is conditional on the model as given" in n for n in rep.notes)
+
+
 def _refit_notes(notes: list[str]) -> list[str]:
     return [n for n in notes if n.startswith("nominal refit")]
 

@@ -511,6 +511,11 @@ def _diagnose(
         if spread.any():
             refit_nominal_now()
             named = with_nominal(named, defs, best, se_fit, heldout, last[0])
+            if last[0] is None:
+                notes_fit.append(
+                    f"{s.effect.name} ({s.scope}): its interval is conditional on the model as "
+                    "given — the nominal refit did not run, so the model's own uncertainty is not in it"
+                )
         _tell(progress, f"named {s.effect.name} ({s.scope})", round_ + 1, max_effects)
 
     # Backward check on the held-out run: an effect named early may only have mimicked part of one
