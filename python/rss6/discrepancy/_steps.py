@@ -16,7 +16,7 @@ import rss6
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, run_of, simulate
 from rss6.discrepancy.noise import NoiseModel
-from rss6.discrepancy.nominal import NominalFit, nominal_variance
+from rss6.discrepancy.nominal import NominalFit, nominal_difference, nominal_variance
 from rss6.discrepancy.report import (
     CandidateRow,
     NamedEffect,
@@ -229,7 +229,9 @@ def _consistency(
     best: Fit,
     res_at_fit: F64,
     res_before: F64,
-) -> tuple[float, float, str, Fit | None]:
+    nf: NominalFit | None = None,
+    jn_held: F64 | None = None,
+) -> tuple[float, float, float, str, Fit | None]:
     """Refits the effects on the held-out run from the fitting run's values and tests that the
     fitting run's parameters are where the held-out run's own fit would put them: the score
     g = Jᵀr of the held-out residual at the fitting run's parameters (J the held-out fit's whitened
@@ -238,7 +240,14 @@ def _consistency(
     projection). Also the *transfer*: the share of the held-out run's own cost reduction (from
     ``res_before``, its whitened residual without the new effect, to its refit) that the fitting
     run's parameters reach (``res_at_fit``) — 1 when they are as good as its own, below 0 when they
-    make it worse. (p, transfer, text of the two estimates, the held-out fit or None)."""
+    make it worse. (p, p with the model taken as exact, transfer, text of the two estimates, the
+    held-out fit or None).
+
+    With the refit ``nf`` and J_n on the held-out run ``jn_held``, the difference of the two
+    estimates also carries the model's own uncertainty (:func:`~rss6.discrepancy.nominal.
+    nominal_difference`, mapped to the score by JᵀJ): an error of the nominal quantities biases
+    the two excitations' estimates differently, and a test that knows only the noise refuses a
+    true effect for it."""
     effs = [(_def(a.name), a.scope) for a in prev] + [(s.effect, s.scope)]
 
     def simulate_h(c: Change) -> F64:
@@ -254,7 +263,7 @@ def _consistency(
             bounds=partial(_physical, base_model),
         )
     except Rss6Error as err:
-        return 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})", None
+        return 1.0, 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})", None
     # A parameter on a bound in either fit has a nonzero score at a constrained optimum: the test
     # is on the free ones (a benchmark effect scaled to its bound was otherwise rejected as a mimic
     # with the truth's values on both runs, e.g. Coulomb 5 vs 4.998 N·m).
@@ -268,14 +277,23 @@ def _consistency(
     transfer = (c0 - c1) / (c0 - hfit.cost) if c0 > hfit.cost else float("-inf")
     text += f"; transfer {transfer:.3f}"
     if not free.any():
-        return 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
+        return 1.0, 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
     j = hfit.jacobian[:, free]
     g = j.T @ res_at_fit
-    t2, p = hotelling(g / np.sqrt(2.0), hcal.replicates @ j)
+    reps = hcal.replicates @ j
+    model_cov = np.zeros((j.shape[1], j.shape[1]))
+    if best.jacobian.shape[1] == free.size:
+        h = j.T @ j
+        d = nominal_difference(best.jacobian[:, free], best.residual_w, j, jn_held, nf)
+        model_cov = h @ d @ h
+    t2, p = hotelling(g / np.sqrt(2.0), reps, model_cov / 2.0)
+    t2_exact, p_exact = hotelling(g / np.sqrt(2.0), reps)
     text += f"; T² {t2:.3g} on {j.shape[1]} parameters"
+    if model_cov.any():
+        text += f" ({t2_exact:.3g} with the model taken as exact)"
     if not free.all():
         text += f" ({int((~free).sum())} on a bound left out)"
-    return p, transfer, text, hfit
+    return p, p_exact, transfer, text, hfit
 
 
 def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:

@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -60,7 +61,13 @@ from rss6.discrepancy.detect import AXES, Detection, detect, reference_signature
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.effects import candidates as library
 from rss6.discrepancy.model import AppliedEffect, Model, replay
-from rss6.discrepancy.nominal import NOMINAL_SPREAD, NominalFit, refit_step, spreads
+from rss6.discrepancy.nominal import (
+    NOMINAL_SPREAD,
+    NominalFit,
+    held_sensitivity,
+    refit_step,
+    spreads,
+)
 from rss6.discrepancy.reidentify import reidentify_on
 from rss6.discrepancy.report import (
     AMBIGUOUS,
@@ -71,13 +78,7 @@ from rss6.discrepancy.report import (
     NamedEffect,
     unexplained,
 )
-from rss6.discrepancy.search import (
-    Fit,
-    Screen,
-    fit_effects,
-    heldout_test,
-    mimicry,
-)
+from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry
 from rss6.errors import InvalidInputError, Rss6Error
 
 __all__ = [
@@ -217,11 +218,14 @@ def _diagnose(
     # The nominal refit (module nominal): its model and baselines, for the screening and the
     # final model; fits and held-out claims are on the model as given with the named effects.
     nom: tuple[list[AppliedEffect], Model, F64, F64] | None = None
-    last: list[NominalFit | None] = [None]  # the latest refit: the model's uncertainty
+    last: NominalFit | None = None  # the latest refit: the model's uncertainty
+    refit_for: list[AppliedEffect] | None = None  # the named effects it was run with
+    jn_held: F64 | None = None  # its J_n on the held-out run, computed when first needed
 
     def refit_nominal_now() -> None:
-        nonlocal nom
-        m, nf, nh, text, last[0] = refit_step(
+        nonlocal nom, last, jn_held, refit_for
+        jn_held, refit_for = None, list(named_effects)
+        m, nf, nh, text, last = refit_step(
             base_model.with_effects(named_effects),
             model,
             spread,
@@ -438,8 +442,10 @@ def _diagnose(
         # A real effect has the same parameters on both runs; a library effect that only mimics
         # something outside the library fits differently on another excitation.
         res_new = hcal.whitener.vec(held.measured - new_held[held.rows])
-        p_cons, transfer, cons_text, hfit = _consistency(
-            base_model, held, hcal, prev, s, best, res_new, hres
+        if jn_held is None and last is not None:
+            jn_held = held_sensitivity(cur, held, current_held, last, sim.many)
+        p_cons, p_exact, transfer, cons_text, hfit = _consistency(
+            base_model, held, hcal, prev, s, best, res_new, hres, last, jn_held
         )
         heldout: list[dict[str, tuple[float, float]]] = [{} for _ in best.values]
         if hfit is not None:
@@ -468,6 +474,11 @@ def _diagnose(
             if mimics > MAX_MIMICS:
                 break
             continue
+        elif p_exact < alpha:
+            notes_fit.append(
+                f"{s.effect.name} ({s.scope}): the held-out run's own fit differs beyond its noise "
+                f"but within the model's own uncertainty ({cons_text}; p = {p_cons:.2g}): named"
+            )
         elif cons_text.startswith("held-out refit failed") or cons_text.endswith("not tested"):
             # The held-out run's own fit could not run, or left nothing free to test.
             notes_fit.append(
@@ -476,17 +487,7 @@ def _diagnose(
             )
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
-            NamedEffect(
-                a.name,
-                a.scope,
-                dict(a.params),
-                c,
-                ne.p_value,
-                ne.gap_after,
-                sf,
-                dict(ho),
-                ne.closest_mimic,
-            )
+            replace(ne, params=dict(a.params), ci=c, se=sf, heldout=dict(ho))
             for a, ne, c, sf, ho in zip(
                 new_effects[len(base_model.applied()) :], named, cis, se_fit, heldout, strict=False
             )
@@ -510,8 +511,8 @@ def _diagnose(
         current_fit = fit.baseline(replay(cand_model, fit.run))
         if spread.any():
             refit_nominal_now()
-            named = with_nominal(named, defs, best, se_fit, heldout, last[0])
-            if last[0] is None:
+            named = with_nominal(named, defs, best, se_fit, heldout, last)
+            if last is None:
                 notes_fit.append(
                     f"{s.effect.name} ({s.scope}): its interval is conditional on the model as "
                     "given — the nominal refit did not run, so the model's own uncertainty is not in it"
@@ -532,7 +533,7 @@ def _diagnose(
             current_held = without
             named = [ne for ne in named if (ne.name, ne.scope) != (a.name, a.scope)]
             dropped.append(f"{a.name} ({a.scope}): held-out p = {p_drop:.3g} beside the others")
-    if spread.any() and (nom is None or nom[0] != named_effects):
+    if spread.any() and refit_for != named_effects:
         refit_nominal_now()  # an effect was dropped: refit with those that stay
     if nom is not None and nom[0] == named_effects:
         base_model, current_held = nom[1].with_effects(base_model.applied()), nom[3]

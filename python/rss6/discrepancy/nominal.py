@@ -35,10 +35,13 @@ __all__ = [
     "NOMINAL_SPREAD",
     "PRIOR_SIGMAS",
     "NominalFit",
+    "held_sensitivity",
+    "nominal_difference",
     "nominal_from",
     "nominal_variance",
     "refit_nominal",
     "refit_step",
+    "sensitivity",
     "spreads",
 ]
 
@@ -263,23 +266,113 @@ def nominal_variance(j_effect: F64, nf: NominalFit | None, residual: F64 | None 
     the model's own friction of it carries the prior's σ; an effect the nominal quantities cannot
     mimic keeps its interval. Zeros (n,) when there is no refit or the layouts differ."""
     n = j_effect.shape[1]
-    if nf is None or nf.sensitivity is None or nf.prior_sigma is None:
+    joint = _joint(j_effect, nf)
+    if joint is None:
         return np.zeros(n)
-    jn, sig = nf.sensitivity, nf.prior_sigma
-    keep = sig > 0
-    if not keep.any() or jn.shape[0] != j_effect.shape[0]:
-        return np.zeros(n)
-    jn = jn[:, keep]
-    a = j_effect.T @ j_effect
-    b = j_effect.T @ jn
-    info = np.block([[a, b], [b.T, jn.T @ jn + np.diag(1.0 / sig[keep] ** 2)]])
-    cov = np.linalg.pinv(info)
-    shared = np.maximum(np.diag(cov)[:n] - np.diag(np.linalg.pinv(a)), 0.0)
+    cov, jn = joint
+    shared = np.maximum(np.diag(cov)[:n] - np.diag(np.linalg.pinv(j_effect.T @ j_effect)), 0.0)
     if residual is None or residual.shape[0] != j_effect.shape[0]:
         return np.asarray(shared)
     # Gauss–Newton on ‖r + J_e Δ + J_n δ‖² + ‖δ/σ‖² (the Jacobians are the residual's).
     step = -(cov @ np.concatenate([j_effect.T @ residual, jn.T @ residual]))[:n]
     return np.asarray(shared + step * step)
+
+
+def _joint(j_effect: F64, nf: NominalFit | None) -> tuple[F64, F64] | None:
+    """The linearised joint fit of (effect, nominal quantities under their prior) on the run of
+    ``j_effect``: its covariance and the nominal quantities' Jacobian (the prior's held ones left
+    out), or None without a refit or with a Jacobian of another run."""
+    if nf is None or nf.sensitivity is None or nf.prior_sigma is None:
+        return None
+    jn, sig = nf.sensitivity, nf.prior_sigma
+    keep = sig > 0
+    if not keep.any() or jn.shape[0] != j_effect.shape[0]:
+        return None
+    jn = jn[:, keep]
+    a = j_effect.T @ j_effect
+    b = j_effect.T @ jn
+    info = np.block([[a, b], [b.T, jn.T @ jn + np.diag(1.0 / sig[keep] ** 2)]])
+    return np.linalg.pinv(info), jn
+
+
+def nominal_difference(
+    j_fit: F64, r_fit: F64, j_held: F64, jn_held: F64 | None, nf: NominalFit | None
+) -> F64:
+    """What the model's own uncertainty adds to the covariance of the difference between an
+    effect's estimates on two runs, both fitted on the model as given: an error δ of the nominal
+    quantities moves the estimate on run x by A_x δ, A_x = (J_xᵀJ_x)⁻¹J_xᵀJ_n,x (J_x the effect's
+    whitened Jacobian on that run, J_n,x the nominal quantities'), so the difference carries
+    (A_f − A_h)δ — zero only when both excitations see the model's error alike. δ is taken as
+    the fitting run's joint fit says (``r_fit`` its residual at the estimate, ``nf`` the refit
+    with the fitting run's J_n): its covariance (what the data do not pin) plus its one step
+    squared, as :func:`nominal_variance`. ``jn_held``: J_n on the held-out run, every one of the
+    15 quantities (:func:`sensitivity`). Zeros (n, n) when anything is missing."""
+    n = j_fit.shape[1]
+    joint = _joint(j_fit, nf)
+    if joint is None or jn_held is None or nf is None or nf.prior_sigma is None:
+        return np.zeros((n, n))
+    if jn_held.shape != (j_held.shape[0], len(nf.prior_sigma)) or j_held.shape[1] != n:
+        return np.zeros((n, n))
+    cov, jn_f = joint
+    jn_h = jn_held[:, nf.prior_sigma > 0]
+    step = -(cov @ np.concatenate([j_fit.T @ r_fit, jn_f.T @ r_fit]))[n:]
+    second = cov[n:, n:] + np.outer(step, step)
+    a_f = np.linalg.pinv(j_fit.T @ j_fit) @ (j_fit.T @ jn_f)
+    a_h = np.linalg.pinv(j_held.T @ j_held) @ (j_held.T @ jn_h)
+    d = a_f - a_h
+    return np.asarray(d @ second @ d.T)
+
+
+def sensitivity(
+    model: Model,
+    prior_sigma: F64,
+    residual: Callable[[Model], F64],
+    r0: F64,
+    many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
+) -> F64:
+    """The whitened ``residual``'s Jacobian (rows × 15) in the nominal quantities of ``model``
+    whose ``prior_sigma`` is positive (0 for the others), by forward differences of 0.3 σ (a tenth
+    of the box, the steps of :func:`refit_nominal`) from ``r0`` = ``residual(model)``: J_n on
+    another run than the refit's."""
+    v0 = _values(model)
+    out = np.zeros((len(r0), len(v0)))
+    free = np.flatnonzero(prior_sigma > 0)
+    steps = 0.1 * PRIOR_SIGMAS * prior_sigma[free]
+
+    def moved(i: int, h: float) -> F64:
+        v = v0.copy()
+        v[i] += h
+        return residual(_with_values(model, v))
+
+    cols = many([partial(moved, int(i), float(h)) for i, h in zip(free, steps, strict=True)])
+    for i, h, c in zip(free, steps, cols, strict=True):
+        out[:, i] = (c - r0) / h
+    return out
+
+
+def held_sensitivity(
+    model: Model,
+    held: Any,
+    baseline: F64,
+    nf: NominalFit | None,
+    many: Callable[[Sequence[Callable[[], F64]]], list[F64]],
+) -> F64 | None:
+    """J_n on the held-out run for :func:`_consistency`: the whitened residual's Jacobian in the
+    nominal quantities ``nf`` holds uncertain, at ``model`` (whose held-out replay is
+    ``baseline``); None without a refit or when a replay fails (the test then knows only the
+    noise)."""
+    if nf is None or nf.prior_sigma is None or held.calibration is None:
+        return None
+    white = held.calibration.whitener
+
+    def residual(m: Model) -> F64:
+        return np.asarray(white.vec(held.measured - held.baseline(replay(m, held.run))[held.rows]))
+
+    r0 = np.asarray(white.vec(held.measured - baseline[held.rows]))
+    try:
+        return sensitivity(model, nf.prior_sigma, residual, r0, many)
+    except Rss6Error:
+        return None
 
 
 def refit_step(

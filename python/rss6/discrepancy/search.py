@@ -86,14 +86,18 @@ def calibrate(noise: Sequence[F64], *, max_order: int = 20) -> Calibration:
     return Calibration(model, w, reps)
 
 
-def hotelling(g: F64, g_reps: F64) -> tuple[float, float]:
+def hotelling(g: F64, g_reps: F64, extra: F64 | None = None) -> tuple[float, float]:
     """(T², p) of the score vector ``g`` (q,) against K zero-mean replicates ``g_reps`` (K, q) of
     it under the null: T² = gᵀS⁻¹g with S = Σ g_k g_kᵀ/K; (K − q + 1)/(K q)·T² ~ F(q, K − q + 1)
-    for Gaussian noise. Directions the replicates do not see (rank deficiency) are dropped."""
+    for Gaussian noise. Directions the replicates do not see (rank deficiency) are dropped.
+    ``extra`` (q, q): a known covariance added to S (e.g. the model's own uncertainty); the F
+    law is kept, which errs on the side of larger p (the known part has no sampling error)."""
     from scipy.stats import f as f_dist
 
     k = g_reps.shape[0]
     s = g_reps.T @ g_reps / k
+    if extra is not None and extra.shape == s.shape:
+        s = s + extra
     u, sv, _ = np.linalg.svd(s)
     keep = sv > 1e-12 * max(float(sv[0]), 1e-300)
     q = int(keep.sum())
