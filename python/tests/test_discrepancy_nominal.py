@@ -221,6 +221,8 @@ def test_the_consistency_test_allows_for_what_the_model_does_to_each_excitation(
     assert refused(np.array([0.0, 0.5]))[0] >= 0.62
     assert not nominal_difference(-jf, noise[0], -jf, -jnf, nf).any()
     assert not nominal_difference(-jf, noise[0], -jh, None, nf).any()
+    with pytest.raises(InvalidInputError, match="extra covariance"):
+        hotelling(np.zeros(2), np.ones((k, 2)), np.zeros((3, 3)))
 
 
 def test_an_interval_without_the_models_uncertainty_says_so(

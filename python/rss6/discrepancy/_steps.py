@@ -291,6 +291,8 @@ def _consistency(
     text += f"; T² {t2:.3g} on {j.shape[1]} parameters"
     if model_cov.any():
         text += f" ({t2_exact:.3g} with the model taken as exact)"
+    elif nf is not None and jn_held is None:
+        text += " (the model's own uncertainty not in it: no sensitivity on the held-out run)"
     if not free.all():
         text += f" ({int((~free).sum())} on a bound left out)"
     return p, p_exact, transfer, text, hfit

@@ -96,7 +96,9 @@ def hotelling(g: F64, g_reps: F64, extra: F64 | None = None) -> tuple[float, flo
 
     k = g_reps.shape[0]
     s = g_reps.T @ g_reps / k
-    if extra is not None and extra.shape == s.shape:
+    if extra is not None:
+        if extra.shape != s.shape:
+            raise InvalidInputError(f"extra covariance {extra.shape} for a score of {s.shape}")
         s = s + extra
     u, sv, _ = np.linalg.svd(s)
     keep = sv > 1e-12 * max(float(sv[0]), 1e-300)
