@@ -207,8 +207,8 @@ def test_a_held_out_refit_that_fails_is_said_in_the_notes(
 
     dg = importlib.import_module("rss6.discrepancy.diagnose")
 
-    def failing(*args: Any, **kw: Any) -> tuple[float, float, str, None]:
-        return 1.0, float("-inf"), "held-out refit failed (UnreachableError: leg 3)", None
+    def failing(*args: Any, **kw: Any) -> tuple[float, float, float, str, None]:
+        return 1.0, 1.0, float("-inf"), "held-out refit failed (UnreachableError: leg 3)", None
 
     monkeypatch.setattr(dg, "_consistency", failing)
     rep = _diagnose(truth, excitation, {"camera_latency": {"latency": 0.01}})
