@@ -78,7 +78,7 @@ from rss6.discrepancy.report import (
     NamedEffect,
     unexplained,
 )
-from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry
+from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry, robust_cov
 from rss6.errors import InvalidInputError, Rss6Error
 
 __all__ = [
@@ -444,8 +444,9 @@ def _diagnose(
         res_new = hcal.whitener.vec(held.measured - new_held[held.rows])
         if jn_held is None and last is not None:
             jn_held = held_sensitivity(cur, held, current_held, last, sim.many)
+        v_fit = robust_cov(best, cal.whitener, len(fit.t))
         p_cons, p_exact, transfer, cons_text, hfit = _consistency(
-            base_model, held, hcal, prev, s, best, res_new, hres, last, jn_held
+            base_model, held, hcal, prev, s, best, res_new, hres, last, jn_held, v_fit
         )
         heldout: list[dict[str, tuple[float, float]]] = [{} for _ in best.values]
         if hfit is not None:

@@ -86,20 +86,14 @@ def calibrate(noise: Sequence[F64], *, max_order: int = 20) -> Calibration:
     return Calibration(model, w, reps)
 
 
-def hotelling(g: F64, g_reps: F64, extra: F64 | None = None) -> tuple[float, float]:
+def hotelling(g: F64, g_reps: F64) -> tuple[float, float]:
     """(T², p) of the score vector ``g`` (q,) against K zero-mean replicates ``g_reps`` (K, q) of
     it under the null: T² = gᵀS⁻¹g with S = Σ g_k g_kᵀ/K; (K − q + 1)/(K q)·T² ~ F(q, K − q + 1)
-    for Gaussian noise. Directions the replicates do not see (rank deficiency) are dropped.
-    ``extra`` (q, q): a known covariance added to S (e.g. the model's own uncertainty); the F
-    law is kept, which errs on the side of larger p (the known part has no sampling error)."""
+    for Gaussian noise. Directions the replicates do not see (rank deficiency) are dropped."""
     from scipy.stats import f as f_dist
 
     k = g_reps.shape[0]
     s = g_reps.T @ g_reps / k
-    if extra is not None:
-        if extra.shape != s.shape:
-            raise InvalidInputError(f"extra covariance {extra.shape} for a score of {s.shape}")
-        s = s + extra
     u, sv, _ = np.linalg.svd(s)
     keep = sv > 1e-12 * max(float(sv[0]), 1e-300)
     q = int(keep.sum())
@@ -300,25 +294,14 @@ HAC_LAGS = 30
 """Bartlett lags (camera frames, 1 s) of :func:`robust_se`'s long-run covariance."""
 
 
-def robust_se(
-    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS
-) -> list[dict[str, float]]:
-    """Standard errors of ``fit`` that do not trust the noise model: the larger of two sandwiches
-    (JᵀJ)⁻¹ S (JᵀJ)⁻¹ over ``lags`` frames with Bartlett's weights (channels aligned on their last
-    common frames). *Stationary*: S = Σ_h w_h Σ_t J_tᵀ γ(h) J_{t−h}, γ(h) the whitened residual's
-    autocovariance across channels. *Local*: Newey–West on the per-frame scores J_tᵀ r_t, which
-    sees model error where it happens (a start transient) but, as the scores sum to zero at the
-    optimum, cancels the variance of an effect seen in a window shorter than ``lags`` (median 0.55
-    of Wald on white noise) — the stationary form does not. Both equal the Wald errors in
-    expectation when the residual is the noise model's; larger when the residual holds slow model
-    error the effect's signature overlaps (on the rapier plant an offset drift's rate was biased
-    2–17 % low with Wald intervals a tenth of that). ``fit.se`` if the residual's layout is not the
-    whitener's."""
+def _sandwiches(fit: Fit, whitener: Whitener, n_frames: int, lags: int) -> tuple[F64, F64] | None:
+    """:func:`robust_se`'s two sandwich covariances (stationary, local), or None if the residual's
+    layout is not the whitener's."""
     j, r = fit.jacobian, fit.residual_w
     lens = [n_frames - len(whitener.noise.ar[c]) for c in range(whitener.noise.axes)]
     m = min(lens)
     if sum(lens) != len(r) or m < 2:
-        return fit.se
+        return None
     jt = np.zeros((m, len(lens), j.shape[1]))
     rt = np.zeros((m, len(lens)))
     start = 0
@@ -344,8 +327,76 @@ def robust_se(
         gh = g[h:].T @ g[: m - h]
         s_local += w * (gh + gh.T)
     a = np.linalg.pinv(j.T @ j)
-    var = np.maximum(np.diag(a @ s @ a), np.diag(a @ s_local @ a))
+    return a @ s @ a, a @ s_local @ a
+
+
+def robust_se(
+    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS
+) -> list[dict[str, float]]:
+    """Standard errors of ``fit`` that do not trust the noise model: the larger of two sandwiches
+    (JᵀJ)⁻¹ S (JᵀJ)⁻¹ over ``lags`` frames with Bartlett's weights (channels aligned on their last
+    common frames). *Stationary*: S = Σ_h w_h Σ_t J_tᵀ γ(h) J_{t−h}, γ(h) the whitened residual's
+    autocovariance across channels. *Local*: Newey–West on the per-frame scores J_tᵀ r_t, which
+    sees model error where it happens (a start transient) but, as the scores sum to zero at the
+    optimum, cancels the variance of an effect seen in a window shorter than ``lags`` (median 0.55
+    of Wald on white noise) — the stationary form does not. Both equal the Wald errors in
+    expectation when the residual is the noise model's; larger when the residual holds slow model
+    error the effect's signature overlaps (on the rapier plant an offset drift's rate was biased
+    2–17 % low with Wald intervals a tenth of that). ``fit.se`` if the residual's layout is not the
+    whitener's."""
+    sw = _sandwiches(fit, whitener, n_frames, lags)
+    if sw is None:
+        return fit.se
+    var = np.maximum(np.diag(sw[0]), np.diag(sw[1]))
     return per_effect(np.sqrt(np.maximum(var, 0.0)), fit.se)
+
+
+def wald_cov(fit: Fit) -> F64:
+    """The Wald covariance of all of ``fit``'s parameters scaled by the misfit (reduced χ² when
+    above 1)."""
+    j = fit.jacobian
+    dof = max(1, len(fit.residual_w) - j.shape[1])
+    cov: F64 = np.linalg.pinv(j.T @ j) * max(1.0, fit.cost / dof)
+    return cov
+
+
+def robust_cov(fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS) -> F64:
+    """The covariance of all of ``fit``'s parameters that does not trust the noise model: of
+    :func:`wald_cov` and :func:`robust_se`'s two sandwiches, the largest relative to the Wald one
+    (trace of JᵀJ·C: free of the parameters' units) — the full matrix behind the errors of the
+    intervals, whose correlations a test of several parameters needs."""
+    wald = wald_cov(fit)
+    sw = _sandwiches(fit, whitener, n_frames, lags)
+    if sw is None:
+        return wald
+    info = fit.jacobian.T @ fit.jacobian
+    best = max((wald, *sw), key=lambda c: float(np.trace(info @ c)))
+    return np.asarray(best, dtype=np.float64)
+
+
+def difference_test(d: F64, cov: F64, extra: F64 | None = None) -> tuple[float, float]:
+    """(T², p) that two estimates differing by ``d`` (q,) are of the same parameters: T² =
+    dᵀ(C + extra)⁻¹d against χ² on the directions the covariance sees (its rank). ``cov`` (q, q):
+    the two estimates' covariances summed; ``extra``: a known covariance of the difference (e.g.
+    the model's own uncertainty)."""
+    from scipy.stats import chi2
+
+    c = np.array(cov, dtype=np.float64)
+    if c.shape != (len(d), len(d)) or (extra is not None and extra.shape != c.shape):
+        raise InvalidInputError(
+            f"covariances {c.shape} and {None if extra is None else extra.shape} for a "
+            f"difference of {len(d)}"
+        )
+    if extra is not None:
+        c = c + extra
+    u, sv, _ = np.linalg.svd(0.5 * (c + c.T))
+    keep = sv > 1e-12 * max(float(sv[0]), 1e-300) if len(sv) else sv > 0
+    q = int(keep.sum())
+    if q == 0:
+        return 0.0, 1.0
+    z = u[:, keep].T @ d
+    t2 = float(np.sum(z * z / sv[keep]))
+    return t2, float(chi2.sf(t2, q))
 
 
 def per_effect(flat: F64, like: Sequence[dict[str, float]]) -> list[dict[str, float]]:
