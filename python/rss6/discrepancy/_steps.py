@@ -16,7 +16,7 @@ import rss6
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, run_of, simulate
 from rss6.discrepancy.noise import NoiseModel
-from rss6.discrepancy.nominal import NominalFit, nominal_difference, nominal_variance
+from rss6.discrepancy.nominal import NominalFit, nominal_variance
 from rss6.discrepancy.report import (
     CandidateRow,
     NamedEffect,
@@ -27,14 +27,10 @@ from rss6.discrepancy.search import (
     Screen,
     Whitener,
     calibrate,
-    difference_test,
-    fit_effects,
     per_effect,
-    robust_cov,
     robust_se,
     screen,
     signature,
-    wald_cov,
 )
 from rss6.errors import InvalidInputError, Rss6Error
 
@@ -220,90 +216,6 @@ def _calibrate(parts: Sequence[_Part], model: Model, k: int, sim: _Sim, seed: in
         )
         out.append(p.baseline(clean_by[key].at(p.run)))
     return out
-
-
-def _consistency(
-    base_model: Model,
-    held: _Part,
-    hcal: Calibration,
-    prev: Sequence[AppliedEffect],
-    s: Screen,
-    best: Fit,
-    res_at_fit: F64,
-    res_before: F64,
-    nf: NominalFit | None = None,
-    jn_held: F64 | None = None,
-    v_fit: F64 | None = None,
-) -> tuple[float, float, float, str, Fit | None]:
-    """Refits the effects on the held-out run from the fitting run's values and tests that the two
-    runs' estimates are of the same parameters: T² of their difference against the sum of their
-    covariances as the intervals state them (:func:`~rss6.discrepancy.search.robust_cov` — ``v_fit``
-    the fitting run's, the held-out fit's computed here — the misfit-scaled Wald or a sandwich,
-    whichever is larger: on the rapier plant the residual is 1.4–4× the noise and slow, and a test
-    that knew only the noise refused true effects at T² 50–500; without ``v_fit`` the Wald
-    covariance scaled by the misfit). Also the *transfer*: the share of the held-out run's own
-    cost reduction (from ``res_before``, its whitened residual without the new effect, to its
-    refit) that the fitting run's parameters reach (``res_at_fit``) — 1 when they are as good as
-    its own, below 0 when they make it worse. (p, p with the model taken as exact, transfer, text
-    of the two estimates, the held-out fit or None).
-
-    With the refit ``nf`` and J_n on the held-out run ``jn_held``, the difference of the two
-    estimates also carries the model's own uncertainty (:func:`~rss6.discrepancy.nominal.
-    nominal_difference`): an error of the nominal quantities biases the two excitations'
-    estimates differently, and a test that knows only the noise refuses a true effect for it."""
-    effs = [(_def(a.name), a.scope) for a in prev] + [(s.effect, s.scope)]
-
-    def simulate_h(c: Change) -> F64:
-        return held.baseline(replay(base_model, held.run, c))[held.rows]
-
-    try:
-        hfit = fit_effects(
-            effs,
-            best.values,
-            held.measured,
-            simulate_h,
-            hcal.whitener,
-            bounds=partial(_physical, base_model),
-        )
-    except Rss6Error as err:
-        return 1.0, 1.0, float("-inf"), f"held-out refit failed ({type(err).__name__}: {err})", None
-    # A parameter on a bound in either fit has a nonzero score at a constrained optimum: the test
-    # is on the free ones (a benchmark effect scaled to its bound was otherwise rejected as a mimic
-    # with the truth's values on both runs, e.g. Coulomb 5 vs 4.998 N·m).
-    free = np.ones(hfit.jacobian.shape[1], dtype=bool)
-    for f in (best, hfit):
-        if f.at_bound is not None and f.at_bound.shape == free.shape:
-            free &= ~f.at_bound
-    names = [p.name for p in s.effect.params]
-    text = ", ".join(f"{n} {best.values[-1][n]:.4g} vs {hfit.values[-1][n]:.4g}" for n in names)
-    c0, c1 = float(res_before @ res_before), float(res_at_fit @ res_at_fit)
-    transfer = (c0 - c1) / (c0 - hfit.cost) if c0 > hfit.cost else float("-inf")
-    text += f"; transfer {transfer:.3f}"
-    if not free.any():
-        return 1.0, 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
-    j = hfit.jacobian[:, free]
-    d = (np.array(_flat(best.values)) - np.array(_flat(hfit.values)))[free]
-    v_h = robust_cov(hfit, hcal.whitener, len(held.t))
-    vf = v_fit if v_fit is not None and v_fit.shape == v_h.shape else wald_cov(best)
-    cov = (vf + v_h)[np.ix_(free, free)]
-    model_cov = np.zeros_like(cov)
-    if best.jacobian.shape[1] == free.size:
-        model_cov = nominal_difference(best.jacobian[:, free], best.residual_w, j, jn_held, nf)
-    t2, p = difference_test(d, cov, model_cov)
-    t2_exact, p_exact = difference_test(d, cov)
-    text += f"; T² {t2:.3g} on {j.shape[1]} parameters"
-    if model_cov.any():
-        text += f" ({t2_exact:.3g} with the model taken as exact)"
-    elif nf is not None and jn_held is None:
-        text += " (the model's own uncertainty not in it: no sensitivity on the held-out run)"
-    if not free.all():
-        text += f" ({int((~free).sum())} on a bound left out)"
-    return p, p_exact, transfer, text, hfit
-
-
-def _flat(values: Sequence[dict[str, float]]) -> list[float]:
-    """A fit's values in its Jacobian's column order."""
-    return [v for d in values for v in d.values()]
 
 
 def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:

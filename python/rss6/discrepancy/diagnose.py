@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rss6.discrepancy import stats
+from rss6.discrepancy._claims import _consistency, backward_check, bound_note
 from rss6.discrepancy._steps import (
     MAX_MIMICS,
     MAX_NIL,
@@ -38,7 +39,6 @@ from rss6.discrepancy._steps import (
     _best_start,
     _calibrate,
     _conflicts,
-    _consistency,
     _def,
     _gravity_load,
     _named_run,
@@ -379,22 +379,20 @@ def _diagnose(
         cis = intervals(defs, best.values, se_fit)
         ci = cis[-1]
         dll = 0.5 * (float(rw @ rw) - best.cost)
-        for i, sc in enumerate(screens):
-            if i == i_best:
-                rows.append(
-                    CandidateRow(
-                        sc.effect.name,
-                        sc.scope,
-                        dll,
-                        float(p_adj[i]),
-                        best.values[-1],
-                        ci,
-                        rms_new - rms_cur,
-                        False,
-                    )
-                )
-            else:
-                rows.append(_row(sc, float(p_adj[i]), None, None, False))
+        top_row = CandidateRow(
+            s.effect.name,
+            s.scope,
+            dll,
+            float(p_adj[i_best]),
+            best.values[-1],
+            ci,
+            rms_new - rms_cur,
+            False,
+        )
+        rows += [
+            top_row if i == i_best else _row(sc, float(p_adj[i]), None, None, False)
+            for i, sc in enumerate(screens)
+        ]
         if p_held > alpha or (not best.converged and best.cost >= float(rw @ rw)):
             excluded.add((s.effect.name, s.scope))
             notes_fit.append(
@@ -486,6 +484,14 @@ def _diagnose(
                 f"{s.effect.name} ({s.scope}): {cons_text}; the consistency of its parameters "
                 "between the runs is not tested (named on its held-out change and gap alone)"
             )
+        note = bound_note(best, defs, prev, s)
+        if note is not None:
+            excluded.add((s.effect.name, s.scope))
+            notes_fit.append(note)
+            mimics += 1
+            if mimics > MAX_MIMICS:
+                break
+            continue
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
             replace(ne, params=dict(a.params), ci=c, se=sf, heldout=dict(ho))
@@ -520,20 +526,9 @@ def _diagnose(
                 )
         _tell(progress, f"named {s.effect.name} ({s.scope})", round_ + 1, max_effects)
 
-    # Backward check on the held-out run: an effect named early may only have mimicked part of one
-    # named later; drop any whose own contribution the held-out run no longer shows.
-    n0 = len(base_model.applied())
-    for a in list(named_effects[n0:]) if len(named_effects) - n0 >= 2 else []:
-        others = [b for b in named_effects if b is not a]
-        without = held.baseline(replay(base_model.with_effects(others), held.run))
-        delta = hcal.whitener.vec((current_held - without)[held.rows])
-        hres = hcal.whitener.vec(held.measured - without[held.rows])
-        _, p_drop = heldout_test(delta, hres, hcal.replicates)
-        if p_drop > alpha:
-            named_effects = others
-            current_held = without
-            named = [ne for ne in named if (ne.name, ne.scope) != (a.name, a.scope)]
-            dropped.append(f"{a.name} ({a.scope}): held-out p = {p_drop:.3g} beside the others")
+    named_effects, named, current_held, dropped = backward_check(
+        base_model, named_effects, named, held, hcal, current_held, alpha
+    )
     if spread.any() and refit_for != named_effects:
         refit_nominal_now()  # an effect was dropped: refit with those that stay
     if nom is not None and nom[0] == named_effects:
