@@ -520,3 +520,30 @@ def test_intervals_hold_model_error_that_differs_between_the_two_runs() -> None:
     a = intervals([eff], [{name: mid}], [{name: 1e-4}], [{name: (mid + 1e-4, 1e-4)}])[0][name]
     b = intervals([eff], [{name: mid}], [{name: 1e-4}])[0][name]
     assert a == b
+
+
+def test_an_effect_overlapping_one_on_its_bound_is_found() -> None:
+    """:func:`bound_overlap` finds an earlier effect of a joint fit on a bound of its range (not its
+    null value) and the largest canonical correlation of its signature with the new effect's: built
+    here as 0.8 (a payload column 0.8 along a tilt column, 0.6 across)."""
+    from rss6.discrepancy.effects import get
+    from rss6.discrepancy.search import Fit, bound_overlap
+
+    q = np.linalg.qr(np.random.default_rng(2).standard_normal((300, 6)))[0]
+    j = np.column_stack(
+        [2 * q[:, 0], q[:, 1], 0.8 * q[:, 0] + 0.6 * q[:, 2], q[:, 3], q[:, 4], q[:, 5]]
+    )
+    tilt, payload, backlash = get("base_tilt"), get("payload"), get("backlash")
+    values = [{"roll": 0.1, "pitch": 0.3}, {"mass": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}]
+    on_bound = np.array([False, True, False, False, False, False])
+
+    def fit(vals: list[dict[str, float]], jac: F64, at: NDArray[np.bool_]) -> Fit:
+        return Fit(vals, vals, np.zeros(300), 0.0, jac, True, "", at)
+
+    (i, c), *rest = bound_overlap(fit(values, j, on_bound), [tilt, payload])
+    assert i == 0 and not rest and c == pytest.approx(0.8, abs=1e-9)
+    # Nothing on a bound, or a bound that is the null value (backlash at width 0): nothing found.
+    assert bound_overlap(fit(values, j, np.zeros(6, bool)), [tilt, payload]) == []
+    bl = [{"width": 0.0}, values[1]]
+    at_null = np.array([True, False, False, False, False])
+    assert bound_overlap(fit(bl, j[:, 1:], at_null), [backlash, payload]) == []
