@@ -542,8 +542,11 @@ def test_an_effect_overlapping_one_on_its_bound_is_found() -> None:
 
     (i, c), *rest = bound_overlap(fit(values, j, on_bound), [tilt, payload])
     assert i == 0 and not rest and c == pytest.approx(0.8, abs=1e-9)
-    # Nothing on a bound, or a bound that is the null value (backlash at width 0): nothing found.
+    # Nothing on a bound, or a bound that is the null value (backlash at width 0): nothing found —
+    # unless the earlier effect was on its bound before the new one pulled it off.
     assert bound_overlap(fit(values, j, np.zeros(6, bool)), [tilt, payload]) == []
+    (i, c), *rest = bound_overlap(fit(values, j, np.zeros(6, bool)), [tilt, payload], [True])
+    assert i == 0 and not rest and c == pytest.approx(0.8, abs=1e-9)
     bl = [{"width": 0.0}, values[1]]
     at_null = np.array([True, False, False, False, False])
     assert bound_overlap(fit(bl, j[:, 1:], at_null), [backlash, payload]) == []

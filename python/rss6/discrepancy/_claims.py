@@ -120,11 +120,21 @@ def bound_note(
     best: Fit, defs: Sequence[EffectDef], prev: Sequence[AppliedEffect], s: Screen
 ) -> str | None:
     """Why the new effect of the joint fit ``best`` (of ``defs``: ``prev`` and then ``s``) is not
-    named, or None: an earlier effect ended on a bound of its library range — the data want more
-    of it than the library allows — and the new effect's signature overlaps it beyond
+    named, or None: an earlier effect ended on a bound of its library range (before the new effect
+    was added, or in the joint fit: the new effect can pull it off) — the data want more of it
+    than the library allows — and the new effect's signature overlaps it beyond
     :data:`~rss6.discrepancy.search.BOUND_OVERLAP`, so it would take up the shortfall (a payload
     beside a 5× tilt clipped at 0.3 rad, on the plant)."""
-    over = [(i, c) for i, c in bound_overlap(best, defs) if c > BOUND_OVERLAP]
+    before = [
+        any(
+            abs(a.params.get(p.name, p.null) - b) <= 1e-3 * p.scale
+            for p in e.params
+            for b in p.bounds
+            if b != p.null
+        )
+        for a, e in zip(prev, defs[:-1], strict=False)
+    ]
+    over = [(i, c) for i, c in bound_overlap(best, defs, before) if c > BOUND_OVERLAP]
     if not over:
         return None
     a, c = prev[over[0][0]], over[0][1]

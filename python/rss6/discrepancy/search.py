@@ -357,11 +357,14 @@ a bound of its range (:func:`bound_overlap`): the new effect is then not named. 
 plant a payload beside a 5× tilt clipped at 0.3 rad overlapped it by 0.6–0.7 at screening."""
 
 
-def bound_overlap(fit: Fit, effects: Sequence[EffectDef]) -> list[tuple[int, float]]:
+def bound_overlap(
+    fit: Fit, effects: Sequence[EffectDef], before: Sequence[bool] = ()
+) -> list[tuple[int, float]]:
     """For each earlier effect of a joint ``fit`` of ``effects`` (all but the last) with a
-    parameter on a bound other than its null value: (its index, the largest canonical correlation
-    between its whitened Jacobian columns and the last effect's — the cosine of the smallest angle
-    between what the two can change)."""
+    parameter on a bound other than its null value — in this fit, or before the last effect was
+    added (``before``, one flag per earlier effect: the new effect can pull it off its bound) —:
+    (its index, the largest canonical correlation between its whitened Jacobian columns and the
+    last effect's — the cosine of the smallest angle between what the two can change)."""
     if fit.at_bound is None or fit.at_bound.shape != (fit.jacobian.shape[1],):
         return []
     cols, k = [], 0
@@ -380,7 +383,7 @@ def bound_overlap(fit: Fit, effects: Sequence[EffectDef]) -> list[tuple[int, flo
     out = []
     for i, (e, c) in enumerate(zip(effects[:-1], cols[:-1], strict=True)):
         values = [fit.values[i][p.name] for p in e.params]
-        if not any(
+        if not (i < len(before) and before[i]) and not any(
             fit.at_bound[j] and abs(v - p.null) > 1e-3 * p.scale
             for j, v, p in zip(c, values, e.params, strict=True)
         ):
