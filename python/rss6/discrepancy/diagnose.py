@@ -437,6 +437,15 @@ def _diagnose(
             if mimics > MAX_MIMICS:
                 break
             continue
+        # An earlier effect on a bound: a new one that overlaps it would take up the shortfall.
+        note = bound_note(best, defs, prev, s)
+        if note is not None:
+            excluded.add((s.effect.name, s.scope))
+            notes_fit.append(note)
+            mimics += 1
+            if mimics > MAX_MIMICS:
+                break
+            continue
         # A real effect has the same parameters on both runs; a library effect that only mimics
         # something outside the library fits differently on another excitation.
         res_new = hcal.whitener.vec(held.measured - new_held[held.rows])
@@ -484,14 +493,6 @@ def _diagnose(
                 f"{s.effect.name} ({s.scope}): {cons_text}; the consistency of its parameters "
                 "between the runs is not tested (named on its held-out change and gap alone)"
             )
-        note = bound_note(best, defs, prev, s)
-        if note is not None:
-            excluded.add((s.effect.name, s.scope))
-            notes_fit.append(note)
-            mimics += 1
-            if mimics > MAX_MIMICS:
-                break
-            continue
         # Earlier effects take their refitted values; the new one carries its held-out claim.
         named = [
             replace(ne, params=dict(a.params), ci=c, se=sf, heldout=dict(ho))
