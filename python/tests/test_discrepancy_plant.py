@@ -28,10 +28,17 @@ PLANT = {"robot": "plant", "friction_law": "implicit", "magnitude": 5.0, "seed":
 def test_a_large_base_tilt_on_the_plant_is_fitted_from_a_global_start() -> None:
     rec = benchmark.benchmark_case({**PLANT, "effect": "base_tilt"})
     assert rec["first_right"], rec["verdict"] + " | " + rec["notes"]
-    truth, est = json.loads(rec["truth"]), json.loads(rec["estimate"])
-    # Measured error ≤ 0.0018 rad; bound ≈ 3×.
+    # The truth (0.3, 0.3) rad is on the tilt's bounds and the plant's data want more pitch: a
+    # payload that overlaps the clipped tilt (canonical correlation 0.83) is not named beside it.
+    assert rec["named"] == "base_tilt (base)", rec["notes"]
+    assert "it would take up what that bound stops" in rec["notes"], rec["notes"]
+    truth, est, ci = (json.loads(rec[k]) for k in ("truth", "estimate", "ci"))
+    # The global start's minimum, not the wrong one at (0.14, −0.02): measured roll 0.258 (pitch
+    # on its bound), bound ≈ 3× its error. With the payload beside it (before the twenty-third
+    # session) the roll was 0.298: the payload took up the plant's error the clipped pitch leaves.
     for k in ("roll", "pitch"):
-        assert abs(est[k] - truth[k]) <= 0.006, (k, est, truth)
+        assert abs(est[k] - truth[k]) <= 0.126, (k, est, truth)
+        assert ci[k][0] <= truth[k] <= ci[k][1], (k, ci, truth)
 
 
 def test_model_error_on_the_plant_does_not_refuse_the_true_friction() -> None:
