@@ -36,7 +36,10 @@ def synthetic(reps: int) -> None:
     t = np.arange(N) / RATE
     ref = np.column_stack([0.01 * np.sin(2 * np.pi * 0.1 * t + k) for k in range(6)])
     sig = discrepancy.reference_signatures(t, ref)
-    print(f"1. noise-only residuals, {reps} runs each (family-wise α = 0.01, 48 tests, Holm)")
+    print(
+        f"1. noise-only residuals, {reps} runs each (family-wise α = 0.01, "
+        f"{6 * (3 + len(sig))} tests, Holm)"
+    )
     cases = [
         ("white, σ given", 0.0, SIGMA, None),
         ("white, from differences", 0.0, None, None),

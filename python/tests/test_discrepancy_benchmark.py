@@ -52,16 +52,18 @@ def test_an_effect_its_bounds_stop_is_reported_below_its_multiple(seed1_run):
     assert f"base_tilt (base) 5× reached {reached:.2f}× (seed 1)" in summary([rec])
 
 
-def test_an_effect_not_null_at_its_null_value_is_reported_above_its_multiple(seed1_run):
+def test_an_effect_not_nested_is_sized_by_what_it_adds_to_its_null_value(seed1_run):
     # Backlash brings a rotor and a gear mesh the rigid model does not have: at width 0 its output
-    # is already 6.9× here (measured; bound > 1.05×, what the summary calls off), so the case hides
-    # width 0 and says so.
+    # is already 6.9× here (measured; bound > 1.05×). Its width is sized by what it adds to that, so
+    # a case tests the width's estimate (it hid width 0 before).
     m, run = seed1_run
+    e, scope = bm._split("backlash")
+    null = replay(m, run, e.apply({"width": 0.0}, scope))
+    assert bm._output(m, run, e.apply({"width": 0.0}, scope), replay(m, run)) > 1.05
     params, reached = bm.magnitude(m, run, "backlash", 1.0)
-    assert params == {"width": 0.0}
-    assert reached > 1.05, reached
-    rec = _record("backlash (all joints)", 1.0, "none", reached=reached)
-    assert "not at the asked multiple" in summary([rec])
+    assert params["width"] > 0.0
+    assert abs(reached - 1.0) < 1e-3, (params, reached)
+    assert abs(bm._output(m, run, e.apply(params, scope), null) - reached) < 1e-9
 
 
 def _record(hidden: str, magnitude: float, named: str, **kw: Any) -> dict[str, Any]:

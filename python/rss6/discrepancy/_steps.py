@@ -31,6 +31,7 @@ from rss6.discrepancy.search import (
     robust_se,
     screen,
     signature,
+    wald_cov,
 )
 from rss6.errors import InvalidInputError, Rss6Error
 
@@ -220,14 +221,10 @@ def _calibrate(parts: Sequence[_Part], model: Model, k: int, sim: _Sim, seed: in
 
 def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:
     """Standard errors of ``fit`` from its own run: the larger of the Wald error scaled by the
-    misfit (reduced χ² when above 1) and :func:`robust_se`'s sandwiches."""
-    dof = max(1, len(fit.residual_w) - fit.jacobian.shape[1])
-    scale = np.sqrt(max(1.0, fit.cost / dof))
+    misfit (:func:`~rss6.discrepancy.search.wald_cov`) and :func:`robust_se`'s sandwiches."""
+    wald = per_effect(np.sqrt(np.maximum(np.diag(wald_cov(fit)), 0.0)), fit.se)
     rob = robust_se(fit, whitener, n_frames)
-    return [
-        {k: max(float(w[k]) * scale, float(r[k])) for k in w}
-        for w, r in zip(fit.se, rob, strict=True)
-    ]
+    return [{k: max(w[k], r[k]) for k in w} for w, r in zip(wald, rob, strict=True)]
 
 
 Z95 = 1.959963984540054

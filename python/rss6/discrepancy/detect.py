@@ -121,7 +121,9 @@ def reference_signatures(
     """Physical signatures from the reference pose χ_d (N, 6) at the camera times ``t`` (N,):
     "velocity", "velocity sign", "acceleration" (finite differences), "reference" (its
     cross-correlation at a non-zero lag is a time-shifted reference), "workspace radius" (distance
-    of the reference position from its mean, one column for every axis) and, if given,
+    of the reference position from its mean, one column for every axis), "time" (elapsed time
+    from the run's middle, one column: a slow drift of the sensor or the robot, which the
+    closed loop's low-frequency noise hides from the energy test) and, if given,
     "gravity load" (N, 6): e.g. the gravity wrench along each axis from the model."""
     tt = np.asarray(t, dtype=np.float64)
     x = as_residual(reference, "reference")
@@ -136,6 +138,7 @@ def reference_signatures(
         "acceleration": a,
         "reference": x - x.mean(axis=0),
         "workspace radius": np.repeat(rad[:, None], x.shape[1], axis=1),
+        "time": (tt - tt.mean())[:, None],
     }
     if gravity_load is not None:
         out["gravity load"] = as_residual(gravity_load, "gravity_load")
