@@ -59,6 +59,11 @@ def main() -> int:
         help="the model's friction and gains drawn from the nominal refit's prior around the\n"
         "truth (default: the model is the truth)",
     )
+    ap.add_argument(
+        "--bias-refresh",
+        action="store_true",
+        help="refit each candidate against the loop's bias at its values (diagnose(bias_refresh=))",
+    )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
     specs = cases(
@@ -72,6 +77,7 @@ def main() -> int:
         solver_iterations=args.solver_iterations,
         hold_nominal=args.hold_nominal,
         model_error=args.model_error,
+        bias_refresh=args.bias_refresh,
     )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

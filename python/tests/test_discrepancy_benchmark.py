@@ -143,3 +143,24 @@ def test_the_summary_counts_what_the_records_say():
     assert rows["camera_latency"] == [1, 2, 0, 0]
     assert rows["base_tilt"] == [1, 0, 0, 1]
     assert rows["none"] == [0, 0, 4, 0]
+
+
+def test_the_loops_bias_refreshed_at_the_candidate_recovers_a_backlash_width():
+    # The twin as the robot with the stick–slip law, a 5× backlash (seed 1): with the bias of the
+    # model before any effect the width came out at 0.87 of the truth with an offset drift named
+    # beside it; refitted against the bias of the replays at the fitted width (opt-in
+    # bias_refresh) it is named alone at 0.979 (measured). Bound: within 6 % (3× that error).
+    rec = bm.benchmark_case(
+        {
+            "robot": "twin",
+            "friction_law": "implicit",
+            "effect": "backlash",
+            "magnitude": 5.0,
+            "seed": 1,
+            "bias_refresh": True,
+        }
+    )
+    assert rec["named"] == "backlash (all joints)", rec["verdict"]
+    truth = json.loads(rec["truth"])["width"]
+    est = json.loads(rec["estimate"])["width"]
+    assert abs(est / truth - 1) < 0.06, (est, truth)

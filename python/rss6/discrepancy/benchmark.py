@@ -373,6 +373,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         seed=7919 + seed,
         commands=str(spec.get("commands", "recorded")),
         nominal=spec.get("nominal", NOMINAL_SPREAD),
+        bias_refresh=bool(spec.get("bias_refresh", False)),
     )
     names = case.hidden
     library = case.library
@@ -455,6 +456,7 @@ def cases(
     solver_iterations: int | None = None,
     hold_nominal: bool = False,
     model_error: bool = False,
+    bias_refresh: bool = False,
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
@@ -463,7 +465,8 @@ def cases(
     model's loop, ``commands="simulated"``, + "-itN" for the plant at N solver iterations instead of
     the implicit law's 48, ``solver_iterations=N``, + "-held" with the model's friction and gains
     held instead of refitted, ``hold_nominal=True``, + "-uncertain" with the model's friction and
-    gains drawn from the nominal refit's prior around the truth, ``model_error=True``)."""
+    gains drawn from the nominal refit's prior around the truth, ``model_error=True``, + "-refresh"
+    with the loop's bias refreshed at each candidate, ``bias_refresh=True``)."""
     friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
@@ -483,6 +486,9 @@ def cases(
     if model_error:
         tag += "-uncertain"
         common["model_error"] = "prior"
+    if bias_refresh:
+        tag += "-refresh"
+        common["bias_refresh"] = True
     effs = (
         list(effects)
         if effects is not None

@@ -52,9 +52,14 @@ from rss6.discrepancy._steps import (
     _Sim,
     _start,
     _tell,
+    check_frames,
     fit_se,
+    held_detection,
     intervals,
+    loop_bias,
     on_bounds,
+    refit_at_bias,
+    replays_note,
     with_nominal,
 )
 from rss6.discrepancy.detect import AXES, Detection, detect, reference_signatures
@@ -110,6 +115,7 @@ def diagnose(
     seed: int = 1_000_003,
     commands: str = "recorded",
     nominal: Mapping[str, float] | None = NOMINAL_SPREAD,
+    bias_refresh: bool = False,
 ) -> DiscrepancyReport:
     """Finds where ``model`` disagrees with the ``measured`` run, names the missing effects from
     the library, adds them and shows the gap on the held-out run (module docs).
@@ -131,7 +137,9 @@ def diagnose(
     which the model's friction and drive gains are refitted before the search and after each
     named effect — the candidates are screened against that model, and it is the final model's
     (:mod:`rss6.discrepancy.nominal`; keys "coulomb", "viscous", "gains" or CLOE names; None or
-    {} holds them: the model taken as exact)."""
+    {} holds them: the model taken as exact). ``bias_refresh``: in a nonlinear loop (stick–slip,
+    whose noisy replays' mean is the baseline) refit each candidate against the bias of the
+    replays at its fitted values, and take the held-out baseline at them (opt-in: docs/discrepancy.md)."""
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     if replicates < 8:
@@ -151,13 +159,7 @@ def diagnose(
             )
         fit_part = _Part(run, slice(0, n))
         held = _Part(vrun, slice(0, len(vrun.t)))
-    for what, part in (("fitting", fit_part), ("held-out", held)):
-        frames = len(part.t)
-        if frames < MIN_FRAMES:
-            raise InvalidInputError(
-                f"the {what} part has {frames} camera frames; the noise model and the tests need "
-                f"at least {MIN_FRAMES} (≈ {MIN_FRAMES / 30:.0f} s at 30 Hz): use longer runs"
-            )
+    check_frames((("fitting", fit_part), ("held-out", held)))
     sim = _Sim(workers)
     try:
         return _diagnose(
@@ -174,6 +176,7 @@ def diagnose(
             sim,
             seed,
             spread,
+            bias_refresh,
         )
     finally:
         sim.close()
@@ -193,6 +196,7 @@ def _diagnose(
     sim: _Sim,
     seed: int,
     spread: F64,
+    bias_refresh: bool = False,
 ) -> DiscrepancyReport:
     _tell(progress, "noisy replays", 0, 1)
     clean_fit, clean_held = _calibrate([fit, held], model, k, sim, seed)
@@ -243,10 +247,12 @@ def _diagnose(
         refit_nominal_now()
         _tell(progress, "nominal refit", 1, 1)
     mimics = nil = 0
-    # Fits against the current residual, kept while nothing is named: after a refusal the next
-    # round's candidates were mostly fitted already.
+    # Fits against the current residual, kept while nothing is named (a refused one's are reused).
     fit_cache: dict[tuple[str, str], Fit] = {}
+    fit_bias: dict[tuple[str, str], F64] = {}  # with bias_refresh: the loop's bias at each fit
+    committed = (fit.bias, held.bias)  # the baselines' bias of the model with the named effects
     for round_ in range(max_effects + MAX_MIMICS + MAX_NIL):
+        fit.bias, held.bias = committed
         if len(named) >= max_effects:
             break
         cands = [
@@ -340,6 +346,18 @@ def _diagnose(
                     cal.whitener,
                     bounds=partial(_physical, base_model),
                 )
+                if bias_refresh and fit.bias is not None:
+                    f, fit_bias[(s.effect.name, s.scope)] = refit_at_bias(
+                        effs,
+                        f,
+                        base_model,
+                        fit,
+                        cal.whitener,
+                        sim,
+                        k,
+                        seed,
+                        partial(_physical, base_model),
+                    )
                 fits.append((i, f))
                 fit_cache[(s.effect.name, s.scope)] = f
             except Rss6Error as err:
@@ -363,6 +381,9 @@ def _diagnose(
             )
         ]
         cand_model = base_model.with_effects(new_effects)
+        if bias_refresh:
+            fit.bias = fit_bias.get((s.effect.name, s.scope), fit.bias)
+            held.bias = None if held.bias is None else loop_bias(cand_model, held, k, sim, seed)
         new_held = held.baseline(replay(cand_model, held.run))
         delta = hcal.whitener.vec((new_held - current_held)[held.rows])
         hres = hcal.whitener.vec(held.measured - current_held[held.rows])
@@ -513,8 +534,9 @@ def _diagnose(
                 mimic,
             )
         )
-        named_effects = new_effects
+        named_effects, committed = new_effects, (fit.bias, held.bias)
         fit_cache.clear()
+        fit_bias.clear()
         current_held = new_held
         current_fit = fit.baseline(replay(cand_model, fit.run))
         if spread.any():
@@ -540,12 +562,7 @@ def _diagnose(
     reidentified = False
     after_model = final_model
     notes = list(dropped) + notes_fit + on_bounds(named, base_model)
-    notes.append(
-        "replays driven by the run's recorded commands"
-        if fit.run.commands is not None
-        else "replays close the model's own visual PID (commands='simulated', or a run without "
-        "per-tick commands)"
-    )
+    notes.append(replays_note(fit.run))
     if reidentify and named:
         _tell(progress, "re-identification", 0, 1)
         after_model, re_held, note = reidentify_on(
@@ -560,15 +577,7 @@ def _diagnose(
             held_after, reidentified = re_held, True
         notes.append(note)
         _tell(progress, "re-identification", 1, 1)
-    h_det = detect(
-        held.t,
-        held_named[:, :6],
-        reference_signatures(
-            held.t, np.array([held.run.reference.sample(float(t))[0] for t in held.t])
-        ),
-        _pose_noise(hcal.noise),
-        alpha,
-    )
+    h_det = held_detection(held, held_named, hcal.noise, alpha)
     return DiscrepancyReport(
         detected=detection,
         named=named,
