@@ -268,9 +268,11 @@ def refit_at_bias(
     k: int,
     seed: int,
     bounds: Callable[[EffectDef, str], dict[str, tuple[float, float]]],
-) -> tuple[Fit, F64]:
+    current: F64,
+) -> tuple[Fit, tuple[F64, float]]:
     """``f`` refitted from its values against the clean replays plus the loop's bias at those
-    values, and that bias. In a nonlinear loop the bias moves with the effect (the noise dithers
+    values, with that bias and the whitened cost of the ``current`` model's clean replay (whole
+    run) on the same baseline — what the refit's cost must be compared with. In a nonlinear loop the bias moves with the effect (the noise dithers
     a backlash's dead band under stick–slip: on the twin, 0.67× the camera's σ on x at 1.9 mrad),
     and the bias of the model before any effect made the whitened cost least at 0.9 of a true
     width (``benches/python/backlash_response.py``)."""
@@ -282,7 +284,9 @@ def refit_at_bias(
     def simulate_b(c: Change) -> F64:
         return (replay(base, part.run, c) + b)[part.rows]
 
-    return fit_effects(effs, f.values, part.measured, simulate_b, whitener, bounds=bounds), b
+    r0 = whitener.vec(part.measured - (current + b)[part.rows])
+    refit = fit_effects(effs, f.values, part.measured, simulate_b, whitener, bounds=bounds)
+    return refit, (b, float(r0 @ r0))
 
 
 def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:

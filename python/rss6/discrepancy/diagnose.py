@@ -137,9 +137,8 @@ def diagnose(
     which the model's friction and drive gains are refitted before the search and after each
     named effect — the candidates are screened against that model, and it is the final model's
     (:mod:`rss6.discrepancy.nominal`; keys "coulomb", "viscous", "gains" or CLOE names; None or
-    {} holds them: the model taken as exact). ``bias_refresh``: in a nonlinear loop (stick–slip,
-    whose noisy replays' mean is the baseline) refit each candidate against the bias of the
-    replays at its fitted values, and take the held-out baseline at them (opt-in: docs/discrepancy.md)."""
+    {} holds them: the model taken as exact). ``bias_refresh`` (opt-in, docs/discrepancy.md): in a
+    stick–slip loop, fit and hold out each candidate against the replays' bias at its values."""
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     if replicates < 8:
@@ -249,7 +248,7 @@ def _diagnose(
     mimics = nil = 0
     # Fits against the current residual, kept while nothing is named (a refused one's are reused).
     fit_cache: dict[tuple[str, str], Fit] = {}
-    fit_bias: dict[tuple[str, str], F64] = {}  # with bias_refresh: the loop's bias at each fit
+    fit_bias: dict[tuple[str, str], tuple[F64, float]] = {}  # bias_refresh: bias, current cost
     committed = (fit.bias, held.bias)  # the baselines' bias of the model with the named effects
     for round_ in range(max_effects + MAX_MIMICS + MAX_NIL):
         fit.bias, held.bias = committed
@@ -357,6 +356,7 @@ def _diagnose(
                         k,
                         seed,
                         partial(_physical, base_model),
+                        current_fit if committed[0] is None else current_fit - committed[0],
                     )
                 fits.append((i, f))
                 fit_cache[(s.effect.name, s.scope)] = f
@@ -381,9 +381,9 @@ def _diagnose(
             )
         ]
         cand_model = base_model.with_effects(new_effects)
-        if bias_refresh:
-            fit.bias = fit_bias.get((s.effect.name, s.scope), fit.bias)
-            held.bias = None if held.bias is None else loop_bias(cand_model, held, k, sim, seed)
+        fit.bias, null_cost = fit_bias.get((s.effect.name, s.scope), (fit.bias, float(rw @ rw)))
+        if bias_refresh and held.bias is not None:
+            held.bias = loop_bias(cand_model, held, k, sim, seed)
         new_held = held.baseline(replay(cand_model, held.run))
         delta = hcal.whitener.vec((new_held - current_held)[held.rows])
         hres = hcal.whitener.vec(held.measured - current_held[held.rows])
@@ -399,7 +399,7 @@ def _diagnose(
         defs = [_def(a.name) for a in prev] + [s.effect]
         cis = intervals(defs, best.values, se_fit)
         ci = cis[-1]
-        dll = 0.5 * (float(rw @ rw) - best.cost)
+        dll = 0.5 * (null_cost - best.cost)
         top_row = CandidateRow(
             s.effect.name,
             s.scope,
@@ -414,7 +414,7 @@ def _diagnose(
             top_row if i == i_best else _row(sc, float(p_adj[i]), None, None, False)
             for i, sc in enumerate(screens)
         ]
-        if p_held > alpha or (not best.converged and best.cost >= float(rw @ rw)):
+        if p_held > alpha or (not best.converged and best.cost >= null_cost):
             excluded.add((s.effect.name, s.scope))
             notes_fit.append(
                 f"{s.effect.name} ({s.scope}) not named: "
