@@ -64,6 +64,12 @@ def main() -> int:
         action="store_true",
         help="refit each candidate against the loop's bias at its values (diagnose(bias_refresh=))",
     )
+    ap.add_argument(
+        "--effects",
+        nargs="+",
+        default=None,
+        help="run only the cases hiding these effects (a spec's 'effect', e.g. backlash)",
+    )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
     specs = cases(
@@ -79,6 +85,8 @@ def main() -> int:
         model_error=args.model_error,
         bias_refresh=args.bias_refresh,
     )
+    if args.effects is not None:
+        specs = [s for s in specs if s.get("effect") in args.effects]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     done = set()

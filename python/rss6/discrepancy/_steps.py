@@ -28,7 +28,6 @@ from rss6.discrepancy.search import (
     Screen,
     Whitener,
     calibrate,
-    fit_effects,
     per_effect,
     robust_se,
     screen,
@@ -248,45 +247,6 @@ def check_frames(parts: Sequence[tuple[str, _Part]]) -> None:
                 f"the {what} part has {frames} camera frames; the noise model and the tests need "
                 f"at least {MIN_FRAMES} (≈ {MIN_FRAMES / 30:.0f} s at 30 Hz): use longer runs"
             )
-
-
-def loop_bias(model: Model, part: _Part, k: int, sim: _Sim, seed: int) -> F64:
-    """The bias of ``model``'s loop on ``part``'s run: the mean of ``k`` noisy replays minus its
-    clean replay (whole run, every channel)."""
-    clean = simulate(model, part.run)
-    noise = sim.many([partial(_noise, model, part.run, clean, seed + s) for s in range(k)])
-    return np.asarray(np.mean(noise, axis=0), dtype=np.float64)
-
-
-def refit_at_bias(
-    effs: Sequence[tuple[EffectDef, str]],
-    f: Fit,
-    base_model: Model,
-    part: _Part,
-    whitener: Whitener,
-    sim: _Sim,
-    k: int,
-    seed: int,
-    bounds: Callable[[EffectDef, str], dict[str, tuple[float, float]]],
-    current: F64,
-) -> tuple[Fit, tuple[F64, float]]:
-    """``f`` refitted from its values against the clean replays plus the loop's bias at those
-    values, with that bias and the whitened cost of the ``current`` model's clean replay (whole
-    run) on the same baseline — what the refit's cost must be compared with. In a nonlinear loop the bias moves with the effect (the noise dithers
-    a backlash's dead band under stick–slip: on the twin, 0.67× the camera's σ on x at 1.9 mrad),
-    and the bias of the model before any effect made the whitened cost least at 0.9 of a true
-    width (``benches/python/backlash_response.py``)."""
-    applied = list(base_model.applied())
-    fitted = [AppliedEffect(e.name, sc, dict(v)) for (e, sc), v in zip(effs, f.values, strict=True)]
-    b = loop_bias(base_model.with_effects(applied + fitted), part, k, sim, seed)
-    base = base_model.with_effects(applied)
-
-    def simulate_b(c: Change) -> F64:
-        return (replay(base, part.run, c) + b)[part.rows]
-
-    r0 = whitener.vec(part.measured - (current + b)[part.rows])
-    refit = fit_effects(effs, f.values, part.measured, simulate_b, whitener, bounds=bounds)
-    return refit, (b, float(r0 @ r0))
 
 
 def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:

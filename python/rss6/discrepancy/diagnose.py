@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from rss6.discrepancy import stats
 from rss6.discrepancy._claims import _consistency, backward_check, bound_note
+from rss6.discrepancy._refresh import loop_bias, refit_at_bias
 from rss6.discrepancy._steps import (
     MAX_MIMICS,
     MAX_NIL,
@@ -56,9 +57,7 @@ from rss6.discrepancy._steps import (
     fit_se,
     held_detection,
     intervals,
-    loop_bias,
     on_bounds,
-    refit_at_bias,
     replays_note,
     with_nominal,
 )
@@ -302,10 +301,10 @@ def _diagnose(
             break
         if len(order) > 1:
             # How close the round came to an ambiguity: the best candidate's closest mimic.
-            k = max(range(1, len(order)), key=lambda j: abs(corr[0, j]))
+            near = max(range(1, len(order)), key=lambda j: abs(corr[0, j]))  # not k: replicates
             notes_fit.append(
-                f"round {round_ + 1}: {best_label}'s closest mimic {names_c[k]}, "
-                f"|ρ| {abs(corr[0, k]):.2f} (ambiguous above {AMBIGUOUS:g})"
+                f"round {round_ + 1}: {best_label}'s closest mimic {names_c[near]}, "
+                f"|ρ| {abs(corr[0, near]):.2f} (ambiguous above {AMBIGUOUS:g})"
             )
         top = [i for i in order if label(i) not in in_group][: max(1, refit)]
         _tell(progress, f"fit round {round_ + 1}", 0, len(top))
@@ -346,18 +345,17 @@ def _diagnose(
                     bounds=partial(_physical, base_model),
                 )
                 if bias_refresh and fit.bias is not None:
-                    f, fit_bias[(s.effect.name, s.scope)] = refit_at_bias(
+                    f, fit_bias[(s.effect.name, s.scope)], unsettled = refit_at_bias(
                         effs,
                         f,
                         base_model,
                         fit,
                         cal.whitener,
-                        sim,
-                        k,
-                        seed,
                         partial(_physical, base_model),
                         current_fit if committed[0] is None else current_fit - committed[0],
+                        (k, sim, seed),
                     )
+                    notes_fit += [f"{s.effect.name} ({s.scope}): {unsettled}"] if unsettled else []
                 fits.append((i, f))
                 fit_cache[(s.effect.name, s.scope)] = f
             except Rss6Error as err:
@@ -390,11 +388,8 @@ def _diagnose(
         _, p_held = heldout_test(delta, hres, hcal.replicates)
         rms_new = _rms((held.measured - new_held[held.rows])[:, :6])
         rms_cur = _rms((held.measured - current_held[held.rows])[:, :6])
-        # Standard errors from the fitting run (the larger of Wald, scaled by the misfit, and the
-        # sandwiches: model error the noise model does not hold widens them); every effect of the
-        # joint fit (earlier ones were refitted with the new one) gets its interval, inside the
-        # parameter's bounds. Once the held-out run has refitted them, the intervals also hold
-        # the spread between the runs (below).
+        # Standard errors from the fitting run (`fit_se`); every effect of the joint fit gets its
+        # interval inside its bounds, and the spread between the runs once the held-out run refits.
         se_fit = fit_se(best, cal.whitener, len(fit.t))
         defs = [_def(a.name) for a in prev] + [s.effect]
         cis = intervals(defs, best.values, se_fit)
@@ -498,7 +493,6 @@ def _diagnose(
                 f"{s.effect.name} ({s.scope}) not named: the held-out run wants other parameters "
                 f"({cons_text}; p = {p_cons:.2g}) — it mimics something outside the library"
             )
-            # Try the next candidates against the same residual, a bounded number of times.
             mimics += 1
             if mimics > MAX_MIMICS:
                 break

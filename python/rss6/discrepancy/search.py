@@ -35,6 +35,7 @@ __all__ = [
     "heldout_test",
     "hotelling",
     "mimicry",
+    "moved_by",
     "per_effect",
     "robust_se",
     "signature",
@@ -488,3 +489,14 @@ def mimicry(screens: Sequence[Screen]) -> F64:
             ba = float(np.linalg.norm(spans[a].T @ dirs[b]))
             rho[a, b] = rho[b, a] = min(ab, ba)
     return rho
+
+
+def moved_by(a: Fit, b: Fit) -> float:
+    """The largest change of a parameter from fit ``a`` to fit ``b``, in ``b``'s standard errors."""
+    out = 0.0
+    for va, vb, sb in zip(a.values, b.values, b.se, strict=True):
+        for key, x in vb.items():
+            se = sb.get(key, 0.0)
+            d = abs(x - va[key])
+            out = max(out, d / se if se > 0 else (0.0 if d == 0 else np.inf))
+    return out
