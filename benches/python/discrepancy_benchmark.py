@@ -6,7 +6,7 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
         [--commands recorded|simulated] [--solver-iterations 48] [--hold-nominal]
-        [--model-error]
+        [--model-error] [--no-bias-refresh] [--effects backlash ... | none]
         [--out out/discrepancy_benchmark.csv]
 """
 
@@ -61,14 +61,17 @@ def main() -> int:
     )
     ap.add_argument(
         "--bias-refresh",
-        action="store_true",
-        help="refit each candidate against the loop's bias at its values (diagnose(bias_refresh=))",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="refit each candidate against the loop's bias at its values (diagnose(bias_refresh=),\n"
+        "the default; --no-bias-refresh takes the bias of the model as given)",
     )
     ap.add_argument(
         "--effects",
         nargs="+",
         default=None,
-        help="run only the cases hiding these effects (a spec's 'effect', e.g. backlash)",
+        help="run only the cases hiding these effects (a spec's 'effect', e.g. backlash; 'none' for\n"
+        "the no-effect runs)",
     )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
@@ -86,7 +89,8 @@ def main() -> int:
         bias_refresh=args.bias_refresh,
     )
     if args.effects is not None:
-        specs = [s for s in specs if s.get("effect") in args.effects]
+        wanted = [None if e == "none" else e for e in args.effects]
+        specs = [s for s in specs if s.get("effect") in wanted]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     done = set()

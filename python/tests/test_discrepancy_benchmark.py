@@ -148,8 +148,8 @@ def test_the_summary_counts_what_the_records_say():
 def test_the_loops_bias_refreshed_at_the_candidate_recovers_a_backlash_width(monkeypatch):
     # The twin as the robot with the stick–slip law, a 5× backlash (seed 1): with the bias of the
     # model before any effect the width came out at 0.87 of the truth with an offset drift named
-    # beside it; refitted against the bias of the replays at the fitted width (opt-in
-    # bias_refresh) it is named alone at 0.983 (measured; 0.979 before the fix below). Bound:
+    # beside it; refitted against the bias of the replays at the fitted width (bias_refresh,
+    # the default since the twenty-sixth session) it is named alone at 0.983 (measured; 0.979 before the fix below). Bound:
     # within 6 % (3.5× that error).
     # Every refreshed bias is the mean of the benchmark's 16 replays (until the twenty-fifth
     # session a round's "closest mimic" index took the name of the replicate count, and the
@@ -184,3 +184,18 @@ def test_the_loops_bias_refreshed_at_the_candidate_recovers_a_backlash_width(mon
     est = json.loads(rec["estimate"])["width"]
     assert abs(est / truth - 1) < 0.06, (est, truth)
     assert counts and set(counts) == {16}, counts
+
+
+def test_spec_ids_say_whether_the_bias_was_refreshed():
+    # The refresh became diagnose's default in the twenty-sixth session: the benchmark's specs
+    # state it, and the ids of specs without it keep their meaning, so a CSV resumed from before
+    # is not mixed with records run the other way.
+    on = bm.cases(robot="plant", n_null=1, seeds=[0], magnitudes=[2.0])
+    off = bm.cases(robot="plant", n_null=1, seeds=[0], magnitudes=[2.0], bias_refresh=False)
+    assert all(
+        s["bias_refresh"] is True and s["spec_id"].startswith("plant-implicit-refresh:") for s in on
+    )
+    assert all(
+        s["bias_refresh"] is False and s["spec_id"].startswith("plant-implicit:") for s in off
+    )
+    assert {s["spec_id"] for s in on}.isdisjoint(s["spec_id"] for s in off)

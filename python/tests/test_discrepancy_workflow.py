@@ -304,6 +304,28 @@ def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model
     assert "stopped before collecting" in capsys.readouterr().err
 
 
+def test_diagnose_refreshes_the_loops_bias_unless_told_not_to(monkeypatch: Any) -> None:
+    """`rss6 diagnose` passes the default refresh (diagnose(bias_refresh=True)) and
+    `--no-bias-refresh` turns it off."""
+    from types import SimpleNamespace
+
+    from rss6.cli import main
+    from rss6.discrepancy import benchmark
+
+    seen: list[Any] = []
+
+    def fake_diagnose(*args: Any, **kw: Any) -> Any:
+        seen.append(kw.get("bias_refresh"))
+        raise rss6.InvalidInputError("stopped before diagnosing")
+
+    case = SimpleNamespace(fit=None, validation=None, model=None, hidden=[], params={})
+    monkeypatch.setattr(benchmark, "hidden_case", lambda spec, progress=None: case)
+    monkeypatch.setattr(discrepancy, "diagnose", fake_diagnose)
+    base = ["diagnose", "--simulate", "none", "--plant", "model", "--quiet"]
+    assert main(base) == 1 and main([*base, "--no-bias-refresh"]) == 1
+    assert seen == [True, False]
+
+
 def test_a_run_the_robot_left_the_loop_in_is_refused_naming_the_run(truth: Any) -> None:
     """A hidden effect can drive the robot out of its working branch (the visual PID faults):
     the error says which of the two runs it was."""

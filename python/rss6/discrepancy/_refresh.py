@@ -1,10 +1,10 @@
-"""The loop's bias refreshed at a candidate (:func:`rss6.discrepancy.diagnose`'s opt-in
-``bias_refresh``): in a stick–slip loop the baseline is the mean noisy replay, and its bias moves
-with the effect — a backlash's dead band is dithered by the noise (on the twin, 0.67× the
-camera's σ on x at 1.9 mrad; on the plant's 1× backlash, the mesh and width move it by 0.04–0.25×
-the loop's noise floor, ``benches/python/refresh_bias_shift.py``). The bias of the model before
-any effect made the whitened cost least at 0.9 of a true width
-(``benches/python/backlash_response.py``)."""
+"""The loop's bias refreshed at a candidate (:func:`rss6.discrepancy.diagnose`'s
+``bias_refresh``, the default since the twenty-sixth session): in a stick–slip loop the baseline
+is the mean noisy replay, and its bias moves with the effect — a backlash's dead band is dithered
+by the noise (on the twin, 0.67× the camera's σ on x at 1.9 mrad; on the plant's 1× backlash, the
+mesh and width move it by 0.04–0.25× the loop's noise floor,
+``benches/python/refresh_bias_shift.py``). The bias of the model before any effect made the
+whitened cost least at 0.9 of a true width (``benches/python/backlash_response.py``)."""
 
 from __future__ import annotations
 

@@ -373,7 +373,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         seed=7919 + seed,
         commands=str(spec.get("commands", "recorded")),
         nominal=spec.get("nominal", NOMINAL_SPREAD),
-        bias_refresh=bool(spec.get("bias_refresh", False)),
+        bias_refresh=bool(spec.get("bias_refresh", True)),
     )
     names = case.hidden
     library = case.library
@@ -456,7 +456,7 @@ def cases(
     solver_iterations: int | None = None,
     hold_nominal: bool = False,
     model_error: bool = False,
-    bias_refresh: bool = False,
+    bias_refresh: bool = True,
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
@@ -466,7 +466,8 @@ def cases(
     the implicit law's 48, ``solver_iterations=N``, + "-held" with the model's friction and gains
     held instead of refitted, ``hold_nominal=True``, + "-uncertain" with the model's friction and
     gains drawn from the nominal refit's prior around the truth, ``model_error=True``, + "-refresh"
-    with the loop's bias refreshed at each candidate, ``bias_refresh=True``)."""
+    with the loop's bias refreshed at each candidate, ``bias_refresh=True``, the default; ids
+    without it were run with the bias of the model as given)."""
     friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
@@ -486,9 +487,11 @@ def cases(
     if model_error:
         tag += "-uncertain"
         common["model_error"] = "prior"
+    # Every spec states it: the ids without "-refresh" keep their meaning from before the
+    # refresh became diagnose's default (the twenty-sixth session).
+    common["bias_refresh"] = bias_refresh
     if bias_refresh:
         tag += "-refresh"
-        common["bias_refresh"] = True
     effs = (
         list(effects)
         if effects is not None

@@ -93,6 +93,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="relative half-widths inside which the model's friction and drive gains are refitted, "
         "e.g. 'coulomb=0.1,viscous=0.25,gains=0.05' (the default) or 'fc2=0.2'; 'none' holds them",
     )
+    p.add_argument(
+        "--no-bias-refresh",
+        action="store_true",
+        help="take the stick–slip loop's bias of the model as given for every candidate (default:\n"
+        "refreshed at each candidate's values, diagnose(bias_refresh=True))",
+    )
     p.add_argument("--out", default="out-diagnose", help="report directory (default out-diagnose/)")
     p.add_argument("--quiet", action="store_true")
 
@@ -164,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
         progress=progress,
         commands=args.commands,
         nominal=nominal_of(args.nominal),
+        bias_refresh=not args.no_bias_refresh,
     )
     out = Path(args.out)
     files = rep.save(out)

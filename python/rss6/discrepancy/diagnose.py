@@ -114,7 +114,7 @@ def diagnose(
     seed: int = 1_000_003,
     commands: str = "recorded",
     nominal: Mapping[str, float] | None = NOMINAL_SPREAD,
-    bias_refresh: bool = False,
+    bias_refresh: bool = True,
 ) -> DiscrepancyReport:
     """Finds where ``model`` disagrees with the ``measured`` run, names the missing effects from
     the library, adds them and shows the gap on the held-out run (module docs).
@@ -136,8 +136,9 @@ def diagnose(
     which the model's friction and drive gains are refitted before the search and after each
     named effect — the candidates are screened against that model, and it is the final model's
     (:mod:`rss6.discrepancy.nominal`; keys "coulomb", "viscous", "gains" or CLOE names; None or
-    {} holds them: the model taken as exact). ``bias_refresh`` (opt-in, docs/discrepancy.md): in a
-    stick–slip loop, fit and hold out each candidate against the replays' bias at its values."""
+    {} holds them: the model taken as exact). ``bias_refresh`` (the default since the twenty-sixth
+    session, docs/discrepancy.md): in a stick–slip loop, fit and hold out each candidate against the
+    replays' bias at its values; False takes the bias of the model as given for every candidate."""
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     if replicates < 8:
@@ -194,7 +195,7 @@ def _diagnose(
     sim: _Sim,
     seed: int,
     spread: F64,
-    bias_refresh: bool = False,
+    bias_refresh: bool = True,
 ) -> DiscrepancyReport:
     _tell(progress, "noisy replays", 0, 1)
     clean_fit, clean_held = _calibrate([fit, held], model, k, sim, seed)
