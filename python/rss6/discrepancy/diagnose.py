@@ -195,7 +195,7 @@ def _diagnose(
     sim: _Sim,
     seed: int,
     spread: F64,
-    bias_refresh: bool = True,
+    bias_refresh: bool,
 ) -> DiscrepancyReport:
     _tell(progress, "noisy replays", 0, 1)
     clean_fit, clean_held = _calibrate([fit, held], model, k, sim, seed)
