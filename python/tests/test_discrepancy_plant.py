@@ -7,10 +7,10 @@ out-of-library camera drift on the twin, which a joint's offset drift can mimic 
 Measured (seed 0, recorded commands, 16 replicates, the loop's bias refreshed at each candidate —
 diagnose's default since the twenty-sixth session; 100–141 s a case on one thread, the grid's
 `--null 0 --seeds 0 --magnitudes 2 5`): base tilt (0.3, 0.3) rad → (0.273, 0.300), pitch on its
-bound (0.258 without the refresh; the one-step start had fitted (0.09, −0.24)); friction on joint 2
+bound (0.258 without the refresh; the one-step start had fitted (0.09, −0.24)); friction on joint 3
 (1.839 N·m, 9.193 N·m·s/rad) → (1.809, 9.418) (1.774, 9.334 without); a 13.3 kg payload → 13.7 kg
 at (0.014, −0.007, 0.006) m for (0.02, 0, 0) (14.0 kg at (0.011, −0.008, −0.001) without), from the
-mass scan's start; camera drift at 5× (the twin) → "unexplained", the offset drift of joint 4
+mass scan's start; camera drift at 5× (the twin) → "unexplained", the offset drift of joint 5
 refused for making z worse."""
 
 from __future__ import annotations
@@ -44,8 +44,8 @@ def test_a_large_base_tilt_on_the_plant_is_fitted_from_a_global_start() -> None:
 
 
 def test_model_error_on_the_plant_does_not_refuse_the_true_friction() -> None:
-    rec = benchmark.benchmark_case({**PLANT, "effect": "joint_friction@joint 2"})
-    assert rec["named"] == "joint_friction (joint 2)", rec["verdict"] + " | " + rec["notes"]
+    rec = benchmark.benchmark_case({**PLANT, "effect": "joint_friction@joint 3"})
+    assert rec["named"] == "joint_friction (joint 3)", rec["verdict"] + " | " + rec["notes"]
     # The two runs' estimates agree within the errors their intervals state (robust covariances):
     # no note of a difference. Against the noise replicates alone the held-out refit differed
     # (T² 33, p = 2e-4), and until the twenty-second session the friction was refused for it.

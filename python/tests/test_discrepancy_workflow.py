@@ -78,7 +78,7 @@ def test_replay_with_an_effect_equals_the_twin_that_hides_it(
         truth,
         robot,
         (
-            AppliedEffect("joint_friction", "joint 2", {"coulomb": 0.3, "viscous": 0.2}),
+            AppliedEffect("joint_friction", "joint 3", {"coulomb": 0.3, "viscous": 0.2}),
             AppliedEffect("camera_latency", "sensor", {"latency": 0.01}),
             ("base_tilt", "base", {"roll": 0.02, "pitch": -0.01}),
         ),
@@ -92,6 +92,17 @@ def test_replay_with_an_effect_equals_the_twin_that_hides_it(
     back = Model.load(tmp_path / "model")
     assert back.applied() == model.applied()
     assert np.array_equal(replay(back, run), replay(model, run))
+    # A file saved before joints were numbered from 1 (no `format` key) reads in today's numbering.
+    toml = (tmp_path / "model" / "model.toml").read_text(encoding="utf-8")
+    assert "format = 2" in toml and 'scope = "joint 3"' in toml
+    old = toml.replace("format = 2\n", "").replace('scope = "joint 3"', 'scope = "joint 2"')
+    (tmp_path / "model" / "model.toml").write_text(old, encoding="utf-8")
+    assert Model.load(tmp_path / "model").applied() == model.applied()
+    (tmp_path / "model" / "model.toml").write_text(
+        "format = 3\n" + toml.replace("format = 2\n", ""), encoding="utf-8"
+    )
+    with pytest.raises(rss6.InvalidInputError, match="format 3"):
+        Model.load(tmp_path / "model")
     (tmp_path / "model" / "model.toml").write_text("pid = [1, 2", encoding="utf-8")
     with pytest.raises(rss6.InvalidInputError, match="not valid TOML"):
         Model.load(tmp_path / "model")

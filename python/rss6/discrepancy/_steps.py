@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 import rss6
 from rss6.discrepancy.detect import Detection, detect, reference_signatures
-from rss6.discrepancy.effects import Change, EffectDef
+from rss6.discrepancy.effects import Change, EffectDef, joint_index
 from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, run_of, simulate
 from rss6.discrepancy.noise import NoiseModel
 from rss6.discrepancy.nominal import NominalFit, nominal_variance
@@ -54,7 +54,7 @@ MAX_NIL = 10
 """Candidates rejected for a practically nil held-out shrink (:data:`MIN_SHRINK`), or whose
 predicted change the held-out run does not show, that the search tries past (their fits are kept
 while nothing is named, so each try costs one new fit). Measured on the model twin in its own
-loop: a 5× backlash was hidden behind an offset drift of joint 1 that shrank the held-out gap by
+loop: a 5× backlash was hidden behind an offset drift of joint 2 that shrank the held-out gap by
 1.7 % of the floor (2 sufficed). With the model's friction a few per cent off (Coulomb 3 %, viscous
 8 %, as CLOE leaves it) the potentiometers rank joint friction first on every scope although it
 hardly moves the pose: a hidden 10 ms latency was named after 9 such refusals (2026-11-28)."""
@@ -74,7 +74,7 @@ an offset drift on all joints whose held-out claim passed (p ≈ 0.001) but whic
 MAX_WORSEN = 0.02
 """Most a named effect may make any pose axis's held-out gap worse, as a fraction of its noise
 floor. Measured on the twin grid (205 cases) and the plant: 82 correctly named effects worsened an
-axis by 0.011 of the floor at most; a camera drift on x named an offset drift of joint 4 or 1
+axis by 0.011 of the floor at most; a camera drift on x named an offset drift of joint 5 or 2
 (which moves z and the angles too) worsened one by 0.016–0.025 at 1×, 0.055–0.078 at 2× and
 0.28–0.34 at 5×."""
 
@@ -324,7 +324,7 @@ def _physical(model: Model, e: EffectDef, scope: str) -> dict[str, tuple[float, 
         return {}
     fc = np.asarray(model.dynamics.coulomb, dtype=np.float64)
     fv = np.asarray(model.dynamics.viscous, dtype=np.float64)
-    j = None if scope == "all joints" else int(scope.removeprefix("joint "))
+    j = joint_index(scope)
     c_min = float(fc.min() if j is None else fc[j])
     v_min = float(fv.min() if j is None else fv[j])
     return {"coulomb": (-c_min, np.inf), "viscous": (-v_min, np.inf)}

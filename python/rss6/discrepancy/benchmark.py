@@ -41,7 +41,7 @@ import rss6
 from rss6 import identify
 from rss6.discrepancy.benchmark_summary import summary
 from rss6.discrepancy.diagnose import diagnose
-from rss6.discrepancy.effects import Change, EffectDef, get
+from rss6.discrepancy.effects import Change, EffectDef, get, joint_index
 from rss6.discrepancy.model import Model, Run, replay, run_of
 from rss6.discrepancy.nominal import NOMINAL_SPREAD, PRIOR_SIGMAS
 from rss6.errors import InvalidInputError
@@ -284,9 +284,9 @@ def hidden_case(
             for k, v in c.twin.items():
                 hidden[k] = {**hidden.get(k, {}), **v}
             if any(c.coulomb) or any(c.viscous):
-                j = None if scope == "all joints" else float(scope.removeprefix("joint "))
+                j = joint_index(scope)
                 fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
-                hidden["joint_friction"] = fr if j is None else {**fr, "joint": j}
+                hidden["joint_friction"] = fr if j is None else {**fr, "joint": float(j)}
             if any(c.gains):
                 hidden_pid = tuple(g * (1 + d) for g, d in zip(pid, c.gains, strict=True))
 
@@ -421,8 +421,8 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
     )
     first = (_split(library[0])[0].name, _split(library[0])[1]) if library else None
     truth = case.params.get(first[0], {}) if first else {}
-    # The estimate of the hidden effect in its own scope (a drift named on joint 0 for one on
-    # joint 3 is a wrong name, not an estimate of the truth).
+    # The estimate of the hidden effect in its own scope (a drift named on joint 1 for one on
+    # joint 4 is a wrong name, not an estimate of the truth).
     mine = next((e for e in rep.named if (e.name, e.scope) == first), None)
     record["truth"] = json.dumps({k: v for k, v in truth.items() if k != "joint"})
     record["estimate"] = json.dumps(mine.params if mine else {})
@@ -496,14 +496,14 @@ def cases(
         list(effects)
         if effects is not None
         else [
-            "joint_friction@joint 2",
+            "joint_friction@joint 3",
             "joint_friction@all joints",
             "backlash",
             "camera_latency",
             "payload",
             "base_tilt",
             "pid_gains",
-            "joint_offset_drift@joint 3",
+            "joint_offset_drift@joint 4",
             "joint_offset_drift@all joints",
         ]
     )
@@ -520,7 +520,7 @@ def cases(
                         **common,
                     }
                 )
-    for pair in (["camera_latency", "base_tilt"], ["payload", "joint_offset_drift@joint 3"]):
+    for pair in (["camera_latency", "base_tilt"], ["payload", "joint_offset_drift@joint 4"]):
         for s in seeds:
             out.append(
                 {

@@ -47,6 +47,7 @@ from rss6.errors import InvalidInputError, ShapeError
 __all__ = [
     "CHANNELS",
     "COMMAND_MODES",
+    "MODEL_FORMAT",
     "AppliedEffect",
     "Model",
     "Replay",
@@ -60,11 +61,15 @@ F64 = NDArray[np.float64]
 
 CHANNELS: tuple[str, ...] = (
     *("x", "y", "z", "α", "β", "γ"),
-    *(f"κ{i}" for i in range(6)),
-    *(f"θcmd{i}" for i in range(6)),
+    *(f"κ{i + 1}" for i in range(6)),
+    *(f"θcmd{i + 1}" for i in range(6)),
 )
 """The channels compared: camera pose χ_E (m, rad), potentiometers κ (bit), joint commands (rad;
-only when the replay closes its own loop)."""
+only when the replay closes its own loop); joints numbered from 1."""
+
+MODEL_FORMAT = 2
+"""The ``format`` :meth:`Model.save` writes into ``model.toml``: 2 numbers joint scopes from 1;
+files without the key (format 1) numbered them from 0 and are read in today's numbering."""
 
 COMMAND_MODES: tuple[str, ...] = ("recorded", "simulated")
 """How a replay drives the model: the run's per-tick commands, or the model's own visual PID."""
@@ -139,6 +144,7 @@ class Model:
         self.dynamics.to_toml(out / "dynamics.toml")
         lines = [
             "# rss6 discrepancy model: parameters beside kinematics.toml and dynamics.toml",
+            f"format = {MODEL_FORMAT}",
             f"pid = [{', '.join(repr(float(g)) for g in self.pid)}]",
             f"sensor_in_base = [{', '.join(repr(float(v)) for v in self.sensor_in_base)}]",
             f"target_in_effector = [{', '.join(repr(float(v)) for v in self.target_in_effector)}]",
@@ -171,8 +177,16 @@ class Model:
         except tomllib.TOMLDecodeError as e:
             raise InvalidInputError(f"{d / 'model.toml'} is not valid TOML: {e}") from None
         try:
+            fmt = doc.get("format", 1)
+            if fmt not in (1, MODEL_FORMAT):
+                raise InvalidInputError(
+                    f"{d / 'model.toml'} has format {fmt!r}; this rss6 reads formats 1 and "
+                    f"{MODEL_FORMAT}"
+                )
             effects = tuple(
-                AppliedEffect(str(e["name"]), str(e["scope"]), dict(e.get("params", {})))
+                AppliedEffect(
+                    str(e["name"]), _scope_from(str(e["scope"]), fmt), dict(e.get("params", {}))
+                )
                 for e in doc.get("effects", [])
             )
             model = cls(
@@ -192,6 +206,14 @@ class Model:
             raise InvalidInputError(f"{d / 'model.toml'} has no {e.args[0]!r}") from None
         model.applied()
         return model
+
+
+def _scope_from(scope: str, fmt: int) -> str:
+    """A saved effect's scope in today's numbering: format 1 (files without a ``format`` key,
+    before the twenty-seventh session) numbered joint scopes from 0, format 2 from 1."""
+    if fmt == 1 and scope.startswith("joint ") and scope[6:].isdigit():
+        return f"joint {int(scope[6:]) + 1}"
+    return scope
 
 
 @dataclass(frozen=True)

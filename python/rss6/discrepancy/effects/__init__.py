@@ -16,10 +16,20 @@ from rss6.discrepancy.effects import (
     payload,
     pid_gains,
 )
-from rss6.discrepancy.effects.base import Change, EffectDef, ParamDef, Scope
+from rss6.discrepancy.effects.base import Change, EffectDef, ParamDef, Scope, joint_index
 from rss6.errors import InvalidInputError
 
-__all__ = ["CANDIDATES", "EFFECTS", "Change", "EffectDef", "ParamDef", "Scope", "candidates", "get"]
+__all__ = [
+    "CANDIDATES",
+    "EFFECTS",
+    "Change",
+    "EffectDef",
+    "ParamDef",
+    "Scope",
+    "candidates",
+    "get",
+    "joint_index",
+]
 
 EFFECTS: dict[str, EffectDef] = {
     m.EFFECT.name: m.EFFECT

@@ -8,10 +8,13 @@ from dataclasses import dataclass, field
 
 from rss6.errors import InvalidInputError
 
-__all__ = ["Change", "EffectDef", "ParamDef", "Scope", "joint_scopes"]
+__all__ = ["Change", "EffectDef", "ParamDef", "Scope", "joint_index", "joint_scopes"]
 
 Scope = str
-"""Where an effect acts: "all joints", "joint 0" … "joint 5", "sensor", "base", "payload", "drive"."""
+"""Where an effect acts: "all joints", "joint 1" … "joint 6", "sensor", "base", "payload", "drive".
+Joints are numbered from 1, as everywhere else in rss6 (CLOE's f_c1 … f_c6, the core's errors, the
+CAN bridge); before the twenty-seventh session they were numbered from 0 here (see
+:meth:`rss6.discrepancy.Model.load`)."""
 
 
 @dataclass(frozen=True)
@@ -139,10 +142,10 @@ class EffectDef:
 
 
 def joint_scopes() -> tuple[Scope, ...]:
-    """ "all joints", then "joint 0" … "joint 5"."""
-    return ("all joints", *(f"joint {i}" for i in range(6)))
+    """ "all joints", then "joint 1" … "joint 6"."""
+    return ("all joints", *(f"joint {i + 1}" for i in range(6)))
 
 
 def joint_index(scope: Scope) -> int | None:
-    """The joint of a "joint i" scope (None for "all joints")."""
-    return None if scope == "all joints" else int(scope.removeprefix("joint "))
+    """The 0-based index of the joint of a "joint i" scope (i from 1; None for "all joints")."""
+    return None if scope == "all joints" else int(scope.removeprefix("joint ")) - 1
