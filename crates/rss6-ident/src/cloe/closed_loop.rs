@@ -153,15 +153,20 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
     else {
         return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
     };
-    let producer = StageModel::new(cfg, &a.dynamics, cols.clone());
-    let (tx, rx) = std::sync::mpsc::sync_channel(2);
+    let helper = StageModel::new(cfg, &a.dynamics, cols.clone());
+    let shared = ahead::Shared::new(calls);
     let mut sim = Lean::new(cfg, a, cols)?;
-    sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&calls), rx)));
+    sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&shared))));
+    // One helper per further core: the loop's own thread evaluates chunks too while it waits.
+    let helpers = rayon::current_num_threads().saturating_sub(1).max(1);
     std::thread::scope(|scope| {
-        scope.spawn(|| ahead::produce(&producer, &calls, &tx));
+        for _ in 0..helpers {
+            scope.spawn(|| ahead::help(&helper, &shared));
+        }
         let out = sim.run(reference);
-        // Stops the producer at its next block.
+        // Stops the helpers at their next chunk.
         drop(sim);
+        shared.stop();
         out.map(|run| (run, None))
     })
 }

@@ -2,20 +2,24 @@
 //!
 //! A stage's derivatives (F_χ, F_χ̇, M̃⁻¹J_θᵀ, −M̃⁻¹J_θᵀΓ: most of the sensitivities' cost) depend
 //! on the primal trajectory only, not on the sensitivities carried through the loop. So a primal
-//! run (no sensitivities, one simulation's cost) records every stage call; a producer thread then
-//! evaluates the calls in blocks, each block in parallel (rayon), while the sensitivity run takes
-//! its stages from the blocks instead of evaluating them in turn. The same function evaluates a
-//! stage either way, so the result is bit for bit the one of the sequential run; a call whose
-//! inputs differ from the recorded one (which the loop's determinism rules out, checked anyway)
-//! is evaluated in turn.
+//! run (no sensitivities, one simulation's cost) records every stage call; helper threads then
+//! evaluate the calls chunk by chunk, while the sensitivity run takes its stages from the chunks
+//! instead of evaluating them in turn. The loop's own thread shares the work: whenever the chunk it
+//! needs is not ready it evaluates the next unclaimed chunk itself instead of waiting, so one
+//! helper per further core keeps every core busy without a third thread competing for two cores
+//! (before the twenty-seventh session a producer thread fed a rayon pool of all cores, block by
+//! block: three busy threads on two cores). Helpers stay at most [`LOOKAHEAD`] chunks ahead of the
+//! loop (bounded memory). The same function evaluates a stage either way, so the result is bit for
+//! bit the one of the sequential run; a call whose inputs differ from the recorded one (which the
+//! loop's determinism rules out, checked anyway) is evaluated in turn.
 
 use super::stages::{Stage, StageModel};
 use super::{Lean, StateJacobians};
 use crate::error::Result;
-use rayon::prelude::*;
 use rss6_core::{ForwardJacobians, Mat6, Vec6};
-use std::sync::mpsc::{Receiver, SyncSender};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
+use std::time::Duration;
 
 /// How a stage gets its state Jacobians F_χ, F_χ̇.
 // A stack temporary, passed once per stage: its 576 bytes are not worth a box.
@@ -42,48 +46,153 @@ pub(super) struct StageCall {
     pub(super) free_rates: bool,
 }
 
-/// Stage calls per block (≈ 5 KB each with 67 columns).
-pub(super) const BLOCK: usize = 512;
+/// Stage calls per chunk (≈ 5 KB each with 67 columns; ≈ 0.5 ms of one core for the exact
+/// Jacobian's 49 columns).
+pub(super) const CHUNK: usize = 64;
 
-/// One block of evaluated stages.
-pub(super) type Block = Vec<Option<Result<Stage>>>;
+/// Chunks a helper may evaluate ahead of the one the loop is on (≈ 5 MB with 67 columns).
+pub(super) const LOOKAHEAD: usize = 16;
 
-/// Evaluates `calls` block by block, each block in parallel, and sends the blocks in order until
-/// the receiver is gone. The state Jacobians of a frozen stage are zero (the consumer puts the
-/// tick's in).
-pub(super) fn produce(model: &StageModel, calls: &[StageCall], tx: &SyncSender<Block>) {
-    for chunk in calls.chunks(BLOCK) {
-        let block: Block = chunk
-            .par_iter()
-            .map_init(ForwardJacobians::default, |fj, c| {
-                let state = c.first || model.cfg.state_jacobians == StateJacobians::Exact;
-                let frozen = (!state).then(|| (Mat6::zeros(), Mat6::zeros()));
-                Some(model.stage(fj, &c.p, &c.v, &c.tau, c.t, frozen, c.free_rates))
-            })
-            .collect();
-        if tx.send(block).is_err() {
+/// One chunk of evaluated stages.
+type Block = Vec<Option<Result<Stage>>>;
+
+/// Evaluates one chunk of calls. The state Jacobians of a frozen stage are zero (the consumer puts
+/// the tick's in).
+fn evaluate(model: &StageModel, fj: &mut ForwardJacobians, calls: &[StageCall]) -> Block {
+    calls
+        .iter()
+        .map(|c| {
+            let state = c.first || model.cfg.state_jacobians == StateJacobians::Exact;
+            let frozen = (!state).then(|| (Mat6::zeros(), Mat6::zeros()));
+            Some(model.stage(fj, &c.p, &c.v, &c.tau, c.t, frozen, c.free_rates))
+        })
+        .collect()
+}
+
+/// What the loop and its helpers share: the recorded calls, the chunks evaluated and not yet taken,
+/// the next chunk to claim and the chunk the loop is on.
+pub(super) struct Shared {
+    calls: Arc<[StageCall]>,
+    slots: Vec<Mutex<Option<Block>>>,
+    next: AtomicUsize,
+    consumed: AtomicUsize,
+    stop: AtomicBool,
+    lock: Mutex<()>,
+    changed: Condvar,
+}
+
+/// A poisoned lock only means another thread panicked; the data (an `Option`) is still whole.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+impl Shared {
+    pub(super) fn new(calls: Arc<[StageCall]>) -> Arc<Self> {
+        let n = calls.len().div_ceil(CHUNK);
+        Arc::new(Shared {
+            calls,
+            slots: (0..n).map(|_| Mutex::new(None)).collect(),
+            next: AtomicUsize::new(0),
+            consumed: AtomicUsize::new(0),
+            stop: AtomicBool::new(false),
+            lock: Mutex::new(()),
+            changed: Condvar::new(),
+        })
+    }
+
+    fn chunk(&self, k: usize) -> &[StageCall] {
+        let end = ((k + 1) * CHUNK).min(self.calls.len());
+        self.calls.get(k * CHUNK..end).unwrap_or(&[])
+    }
+
+    /// The next unclaimed chunk within [`LOOKAHEAD`] of the loop, claimed; `None` if there is none.
+    fn claim(&self) -> Option<usize> {
+        loop {
+            let k = self.next.load(Ordering::Acquire);
+            let limit = self.consumed.load(Ordering::Acquire) + LOOKAHEAD;
+            if k >= self.slots.len() || k >= limit {
+                return None;
+            }
+            if self
+                .next
+                .compare_exchange(k, k + 1, Ordering::AcqRel, Ordering::Acquire)
+                .is_ok()
+            {
+                return Some(k);
+            }
+        }
+    }
+
+    /// Wakes every waiting thread (under the lock, so a thread that checked and is about to wait
+    /// cannot miss it).
+    fn notify(&self) {
+        drop(lock(&self.lock));
+        self.changed.notify_all();
+    }
+
+    fn put(&self, k: usize, block: Block) {
+        if let Some(slot) = self.slots.get(k) {
+            *lock(slot) = Some(block);
+        }
+        self.notify();
+    }
+
+    /// Waits until `ready` holds or another thread signals a change (at most 1 ms: a bound, not
+    /// a poll).
+    fn wait_unless(&self, ready: impl Fn() -> bool) {
+        let guard = lock(&self.lock);
+        if !ready() {
+            let _ = self.changed.wait_timeout(guard, Duration::from_millis(1));
+        }
+    }
+
+    /// Stops the helpers (the loop is done or gone).
+    pub(super) fn stop(&self) {
+        self.stop.store(true, Ordering::Release);
+        self.notify();
+    }
+}
+
+/// A helper thread: evaluates chunks until every chunk is claimed or the loop stops.
+pub(super) fn help(model: &StageModel, shared: &Shared) {
+    let mut fj = ForwardJacobians::default();
+    while !shared.stop.load(Ordering::Acquire) {
+        if let Some(k) = shared.claim() {
+            let block = evaluate(model, &mut fj, shared.chunk(k));
+            shared.put(k, block);
+        } else if shared.next.load(Ordering::Acquire) >= shared.slots.len() {
             return;
+        } else {
+            let next = shared.next.load(Ordering::Acquire);
+            shared.wait_unless(|| {
+                shared.stop.load(Ordering::Acquire)
+                    || next < shared.consumed.load(Ordering::Acquire) + LOOKAHEAD
+            });
         }
     }
 }
 
-/// The consumer's side: the recorded calls and the blocks received so far.
+/// The loop's side: the chunk it is on and the stages taken.
 pub(super) struct Ahead {
-    calls: Arc<[StageCall]>,
-    rx: Receiver<Block>,
+    shared: Arc<Shared>,
     next: usize,
     /// Index of `ready[0]`.
     start: usize,
     ready: Block,
-    /// Stages taken from the blocks.
+    /// Stages taken from the chunks.
     pub(super) taken: usize,
 }
 
+impl Drop for Ahead {
+    fn drop(&mut self) {
+        self.shared.stop();
+    }
+}
+
 impl Ahead {
-    pub(super) fn new(calls: Arc<[StageCall]>, rx: Receiver<Block>) -> Self {
+    pub(super) fn new(shared: Arc<Shared>) -> Self {
         Ahead {
-            calls,
-            rx,
+            shared,
             next: 0,
             start: 0,
             ready: Vec::new(),
@@ -91,19 +200,40 @@ impl Ahead {
         }
     }
 
-    /// The stage of the loop's next call `call`, from the blocks evaluated ahead (waiting for
-    /// the next block if needed); `None` if `call` is not the recorded one or the producer has
-    /// stopped.
-    pub(super) fn take(&mut self, call: &StageCall) -> Option<Result<Stage>> {
+    /// The stage of the loop's next call `call`, from the chunks evaluated ahead; while the chunk
+    /// it needs is not ready, the loop evaluates unclaimed chunks itself with `model` (the same
+    /// function the helpers use). `None` if `call` is not the recorded one.
+    pub(super) fn take(
+        &mut self,
+        call: &StageCall,
+        model: &StageModel,
+        fj: &mut ForwardJacobians,
+    ) -> Option<Result<Stage>> {
         let idx = self.next;
         self.next += 1;
-        if self.calls.get(idx) != Some(call) {
+        let sh = Arc::clone(&self.shared);
+        if sh.calls.get(idx) != Some(call) {
             return None;
         }
+        let c = idx / CHUNK;
         while idx >= self.start + self.ready.len() {
-            let block = self.rx.recv().ok()?;
-            self.start += self.ready.len();
-            self.ready = block;
+            let got = sh.slots.get(c).and_then(|s| lock(s).take());
+            if let Some(block) = got {
+                (self.start, self.ready) = (c * CHUNK, block);
+                sh.consumed.store(c, Ordering::Release);
+                sh.notify();
+            } else if let Some(k) = sh.claim() {
+                let block = evaluate(model, fj, sh.chunk(k));
+                if k == c {
+                    (self.start, self.ready) = (c * CHUNK, block);
+                    sh.consumed.store(c, Ordering::Release);
+                    sh.notify();
+                } else {
+                    sh.put(k, block);
+                }
+            } else {
+                sh.wait_unless(|| sh.slots.get(c).is_none_or(|s| lock(s).is_some()));
+            }
         }
         let stage = self.ready.get_mut(idx - self.start).and_then(Option::take);
         self.taken += usize::from(stage.is_some());
@@ -140,7 +270,11 @@ impl Lean<'_> {
             StateJac::Frozen(j) => Some(j.unwrap_or_else(|| (Mat6::zeros(), Mat6::zeros()))),
         };
         if let Some(ahead) = &self.ahead {
-            if let Some(stage) = ahead.borrow_mut().take(&call) {
+            let taken = {
+                let mut fj = self.scratch.borrow_mut();
+                ahead.borrow_mut().take(&call, &self.model, &mut fj)
+            };
+            if let Some(stage) = taken {
                 let mut stage = stage?;
                 if let (Some(jac), Some((fp, fv))) = (stage.jac.as_mut(), frozen) {
                     (jac.fp, jac.fv) = (fp, fv);
