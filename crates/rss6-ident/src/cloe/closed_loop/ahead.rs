@@ -77,6 +77,8 @@ pub(super) struct Shared {
     next: AtomicUsize,
     consumed: AtomicUsize,
     stop: AtomicBool,
+    /// A helper panicked: the chunk it claimed never comes, so the loop evaluates in turn.
+    failed: AtomicBool,
     lock: Mutex<()>,
     changed: Condvar,
 }
@@ -95,6 +97,7 @@ impl Shared {
             next: AtomicUsize::new(0),
             consumed: AtomicUsize::new(0),
             stop: AtomicBool::new(false),
+            failed: AtomicBool::new(false),
             lock: Mutex::new(()),
             changed: Condvar::new(),
         })
@@ -153,8 +156,21 @@ impl Shared {
     }
 }
 
+/// Marks the helpers failed if a helper unwinds (a panic), so the loop does not wait for its chunk.
+struct Unwinding<'s>(&'s Shared);
+
+impl Drop for Unwinding<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.failed.store(true, Ordering::Release);
+            self.0.notify();
+        }
+    }
+}
+
 /// A helper thread: evaluates chunks until every chunk is claimed or the loop stops.
 pub(super) fn help(model: &StageModel, shared: &Shared) {
+    let _guard = Unwinding(shared);
     let mut fj = ForwardJacobians::default();
     while !shared.stop.load(Ordering::Acquire) {
         if let Some(k) = shared.claim() {
@@ -217,6 +233,9 @@ impl Ahead {
         }
         let c = idx / CHUNK;
         while idx >= self.start + self.ready.len() {
+            if sh.failed.load(Ordering::Acquire) {
+                return None;
+            }
             let got = sh.slots.get(c).and_then(|s| lock(s).take());
             if let Some(block) = got {
                 (self.start, self.ready) = (c * CHUNK, block);
