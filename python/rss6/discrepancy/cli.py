@@ -65,7 +65,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--simulate",
         metavar="EFFECT",
         help="hide EFFECT[@SCOPE][:param=value,...] (or 'none', or 'vibration'/'camera_drift') in "
-        "a simulated robot and diagnose it",
+        "a simulated robot and diagnose it; SCOPE of a joint effect: 'all' or joint1 … joint6",
     )
     p.add_argument("--magnitude", type=float, default=2.0, help="output × camera noise (default 2)")
     p.add_argument("--seed", type=int, default=0)
