@@ -143,6 +143,44 @@ def test_the_summary_counts_what_the_records_say():
     assert rows["camera_latency"] == [1, 2, 0, 0]
     assert rows["base_tilt"] == [1, 0, 0, 1]
     assert rows["none"] == [0, 0, 4, 0]
+    # One effect named beside the hidden ones (the tilt beside the 2× latency); the records carry
+    # no verdict on the model's own error, so none is claimed.
+    assert "effects named beside the hidden ones: 1 in 1 cases\n" in text + "\n"
+    judged = [{**r, "model_error_named": ""} for r in recs if r["kind"] != "none"] + [
+        _record(
+            lat,
+            5.0,
+            f"{lat}+joint_friction (joint 6)+joint_offset_drift (joint 3)",
+            model_error_named="joint_friction (joint 6)",
+        )
+    ]
+    assert (
+        "effects named beside the hidden ones: 3 in 2 cases; 1 of them name the model's own error"
+        in summary(judged)
+    )
+
+
+def test_an_effect_named_beside_is_the_models_own_error_only_if_its_interval_holds_it():
+    # Seed 1's model drawn from its prior: Coulomb 8.4 % below the truth on joint 6 (+0.278 N·m
+    # missing); the payload case named +0.268 [0.029, 0.507] there (twenty-seventh session).
+    err = {
+        "coulomb": [-0.046, -0.124, -0.089, -0.235, -0.050, 0.278],
+        "viscous": [0.0] * 6,
+        "gains": [0.001, 0.003, 0.011],
+    }
+    fr = bm.names_model_error
+    assert fr("joint_friction", "joint 6", {"coulomb": (0.029, 0.507)}, err)
+    assert not fr("joint_friction", "joint 5", {"coulomb": (0.029, 0.507)}, err)
+    assert not fr("joint_friction", "joint 6", {"coulomb": (0.029, 0.25)}, err)
+    # All joints: the interval must hold every joint's error (signs differ here).
+    assert not fr("joint_friction", "all joints", {"coulomb": (-0.088, -0.051)}, err)
+    assert fr("joint_friction", "all joints", {"coulomb": (-0.3, 0.3)}, err)
+    gains = {"l_p": (-0.01, 0.01), "l_i": (-0.01, 0.01), "l_d": (0.0, 0.02)}
+    assert fr("pid_gains", "drive", gains, err)
+    assert not fr("pid_gains", "drive", {**gains, "l_d": (0.02, 0.05)}, err)
+    # Nothing else is drawn, and the model as the truth has no error to name.
+    assert not fr("joint_offset_drift", "joint 3", {"rate": (-1.0, 1.0)}, err)
+    assert not fr("joint_friction", "joint 6", {"coulomb": (0.029, 0.507)}, {})
 
 
 def test_the_loops_bias_refreshed_at_the_candidate_recovers_a_backlash_width(monkeypatch):

@@ -31,7 +31,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 import rss6
 from rss6 import identify
-from rss6.discrepancy.benchmark_summary import summary
+from rss6.discrepancy.benchmark_summary import names_model_error, summary
 from rss6.discrepancy.diagnose import diagnose
 from rss6.discrepancy.effects import Change, EffectDef, get, joint_index
 from rss6.discrepancy.model import Model, Run, replay, run_of
@@ -179,6 +179,9 @@ class HiddenCase:
     params: dict[str, dict[str, float]]
     reached: list[float]
     library: list[str]
+    model_error: dict[str, list[float]] = field(default_factory=dict)
+    """The model's own error when it was drawn around the truth: truth − model Coulomb and viscous
+    per joint, truth / model − 1 of the gains; empty for the model as the truth."""
 
 
 def hidden_case(
@@ -310,8 +313,14 @@ def hidden_case(
         reached.append(multiple)
     # The model given to the workflow: the truth, or drawn around it (the effect's size was the
     # truth's).
-    model = _with_model_error(model, spec.get("model_error"), seed)
-    return HiddenCase(fit, val, model, applied_names + extra, truths, reached, library)
+    drawn = _with_model_error(model, spec.get("model_error"), seed)
+    own: dict[str, list[float]] = {}
+    if drawn is not model:
+        for k in ("coulomb", "viscous"):
+            tr, dr = (np.asarray(getattr(m.dynamics, k), dtype=np.float64) for m in (model, drawn))
+            own[k] = [float(x) for x in tr - dr]
+        own["gains"] = [float(a / b - 1) for a, b in zip(model.pid, drawn.pid, strict=True)]
+    return HiddenCase(fit, val, drawn, applied_names + extra, truths, reached, library, own)
 
 
 def _with_model_error(model: Model, how: Any, seed: int) -> Model:
@@ -412,6 +421,14 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "seconds": time.perf_counter() - t0,
         "notes": " | ".join(rep.notes),
     }
+    # Effects named beside the hidden ones, and which of them name the model's own error.
+    extras = [e for e in rep.named if f"{e.name} ({e.scope})" not in applied_names]
+    record["extra"] = "+".join(f"{e.name} ({e.scope})" for e in extras)
+    record["model_error_named"] = "+".join(
+        f"{e.name} ({e.scope})"
+        for e in extras
+        if names_model_error(e.name, e.scope, e.ci, case.model_error)
+    )
     # The first hidden library effect against what was named for it: right effect and scope first,
     # estimates and 95 % intervals (JSON) for coverage and relative errors.
     record["first_right"] = (

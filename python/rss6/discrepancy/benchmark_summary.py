@@ -10,12 +10,40 @@ from typing import Any
 import numpy as np
 
 from rss6.discrepancy._steps import Z95
+from rss6.discrepancy.effects import joint_index
 
-__all__ = ["summary"]
+__all__ = ["names_model_error", "summary"]
 
 
 def _truthy(v: Any) -> bool:
     return v is True or str(v) == "True"
+
+
+def names_model_error(
+    name: str,
+    scope: str,
+    ci: Mapping[str, tuple[float, float]],
+    model_error: Mapping[str, Sequence[float]],
+) -> bool:
+    """Whether an effect named beside the hidden ones names the model's own error (the benchmark's
+    ``model_error``: the model drawn around the truth). The rule, fixed before the grids that use
+    it were run (twenty-seventh session): a joint friction when its Coulomb interval holds
+    truth − model on its joint (on every joint for "all joints"); drive gains when each gain's
+    interval holds truth / model − 1. Nothing else can be the model's error (only its friction
+    and gains are drawn)."""
+    if not model_error:
+        return False
+    if name == "joint_friction" and "coulomb" in ci:
+        lo, hi = ci["coulomb"]
+        j = joint_index(scope)
+        err = model_error["coulomb"]
+        return all(lo <= err[k] <= hi for k in (range(len(err)) if j is None else [j]))
+    if name == "pid_gains":
+        keys = ("l_p", "l_i", "l_d")
+        return all(k in ci for k in keys) and all(
+            ci[k][0] <= g <= ci[k][1] for k, g in zip(keys, model_error["gains"], strict=True)
+        )
+    return False
 
 
 def summary(records: Sequence[Mapping[str, Any]]) -> str:
@@ -114,6 +142,27 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
         lines.append(
             f"out-of-library: unexplained {un}/{len(ool)} ({100 * un / len(ool):.0f} %), given a "
             f"library name {nm}/{len(ool)} ({100 * nm / len(ool):.0f} %)"
+        )
+    # Effects named beside the hidden ones (library cases and pairs), and those that name the
+    # model's own error (records since the twenty-seventh session carry the verdict).
+    beside = [
+        (r, [n for n in str(r["named"]).split("+") if n not in str(r["hidden"]).split("+")])
+        for r in rows
+        if r["kind"] in ("library", "pair") and r["named"] != "none"
+    ]
+    beside = [(r, ns) for r, ns in beside if ns]
+    if beside:
+        mine = [n for r, _ in beside for n in str(r.get("model_error_named") or "").split("+") if n]
+        judged = all("model_error_named" in r for r, _ in beside)
+        lines.append(
+            f"effects named beside the hidden ones: {sum(len(ns) for _, ns in beside)} in "
+            f"{len(beside)} cases"
+            + (
+                f"; {len(mine)} of them name the model's own error (their interval holds "
+                "truth − model)"
+                if judged
+                else ""
+            )
         )
     five = [r for r in lib if float(r["magnitude"]) == 5.0]
     if five:
