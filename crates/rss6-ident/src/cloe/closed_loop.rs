@@ -164,9 +164,8 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
             scope.spawn(|| ahead::help(&helper, &shared));
         }
         let out = sim.run(reference);
-        // Stops the helpers at their next chunk.
+        // Stops the helpers at their next chunk (`Ahead`'s drop; on unwinding too).
         drop(sim);
-        shared.stop();
         out.map(|run| (run, None))
     })
 }

@@ -176,10 +176,11 @@ pub(super) fn help(model: &StageModel, shared: &Shared) {
         if let Some(k) = shared.claim() {
             let block = evaluate(model, &mut fj, shared.chunk(k));
             shared.put(k, block);
-        } else if shared.next.load(Ordering::Acquire) >= shared.slots.len() {
-            return;
         } else {
             let next = shared.next.load(Ordering::Acquire);
+            if next >= shared.slots.len() {
+                return;
+            }
             shared.wait_unless(|| {
                 shared.stop.load(Ordering::Acquire)
                     || next < shared.consumed.load(Ordering::Acquire) + LOOKAHEAD
@@ -227,7 +228,7 @@ impl Ahead {
     ) -> Option<Result<Stage>> {
         let idx = self.next;
         self.next += 1;
-        let sh = Arc::clone(&self.shared);
+        let sh = &self.shared;
         if sh.calls.get(idx) != Some(call) {
             return None;
         }
