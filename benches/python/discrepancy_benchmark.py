@@ -27,6 +27,11 @@ def _one_thread() -> None:
     os.environ["RAYON_NUM_THREADS"] = "1"
 
 
+def _effect_key(effect: object) -> str | None:
+    """A spec's effect as ``--effects`` names it: a pair joined by "+"."""
+    return "+".join(effect) if isinstance(effect, list) else effect  # type: ignore[return-value]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--robot", default="twin", choices=("twin", "plant"))
@@ -70,8 +75,8 @@ def main() -> int:
         "--effects",
         nargs="+",
         default=None,
-        help="run only the cases hiding these effects (a spec's 'effect', e.g. backlash; 'none' for\n"
-        "the no-effect runs)",
+        help="run only the cases hiding these effects (a spec's 'effect', e.g. backlash; a pair\n"
+        "joined by '+', e.g. camera_latency+base_tilt; 'none' for the no-effect runs)",
     )
     ap.add_argument("--out", default="out/discrepancy_benchmark.csv")
     args = ap.parse_args()
@@ -90,7 +95,7 @@ def main() -> int:
     )
     if args.effects is not None:
         wanted = [None if e == "none" else e for e in args.effects]
-        specs = [s for s in specs if s.get("effect") in wanted]
+        specs = [s for s in specs if _effect_key(s.get("effect")) in wanted]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     done = set()
