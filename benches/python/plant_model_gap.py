@@ -83,12 +83,7 @@ def main() -> None:
         params, got = bm.magnitude(model, run0, name, a.magnitude)
         params = e.check(params, scope)
         c = e.apply(params, scope)
-        hidden = {k: dict(v) for k, v in c.twin.items()}
-        if any(c.coulomb) or any(c.viscous):
-            fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
-            if scope != "all joints":
-                fr["joint"] = float(scope.removeprefix("joint "))
-            hidden["joint_friction"] = fr
+        hidden = bm.robot_effects(e, params, scope)
         gains = tuple(g * (1 + d) for g, d in zip(pid, c.gains, strict=True))
         run = run_of(collect(plant(hidden or None, gains)))
         print(f"{name} at {got:.2f}× ({params})")

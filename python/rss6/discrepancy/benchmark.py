@@ -110,6 +110,22 @@ def _scaled(e: EffectDef, k: float) -> dict[str, float]:
     return out
 
 
+def robot_effects(
+    e: EffectDef, params: Mapping[str, float], scope: str
+) -> dict[str, dict[str, float]]:
+    """Library effect ``e`` at ``params`` on ``scope`` as the simulated robots' hidden effects
+    (``rss6.Plant(effects=...)``, the twin's too): the twin's own specs, and the joint friction as
+    the robots' ``joint_friction`` with its joint numbered from 0 (the model takes friction into
+    its dynamics instead). Drive gains are the robot's PID, not an effect: see :class:`Change`."""
+    c = e.apply(params, scope)
+    hidden = {k: dict(v) for k, v in c.twin.items()}
+    if any(c.coulomb) or any(c.viscous):
+        j = joint_index(scope)
+        fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
+        hidden["joint_friction"] = fr if j is None else {**fr, "joint": float(j)}
+    return hidden
+
+
 def _output(model: Model, run: Run, change: Change, clean: F64) -> float:
     """Largest per-axis RMS of the pose change, in camera-noise units."""
     d = (replay(model, run, change) - clean)[:, :6]
@@ -283,13 +299,9 @@ def hidden_case(
             applied_names.append(f"{e.name} ({scope})")
             params = e.check(params, scope)
             truths[e.name] = dict(params)
-            c = e.apply(params, scope)
-            for k, v in c.twin.items():
+            for k, v in robot_effects(e, params, scope).items():
                 hidden[k] = {**hidden.get(k, {}), **v}
-            if any(c.coulomb) or any(c.viscous):
-                j = joint_index(scope)
-                fr = {"coulomb": params["coulomb"], "viscous": params["viscous"]}
-                hidden["joint_friction"] = fr if j is None else {**fr, "joint": float(j)}
+            c = e.apply(params, scope)
             if any(c.gains):
                 hidden_pid = tuple(g * (1 + d) for g, d in zip(pid, c.gains, strict=True))
 
