@@ -4,7 +4,11 @@ discrepancy.md "The model is not the robot"): noise-free plant runs (shared stic
 by the run's recorded commands, without and with the true effect. Prints the pose residual RMS per
 axis in units of Table 4.1's camera noise.
 
-    python benches/python/plant_model_gap.py [--solver-iterations 48] [--magnitude 5] [EFFECT@SCOPE ...]
+    python benches/python/plant_model_gap.py [--solver-iterations 48] [--magnitude 5]
+        [--payload-com X Y Z] [EFFECT@SCOPE ...]
+
+``--payload-com``: the payload's centre of mass in ΣE (m; the benchmark's is 0.02 0 0), to tell a
+gap that follows the offset from one that follows the mass.
 """
 
 from __future__ import annotations
@@ -31,8 +35,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     ap.add_argument("--solver-iterations", type=int, default=48)
     ap.add_argument("--magnitude", type=float, default=5.0, help="effect size, × camera noise")
+    ap.add_argument("--payload-com", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None)
     ap.add_argument("effects", nargs="*", help=f"EFFECT or EFFECT@SCOPE (default: {EFFECTS})")
     a = ap.parse_args()
+    if a.payload_com is not None:
+        bm.REFERENCE["payload"].update(zip("xyz", a.payload_com, strict=True))
     iterations, args = a.solver_iterations, a.effects
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
