@@ -5,7 +5,7 @@ positives). For the same study on Dask: ``rss6 study discrepancy``.
 
     python benches/python/discrepancy_benchmark.py [--robot twin|plant] [--null 100] [--workers 2]
         [--seeds 0] [--friction table|none] [--friction-law tanh|implicit]
-        [--commands recorded|simulated] [--solver-iterations 48] [--hold-nominal]
+        [--commands recorded|simulated] [--solver-iterations 100] [--hold-nominal]
         [--model-error] [--no-bias-refresh] [--effects backlash ... | none]
         [--out out/discrepancy_benchmark.csv]
 """
@@ -51,7 +51,7 @@ def main() -> int:
         "--solver-iterations",
         type=int,
         default=None,
-        help="the plant's solver iterations with the implicit law (default 48)",
+        help="the plant's solver iterations with the implicit law (default 100; ids tagged -itN)",
     )
     ap.add_argument(
         "--hold-nominal",

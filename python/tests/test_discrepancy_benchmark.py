@@ -262,9 +262,10 @@ def test_spec_ids_say_whether_the_bias_was_refreshed():
     on = bm.cases(robot="plant", n_null=1, seeds=[0], magnitudes=[2.0])
     off = bm.cases(robot="plant", n_null=1, seeds=[0], magnitudes=[2.0], bias_refresh=False)
     assert all(
-        s["bias_refresh"] is True and s["spec_id"].startswith("plant-implicit-refresh:") for s in on
+        s["bias_refresh"] is True and s["spec_id"].startswith("plant-implicit-it100-refresh:")
+        for s in on
     )
     assert all(
-        s["bias_refresh"] is False and s["spec_id"].startswith("plant-implicit:") for s in off
+        s["bias_refresh"] is False and s["spec_id"].startswith("plant-implicit-it100:") for s in off
     )
     assert {s["spec_id"] for s in on}.isdisjoint(s["spec_id"] for s in off)

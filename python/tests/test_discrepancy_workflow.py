@@ -306,13 +306,45 @@ def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model
 
     monkeypatch.setattr(benchmark, "hidden_case", fake)
     base = ["diagnose", "--simulate", "camera_latency", "--quiet"]
-    for extra in ([], ["--plant", "model"], ["--friction-law", "tanh"]):
+    for extra in (
+        [],
+        ["--plant", "model"],
+        ["--friction-law", "tanh"],
+        ["--solver-iterations", "7"],
+    ):
         assert main([*base, *extra]) == 1
-    assert [benchmark.friction_law_of(s) for s in specs] == ["implicit", "tanh", "tanh"]
+    assert [benchmark.friction_law_of(s) for s in specs] == ["implicit", "tanh", "tanh", "implicit"]
+    # The plant at the benchmark's 100 solver iterations with the shared law (docs/discrepancy.md).
+    assert [s.get("solver_iterations") for s in specs] == [100, None, None, 7]
     # The benchmark's specs too (the documented `benchmark_case({... "robot": "plant"})`).
     assert benchmark.friction_law_of({"robot": "plant"}) == "implicit"
     assert benchmark.cases(robot="plant", n_null=1)[0]["friction_law"] == "implicit"
     assert "stopped before collecting" in capsys.readouterr().err
+
+
+def test_a_specs_solver_iterations_reach_the_plant(monkeypatch: Any) -> None:
+    """The plant of a benchmark case is built at the spec's solver iterations, at 48 without the
+    key (ids without "-itN" keep their meaning), and the benchmark's plant specs carry 100."""
+    from rss6.discrepancy import benchmark
+
+    seen: list[Any] = []
+
+    class Recorder:
+        def __init__(self, *args: Any, **kw: Any) -> None:
+            seen.append(kw.get("solver_iterations"))
+            raise rss6.InvalidInputError("stopped at the plant")
+
+    monkeypatch.setattr(rss6, "Plant", Recorder)
+    spec = {"effect": None, "robot": "plant", "seed": 0}
+    for extra in ({}, {"solver_iterations": 100}, {"friction_law": "tanh", "solver_iterations": 9}):
+        with pytest.raises(rss6.InvalidInputError, match="stopped at the plant"):
+            benchmark.hidden_case({**spec, **extra})
+    assert seen == [48, 100, 9]
+    specs = benchmark.cases(robot="plant", n_null=1, seeds=[0], magnitudes=[2.0])
+    assert {s["solver_iterations"] for s in specs} == {100}
+    assert all(s["spec_id"].startswith("plant-implicit-it100-") for s in specs)
+    with pytest.raises(rss6.InvalidInputError, match="solver_iterations must be >= 1"):
+        benchmark.cases(robot="plant", n_null=1, solver_iterations=0)
 
 
 def test_diagnose_refreshes_the_loops_bias_unless_told_not_to(monkeypatch: Any) -> None:

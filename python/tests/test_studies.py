@@ -195,3 +195,32 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     assert "confusion" in text
     # The study keeps both runs' errors, so the summary can say how their own intervals did.
     assert "the fitting run's alone 1/1, the held-out run's own 1/1" in text, text
+
+
+class _Built(Exception):
+    pass
+
+
+def test_the_plants_solver_iterations_reach_the_identification_plant(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``rss6 study identification --solver-iterations N`` builds its plant at N (the figures of
+    docs/identification.md at 100 iterations come from it), and at the default without it."""
+    import rss6
+    from rss6 import identify_sim
+    from rss6.studies.tasks import identification_task
+
+    seen: list[Any] = []
+
+    class Recorder:
+        def __init__(self, *args: Any, **kw: Any) -> None:
+            seen.append(kw.get("solver_iterations"))
+            raise _Built
+
+    monkeypatch.setattr(rss6, "Plant", Recorder)
+    for spec in ({"seed": 0}, {"seed": 0, "solver_iterations": 100}):
+        with pytest.raises(_Built):
+            identification_task({"robot": "plant", "quick": True, **spec})
+    assert seen == [identify_sim.IMPLICIT_PLANT_ITERATIONS, 100]
+    with pytest.raises(InvalidInputError, match="solver_iterations must be >= 1"):
+        studies.identification_variation(1, out="unused.csv", solver_iterations=0)

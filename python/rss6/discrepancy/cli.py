@@ -71,6 +71,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--plant", choices=("rapier", "model"), default="rapier")
     p.add_argument(
+        "--solver-iterations",
+        type=int,
+        default=None,
+        help="the rapier plant's solver iterations (default 100 with the implicit law: "
+        "docs/discrepancy.md)",
+    )
+    p.add_argument(
         "--friction-law",
         choices=("tanh", "implicit"),
         default=None,
@@ -108,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from rss6 import discrepancy
-    from rss6.discrepancy.benchmark import hidden_case
+    from rss6.discrepancy.benchmark import PLANT_SOLVER_ITERATIONS, hidden_case
 
     quiet = bool(args.quiet)
     bars: dict[str, Any] = {}
@@ -146,6 +153,13 @@ def run(args: argparse.Namespace) -> int:
 
             if rss6.Plant is None:
                 raise InvalidInputError("this build has no rapier plant: use --plant model")
+            its = args.solver_iterations  # the benchmark's default with the shared law
+            if its is None and (args.friction_law or "implicit") == "implicit":
+                its = PLANT_SOLVER_ITERATIONS
+            if its is not None:
+                if its < 1:
+                    raise InvalidInputError(f"--solver-iterations must be >= 1, got {its}")
+                spec["solver_iterations"] = its
         case = hidden_case(spec, progress=None if quiet else lambda s: print(s, file=sys.stderr))
         measured, validation, model = case.fit, case.validation, case.model
         header = (

@@ -130,6 +130,7 @@ def identification_variation(
     progress: Any = True,
     friction_law: str = "implicit",
     pot_noise: str = "recorded",
+    solver_iterations: int | None = None,
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
@@ -137,23 +138,29 @@ def identification_variation(
     ``friction_law``: "tanh" or "implicit" (stick–slip in robot and model, linear start, l_p
     known; :func:`rss6.identify_sim.estimate_from_initial`); ``pot_noise``: "recorded" (the
     model's drive replays the potentiometer noise estimated from the readings), "model" (then a
-    second pass against the first estimate's model, ``identify.cloe(pot_noise="model")``) or "none"."""
+    second pass against the first estimate's model, ``identify.cloe(pot_noise="model")``) or "none";
+    ``solver_iterations``: the plant's rapier iterations (default
+    :data:`rss6.identify_sim.IMPLICIT_PLANT_ITERATIONS`; the spec ids then end in ":itN")."""
     from rss6 import identify
 
     if pot_noise not in ("recorded", "model", "none"):
         raise InvalidInputError(
             f"pot_noise must be 'recorded', 'model' or 'none', got {pot_noise!r}"
         )
+    if solver_iterations is not None and solver_iterations < 1:
+        raise InvalidInputError(f"solver_iterations must be >= 1, got {solver_iterations}")
+    it = {} if solver_iterations is None else {"solver_iterations": int(solver_iterations)}
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
-            f"pot-{pot_noise}:{seed + k}",
+            f"pot-{pot_noise}:{seed + k}" + (f":it{solver_iterations}" if it else ""),
             "friction_law": friction_law,
             "pot_noise": pot_noise,
             "seed": seed + k,
             "robot": robot,
             "quick": quick,
             "parameters": parameters,
+            **it,
         }
         for k in range(n_trajectories)
     ]

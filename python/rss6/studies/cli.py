@@ -59,12 +59,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the recorded readings (recorded, the default), then against the first estimate's model "
         "in a second pass (model), or reads clean angles (none)",
     )
+    p.add_argument(
+        "--solver-iterations",
+        type=int,
+        default=None,
+        help="identification, and discrepancy with --plant: the rapier plant's solver "
+        "iterations (default: identification 48, discrepancy 100 — docs/sim.md)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     """Runs the study and prints its summary."""
     from rss6 import studies
 
+    if args.solver_iterations is not None and args.solver_iterations < 1:
+        raise InvalidInputError(f"--solver-iterations must be >= 1, got {args.solver_iterations}")
     common: dict[str, Any] = {
         "out": args.out,
         "client": args.scheduler,
@@ -82,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
             parameters=["lp", "li", "ld"] if args.quick else "base",
             friction_law=args.friction_law or "implicit",
             pot_noise=args.pot_noise,
+            solver_iterations=args.solver_iterations,
             **common,
         )
         print(studies.summary_identification(df))
@@ -95,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
             n_null=args.n,
             robot="plant" if args.plant else "twin",
             friction_law=args.friction_law or ("implicit" if args.plant else "tanh"),
+            **({"solver_iterations": args.solver_iterations} if args.plant else {}),
         )
         df = studies.discrepancy_benchmark(specs, **common)
         print(studies.summary_discrepancy(df))

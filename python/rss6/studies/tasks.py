@@ -62,8 +62,9 @@ def quantities(dynamics: Any, pid: Any) -> dict[str, float]:
 def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     """One identification on a random trajectory (seed ``seed``) of the robot whose truth is
     Table 5.2 (``robot``: "plant" or "twin"): CLOE from Table 5.1 and the nominal gains
-    (:func:`rss6.identify_sim.estimate_from_initial`; ``friction_law`` "tanh" or "implicit"), the
-    estimates by name and the RMS before and after on the trajectory."""
+    (:func:`rss6.identify_sim.estimate_from_initial`; ``friction_law`` "tanh" or "implicit"; the
+    plant at ``solver_iterations`` when given), the estimates by name and the RMS before and after
+    on the trajectory."""
     import rss6
     from rss6 import identify, identify_sim
 
@@ -81,6 +82,8 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         kw = {"implicit_friction": True}
         if cls is not rss6.ModelSim:
             kw["solver_iterations"] = identify_sim.IMPLICIT_PLANT_ITERATIONS
+    if "solver_iterations" in spec and cls is not rss6.ModelSim:
+        kw["solver_iterations"] = int(spec["solver_iterations"])
     robot = cls(kp, dp_true, pid=pid_true, seed=seed, drive_derivative_filter=t_f, **kw)
     tr = robot.truth()
     amplitude = (0.002, 0.01) if quick else (0.001, 0.005)
