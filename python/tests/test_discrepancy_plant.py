@@ -1,7 +1,9 @@
 """The discrepancy workflow's Name step where the model is not the robot (issue 14): the rapier plant
 with the shared stick–slip law hides an effect at 5× the camera noise, and the model — the plant's
 truth without the effect — differs from the plant by 0.1–0.6× the noise even with the effect added
-(the plant's 48 constraint iterations; docs/discrepancy.md, "The model is not the robot"). And an
+(the plant's 48 constraint iterations — what a spec without "solver_iterations" gets; the
+benchmark's grid and `rss6 diagnose --simulate` run at 100 since the twenty-ninth session;
+docs/discrepancy.md, "The model is not the robot"). And an
 out-of-library camera drift on the twin, which a joint's offset drift can mimic on x only.
 
 Measured (seed 0, recorded commands, 16 replicates, the loop's bias refreshed at each candidate —
