@@ -55,7 +55,9 @@ def summary(records: Sequence[Mapping[str, Any]]) -> str:
     lines: list[str] = []
     # Rows read back by pandas carry NaN for empty fields: "" as the csv module gives them (a NaN
     # "model_error_named" was once counted as a name).
-    every = [{k: ("" if isinstance(v, float) and v != v else v) for k, v in r.items()} for r in records]
+    every = [
+        {k: ("" if isinstance(v, float) and v != v else v) for k, v in r.items()} for r in records
+    ]
     rows = [r for r in every if r.get("kind") != "faulted"]
     if len(rows) < len(every):
         lines.append(f"runs where the robot faulted (not counted): {len(every) - len(rows)}")
