@@ -9,7 +9,7 @@ both runs one excitation (the seed's), so only the noise differs between them.
 
     python benches/python/consistency_null.py [--robot twin|plant] [--effect base_tilt]
         [--magnitude 2] [--seeds 10] [--first-seed 0] [--same-excitation] [--hold-nominal]
-        [--workers 2]
+        [--no-bias-refresh] [--workers 2]
 """
 
 from __future__ import annotations
@@ -47,6 +47,11 @@ def main() -> None:
         help="hold the model's friction and gains (no nominal refit: the runs' own errors are then\n"
         "the estimator's whole variance on the twin)",
     )
+    ap.add_argument(
+        "--no-bias-refresh",
+        action="store_true",
+        help="take the loop's bias of the model as given for every candidate",
+    )
     ap.add_argument("--workers", type=int, default=2)
     a = ap.parse_args()
     specs = []
@@ -62,6 +67,8 @@ def main() -> None:
             spec["excitation"] = 1000 + s
         if a.hold_nominal:
             spec["nominal"] = None
+        if a.no_bias_refresh:
+            spec["bias_refresh"] = False
         specs.append(spec)
     t0 = time.perf_counter()
     hidden = a.effect.split("@")[0]
