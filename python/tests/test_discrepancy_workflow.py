@@ -316,10 +316,16 @@ def test_diagnose_simulate_uses_the_friction_law_the_robot_shares_with_the_model
     assert [benchmark.friction_law_of(s) for s in specs] == ["implicit", "tanh", "tanh", "implicit"]
     # The plant at the benchmark's 100 solver iterations with the shared law (docs/discrepancy.md).
     assert [s.get("solver_iterations") for s in specs] == [100, None, None, 7]
+    # Without the rapier plant the option has nothing to set: a typed error, not silence.
+    n = len(specs)
+    assert main([*base, "--plant", "model", "--solver-iterations", "7"]) == 1
+    assert main(["diagnose", "run.mcap", "--model", "m", "--solver-iterations", "7"]) == 1
+    assert len(specs) == n
     # The benchmark's specs too (the documented `benchmark_case({... "robot": "plant"})`).
     assert benchmark.friction_law_of({"robot": "plant"}) == "implicit"
     assert benchmark.cases(robot="plant", n_null=1)[0]["friction_law"] == "implicit"
-    assert "stopped before collecting" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "stopped before collecting" in err and err.count("--solver-iterations needs") == 2, err
 
 
 def test_a_specs_solver_iterations_reach_the_plant(monkeypatch: Any) -> None:

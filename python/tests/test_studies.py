@@ -224,3 +224,8 @@ def test_the_plants_solver_iterations_reach_the_identification_plant(
     assert seen == [identify_sim.IMPLICIT_PLANT_ITERATIONS, 100]
     with pytest.raises(InvalidInputError, match="solver_iterations must be >= 1"):
         studies.identification_variation(1, out="unused.csv", solver_iterations=0)
+    # The command line: without the rapier plant the option is refused, not ignored.
+    from rss6.cli import main
+
+    base = ["study", "discrepancy", "--n", "1", "--out", "unused.csv", "--solver-iterations", "100"]
+    assert main(base) == 1

@@ -160,6 +160,8 @@ def run(args: argparse.Namespace) -> int:
                 if its < 1:
                     raise InvalidInputError(f"--solver-iterations must be >= 1, got {its}")
                 spec["solver_iterations"] = its
+        elif args.solver_iterations is not None:
+            raise InvalidInputError("--solver-iterations needs the rapier plant (--plant rapier)")
         case = hidden_case(spec, progress=None if quiet else lambda s: print(s, file=sys.stderr))
         measured, validation, model = case.fit, case.validation, case.model
         header = (
@@ -170,6 +172,8 @@ def run(args: argparse.Namespace) -> int:
             )
         )
     else:
+        if args.solver_iterations is not None:
+            raise InvalidInputError("--solver-iterations needs --simulate on the rapier plant")
         if args.run is None or args.model is None:
             raise InvalidInputError("rss6 diagnose needs RUN.mcap and --model DIR (or --simulate)")
         model = discrepancy.Model.load(args.model)

@@ -74,6 +74,12 @@ def run(args: argparse.Namespace) -> int:
 
     if args.solver_iterations is not None and args.solver_iterations < 1:
         raise InvalidInputError(f"--solver-iterations must be >= 1, got {args.solver_iterations}")
+    if args.solver_iterations is not None and (
+        args.kind == "calibration" or (args.kind == "discrepancy" and not args.plant)
+    ):
+        raise InvalidInputError(
+            "--solver-iterations needs the rapier plant (identification, or --plant)"
+        )
     common: dict[str, Any] = {
         "out": args.out,
         "client": args.scheduler,
