@@ -93,7 +93,7 @@ def _consistency(
         return 1.0, 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
     j = hfit.jacobian[:, free]
     d = (np.array(_flat(best.values)) - np.array(_flat(hfit.values)))[free]
-    v_h = robust_cov(hfit, hcal.whitener, len(held.t))
+    v_h = robust_cov(hfit, hcal.whitener, len(held.t), replicates=hcal.replicates)
     vf = v_fit if v_fit is not None and v_fit.shape == v_h.shape else wald_cov(best)
     cov = (vf + v_h)[np.ix_(free, free)]
     model_cov = np.zeros_like(cov)

@@ -249,11 +249,14 @@ def check_frames(parts: Sequence[tuple[str, _Part]]) -> None:
             )
 
 
-def fit_se(fit: Fit, whitener: Whitener, n_frames: int) -> list[dict[str, float]]:
+def fit_se(
+    fit: Fit, whitener: Whitener, n_frames: int, replicates: F64 | None = None
+) -> list[dict[str, float]]:
     """Standard errors of ``fit`` from its own run: the larger of the Wald error scaled by the
-    misfit (:func:`~rss6.discrepancy.search.wald_cov`) and :func:`robust_se`'s sandwiches."""
+    misfit (:func:`~rss6.discrepancy.search.wald_cov`) and :func:`robust_se`'s (the sandwiches and
+    the spread over the run's noisy ``replicates``)."""
     wald = per_effect(np.sqrt(np.maximum(np.diag(wald_cov(fit)), 0.0)), fit.se)
-    rob = robust_se(fit, whitener, n_frames)
+    rob = robust_se(fit, whitener, n_frames, replicates=replicates)
     return [{k: max(w[k], r[k]) for k in w} for w, r in zip(wald, rob, strict=True)]
 
 

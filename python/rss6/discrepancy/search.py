@@ -332,7 +332,7 @@ def _sandwiches(fit: Fit, whitener: Whitener, n_frames: int, lags: int) -> tuple
 
 
 def robust_se(
-    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS
+    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS, replicates: F64 | None = None
 ) -> list[dict[str, float]]:
     """Standard errors of ``fit`` that do not trust the noise model: the larger of two sandwiches
     (JᵀJ)⁻¹ S (JᵀJ)⁻¹ over ``lags`` frames with Bartlett's weights (channels aligned on their last
@@ -343,12 +343,19 @@ def robust_se(
     of Wald on white noise) — the stationary form does not. Both equal the Wald errors in
     expectation when the residual is the noise model's; larger when the residual holds slow model
     error the effect's signature overlaps (on the rapier plant an offset drift's rate was biased
-    2–17 % low with Wald intervals a tenth of that). ``fit.se`` if the residual's layout is not the
-    whitener's."""
+    2–17 % low with Wald intervals a tenth of that). With ``replicates`` (the noisy replays'
+    whitened noise, :func:`replicate_cov`) their errors too, if larger: in the stick–slip loop the
+    sandwiches understate the spread between two noise draws ≈ 3× (docs/discrepancy.md).
+    ``fit.se`` if neither layout is the fit's."""
     sw = _sandwiches(fit, whitener, n_frames, lags)
-    if sw is None:
+    rep = replicate_cov(fit, replicates)
+    if sw is None and rep is None:
         return fit.se
-    var = np.maximum(np.diag(sw[0]), np.diag(sw[1]))
+    var = np.zeros(fit.jacobian.shape[1])
+    if sw is not None:
+        var = np.maximum(np.diag(sw[0]), np.diag(sw[1]))
+    if rep is not None:
+        var = np.maximum(var, np.diag(rep))
     return per_effect(np.sqrt(np.maximum(var, 0.0)), fit.se)
 
 
@@ -403,17 +410,34 @@ def wald_cov(fit: Fit) -> F64:
     return cov
 
 
-def robust_cov(fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS) -> F64:
+def replicate_cov(fit: Fit, replicates: F64 | None) -> F64 | None:
+    """The fit's parameter covariance under the loop's own noise, linearised: the sample covariance
+    of (JᵀJ)⁻¹Jᵀr_k over the K whitened noise realisations r_k of the noisy replays (None if their
+    layout is not the fit's, or K < 2). It sees what one run's residual cannot: how the loop's
+    noise moves the estimate. Free: the replays are already run for the score tests."""
+    j = fit.jacobian
+    if replicates is None or replicates.ndim != 2 or replicates.shape[1] != j.shape[0]:
+        return None
+    if replicates.shape[0] < 2:
+        return None
+    d = replicates @ j @ np.linalg.pinv(j.T @ j).T
+    return np.atleast_2d(np.cov(d, rowvar=False, ddof=1))
+
+
+def robust_cov(
+    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS, replicates: F64 | None = None
+) -> F64:
     """The covariance of all of ``fit``'s parameters that does not trust the noise model: of
-    :func:`wald_cov` and :func:`robust_se`'s two sandwiches, the largest relative to the Wald one
+    :func:`wald_cov`, :func:`robust_se`'s two sandwiches and :func:`replicate_cov` (with
+    ``replicates``), the largest relative to the Wald one
     (trace of JᵀJ·C: free of the parameters' units) — the full matrix behind the errors of the
     intervals, whose correlations a test of several parameters needs."""
     wald = wald_cov(fit)
     sw = _sandwiches(fit, whitener, n_frames, lags)
-    if sw is None:
-        return wald
+    rep = replicate_cov(fit, replicates)
+    cands = [wald, *(sw or ()), *(() if rep is None else (rep,))]
     info = fit.jacobian.T @ fit.jacobian
-    best = max((wald, *sw), key=lambda c: float(np.trace(info @ c)))
+    best = max(cands, key=lambda c: float(np.trace(info @ c)))
     return np.asarray(best, dtype=np.float64)
 
 
