@@ -43,10 +43,12 @@ __all__ = [
     "parameter_names",
     "potentiometer_noise",
     "random_excitation",
+    "replicate_deviations",
     "simulate",
     "table_5_2_truth",
     "validate",
     "variation",
+    "with_replicates",
 ]
 
 F64 = NDArray[np.float64]
@@ -65,16 +67,6 @@ def table_5_2_truth() -> tuple[_rss6.DynamicParams, tuple[float, float, float]]:
     drive gains moved by its identified/initial ratios. Returns (dynamics, (l_p, l_i, l_d))."""
     dp, pid = _rss6.table_5_2_truth_params()
     return dp, (float(pid[0]), float(pid[1]), float(pid[2]))
-
-
-def _rows6(a: ArrayLike, name: str) -> F64:
-    x = np.asarray(a, dtype=np.float64)
-    if x.ndim != 2 or x.shape[1] != 6:
-        raise ShapeError(f"{name} must have shape (N, 6), got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        bad = np.argwhere(~np.isfinite(x))[0]
-        raise NonFiniteError(f"{name} contains NaN or infinity at index [{bad[0]}, {bad[1]}]")
-    return x
 
 
 @dataclass(frozen=True)
@@ -182,9 +174,12 @@ class IdentificationData:
             raise NonFiniteError(
                 f"t contains NaN or infinity at index [{np.argmin(np.isfinite(tt))}]"
             )
-        m = _rows6(measured, "measured")
-        if m.shape[0] != tt.size:
+        m = np.asarray(measured, dtype=np.float64)
+        if m.shape != (tt.size, 6):
             raise ShapeError(f"measured must have shape ({tt.size}, 6) like t, got {m.shape}")
+        if not np.all(np.isfinite(m)):
+            bad = np.argwhere(~np.isfinite(m))[0]
+            raise NonFiniteError(f"measured contains NaN or infinity at [{bad[0]}, {bad[1]}]")
         if tt[0] < 0 or np.any(np.diff(tt) <= 0):
             raise InvalidInputError("t must be >= 0 and strictly increasing")
         if not (np.isfinite(dt) and dt > 0):
@@ -380,7 +375,10 @@ class IdentificationResult:
     absorb it — {name: ({estimated: c}, residual)}: a relative change δ of it moves the output at
     the guess as relative changes c·δ of those do (|c| ≥ 0.05, at most 4), ``residual`` the relative
     misfit of that combination (≈ 0: it combines into them; near 1: the output hardly sees it);
-    :meth:`alias_text` says it in words. ``guess`` and ``model`` keep what :func:`validate` needs."""
+    :meth:`alias_text` says it in words. ``guess`` and ``model`` keep what :func:`validate` needs.
+    ``linear_map`` (map (p, 6F), weights (6,)): δψ = map · δr for a change δr of the weighted
+    residual; :func:`with_replicates` carries noisy replicate runs through it to
+    ``relative_std_replicates`` (docs/identification.md, "σ from noisy replicates")."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -403,6 +401,8 @@ class IdentificationResult:
     hops: tuple[float, ...] = ()
     restarts: tuple[float, ...] = ()
     start_spread: F64 = field(default_factory=lambda: np.zeros(0))
+    linear_map: tuple[F64, F64] | None = None
+    relative_std_replicates: F64 = field(default_factory=lambda: np.zeros(0))
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -461,9 +461,8 @@ def cloe(
     non-smooth — or ``implicit_friction``, stick–slip stepped implicitly as the twin and the plant
     step it, see :class:`LoopModel`) and its exact sensitivities. ``commands="recorded"`` holds the
     robot's own joint commands (:meth:`IdentificationData.frame_commands`) instead of simulating the
-    outer visual PID: the output error of the drive + dynamics loop. With stick–slip friction the
-    camera noise fed back through the visual PID moves the robot by more than the noise, and the
-    thesis's loop cannot fit that motion (docs/identification.md).
+    outer visual PID: the output error of the drive + dynamics loop (with stick–slip the camera
+    noise fed back moves the robot by more than the noise: docs/identification.md).
 
     ``parameters``: ``"base"`` estimates every quantity the data identify (QR with column pivoting
     at the guess, relative threshold 10⁻³), a list of names (:func:`parameter_names`) only those
@@ -476,10 +475,9 @@ def cloe(
     (keeps quantities the run hardly sees near it); ``None``: the pure output error of eq. 5.7.
     ``cost_history`` includes the prior's term. ``gravity``, ``load``, ``offset_drift``: effects of
     the model, as for :func:`simulate` (re-identification with named effects).
-    ``measured_cutoff`` (Hz): low-pass χ_m first with a zero-phase 4th-order Butterworth filter
-    (scipy ``filtfilt``); it must lie below the camera's Nyquist frequency (the thesis's 60 Hz is
-    above the 15 Hz of a 30 Hz camera and is refused). Default ``None``: no filter, as the weights
-    assume white noise (docs/identification.md, "Filtering χ_m").
+    ``measured_cutoff`` (Hz): low-pass χ_m first (zero-phase 4th-order Butterworth, scipy
+    ``filtfilt``) below the camera's Nyquist frequency; ``None``: no filter, as the weights assume
+    white noise (docs/identification.md, "Filtering χ_m").
     ``pot_noise``: noise the model's drive adds to its potentiometer readings — ``"none"``
     (default); ``"recorded"``: :func:`potentiometer_noise` of the data (needs per-tick data; with
     stick–slip the noise breaks sticking joints free earlier); ``"model"``: that, then a second
@@ -488,11 +486,9 @@ def cloe(
     ``per_tick_jacobians``: iterate on cheaper sensitivities (state Jacobians once per tick, ≈ 10⁻³);
     a stop is checked on the exact ones (iterations go on with them if their step would lower Φ by
     more than one residual variance), and the σ always come from the exact ones.
-    ``settle_steps``: the *settled* rule's look-back in accepted steps (``IdentificationResult.
-    converged_by``; 0 turns it off; 5 until the fourteenth session). ``hops``: after converging,
-    CLOE again from the estimate with every quantity but the held ones moved by the log-factor δ,
-    for each δ, keeping the lowest χ² (the stick–slip cost's local minima lie along the loop's
-    common scale; :func:`rss6.identify_hops.hopped`, docs/identification.md).
+    ``settle_steps``: the *settled* rule's look-back in accepted steps (0 turns it off). ``hops``:
+    after converging, CLOE again from the estimate with every quantity but the held ones moved by
+    the log-factor δ, for each δ, keeping the lowest χ² (:func:`rss6.identify_hops.hopped`).
     ``restarts``: as many more runs (hops included) from the guess with each identified quantity
     moved by a seeded factor in [1 − ``restart_spread``, 1 + ``restart_spread``], the best kept and
     its σ widened to the spread over equally good runs (:func:`rss6.identify_hops.restarted`);
@@ -500,7 +496,8 @@ def cloe(
     ``progress(iteration, cost)`` after every accepted step (iteration 0: the guess); raise in it (or
     Ctrl-C) to stop. Raises :class:`rss6.IdentificationError`: a requested name is not identifiable
     (``.names``), no convergence (``.iterations``, ``.cost_history``), frames the model's loop does
-    not produce, data whose run faulted (see :meth:`IdentificationData.before_fault`)."""
+    not produce, a faulted run (:meth:`IdentificationData.before_fault`). σ from the loop's own
+    noise too: :func:`with_replicates`."""
     call = dict(locals())
     if hops:
         identify_hops.check(hops, parameters, hold)
@@ -562,6 +559,7 @@ def cloe(
         },
         relative_std=np.asarray(r["relative_std"]),
         relative_std_wald=np.asarray(r["relative_std_wald"]),
+        linear_map=(np.asarray(r["estimator_map"]), np.asarray(r["residual_weight"])),
         poorly_identified=tuple(r["poorly_identified"]),
         rms_before=np.asarray(r["rms_before"]),
         rms_after=np.asarray(r["rms_after"]),
@@ -595,5 +593,6 @@ def cloe(
     return result
 
 
-# Validation and Table 5.5 live in identify_validate (they use the names above).
+# Validation, Table 5.5 and the replicates' σ live in their modules (they use the names above).
+from rss6.identify_replicates import replicate_deviations, with_replicates  # noqa: E402
 from rss6.identify_validate import Validation, validate, variation  # noqa: E402

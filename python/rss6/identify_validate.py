@@ -19,9 +19,8 @@ from rss6.identify import (
     IdentificationResult,
     collect,
     parameter_names,
-    simulate,
 )
-from rss6.identify_linear import replayed_noise
+from rss6.identify_replicates import model_output
 
 __all__ = ["Validation", "validate", "variation"]
 
@@ -91,7 +90,6 @@ def validate(
     rms0 = np.zeros((n, 6))
     excs: list[Excitation] = []
     datas: list[IdentificationData] = []
-    m = result.model
     for i in range(n):
         exc = random_excitation(
             kp, harmonics=harmonics, f0=f0, seed=seed + i, amplitude=amplitude, **limits
@@ -106,23 +104,8 @@ def validate(
             mcap=mcap,
             outer_gains=outer_gains,
         )
-        for out, (dp, pid) in ((rms, (result.dynamics, result.pid)), (rms0, result.guess)):
-            chi = simulate(
-                m.kp,
-                dp,
-                pid,
-                exc,
-                times=d.t,
-                torque_limit=m.torque_limit,
-                camera_latency=m.camera_latency,
-                dt=d.dt,
-                derivative_filter=m.derivative_filter,
-                friction_smoothing=m.friction_smoothing,
-                implicit_friction=m.implicit_friction,
-                commands=d.frame_commands() if m.commands == "recorded" else None,
-                outer_gains=outer_gains,
-                pot_dither=replayed_noise(d, m.pot_noise, result),
-            )
+        for out, params in ((rms, (result.dynamics, result.pid)), (rms0, result.guess)):
+            chi = model_output(result, d, params=params)
             out[i] = np.sqrt(np.mean((d.measured - chi) ** 2, axis=0))
         excs.append(exc)
         datas.append(d)

@@ -158,10 +158,15 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
         quick=True,
         parameters=["lp", "li", "ld"],
         progress=False,
+        replicates=3,
     )
     assert list(ident["status"]) == ["ok", "ok"], ident["error"].tolist()
     text = studies.summary_identification(ident)
     assert "Table 5.5" in text
+    # Each σ is also the spread over 3 noisy replicates on the twin at the estimate (the larger).
+    assert all(str(i).endswith(":rep3") for i in ident["spec_id"])
+    assert (ident["std_li"] >= ident["rep_li"]).all() and (ident["rep_li"] > 0).all()
+    assert "replicates " in next(x for x in text.splitlines() if x.strip().startswith("ld "))
     # Each estimate's error against the Table 5.2 truth the twin carries: l_i's RMS over the two
     # quick runs measured 3.9 %; bound 12 %, 3× that.
     li = next(line for line in text.splitlines() if line.strip().startswith("li "))

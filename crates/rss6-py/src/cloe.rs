@@ -16,7 +16,7 @@ use rss6_ident::{
 };
 
 use crate::calib::ident_err;
-use crate::convert::{exact, out1, out_rows6, rows6, vec6, vecn};
+use crate::convert::{exact, out1, out_dmatrix, out_rows6, rows6, vec6, vecn};
 use crate::errors::{invalid, make, shape, Attr};
 use crate::exp::{create_log, finish_log, Interrupt};
 use crate::identify::{collect_metadata, excitation};
@@ -518,6 +518,8 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("aliases", aliases)?;
     d.set_item("relative_std", out1(py, &r.relative_std))?;
     d.set_item("relative_std_wald", out1(py, &r.relative_std_wald))?;
+    d.set_item("estimator_map", out_dmatrix(py, &r.estimator_map))?;
+    d.set_item("residual_weight", out1(py, &r.residual_weight))?;
     d.set_item("poorly_identified", r.poorly_identified)?;
     d.set_item("rms_before", out1(py, r.rms_before.as_slice()))?;
     d.set_item("rms_after", out1(py, r.rms_after.as_slice()))?;

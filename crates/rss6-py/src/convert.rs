@@ -1,5 +1,6 @@
 //! numpy ⇄ nalgebra conversions with shape and finiteness checks that raise clear `rss6` errors.
 
+use nalgebra::DMatrix;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -157,6 +158,11 @@ pub(crate) fn out_rows<'py, const C: usize>(
     Array2::from_shape_vec((rows.len(), C), flat)
         .map(|a| a.into_pyarray(py))
         .unwrap_or_else(|_| PyArray2::zeros(py, (0, C), false))
+}
+
+/// An (r, c) float64 numpy array of a matrix (row-major copy).
+pub(crate) fn out_dmatrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]).into_pyarray(py)
 }
 
 /// An (N, 6) array from poses/joint vectors.

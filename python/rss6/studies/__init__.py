@@ -131,6 +131,8 @@ def identification_variation(
     friction_law: str = "implicit",
     pot_noise: str = "recorded",
     solver_iterations: int | None = None,
+    replicates: int = 16,
+    bootstrap: bool = False,
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
@@ -140,7 +142,11 @@ def identification_variation(
     model's drive replays the potentiometer noise estimated from the readings), "model" (then a
     second pass against the first estimate's model, ``identify.cloe(pot_noise="model")``) or "none";
     ``solver_iterations``: the plant's rapier iterations (default
-    :data:`rss6.identify_sim.IMPLICIT_PLANT_ITERATIONS`; the spec ids then end in ":itN")."""
+    :data:`rss6.identify_sim.IMPLICIT_PLANT_ITERATIONS`; the spec ids then end in ":itN");
+    ``replicates``: each σ also from that many noisy replicates on the model twin at the estimate
+    (:func:`rss6.identify.with_replicates`; 0: CLOE's σ alone, as before 2026-11-29; spec ids
+    then end in ":repN"), each
+    identified again with ``bootstrap`` (the parametric bootstrap; ":bootN")."""
     from rss6 import identify
 
     if pot_noise not in ("recorded", "model", "none"):
@@ -149,11 +155,17 @@ def identification_variation(
         )
     if solver_iterations is not None and solver_iterations < 1:
         raise InvalidInputError(f"solver_iterations must be >= 1, got {solver_iterations}")
+    if replicates == 1 or replicates < 0:
+        raise InvalidInputError(f"replicates must be 0 or >= 2, got {replicates}")
     it = {} if solver_iterations is None else {"solver_iterations": int(solver_iterations)}
+    if replicates:
+        it.update(replicates=int(replicates), bootstrap=bool(bootstrap))
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
-            f"pot-{pot_noise}:{seed + k}" + (f":it{solver_iterations}" if it else ""),
+            f"pot-{pot_noise}:{seed + k}"
+            + (f":it{solver_iterations}" if solver_iterations is not None else "")
+            + (f":{'boot' if bootstrap else 'rep'}{replicates}" if replicates else ""),
             "friction_law": friction_law,
             "pot_noise": pot_noise,
             "seed": seed + k,
@@ -168,6 +180,7 @@ def identification_variation(
     fields += [f"est_{n}" for n in identify.parameter_names()]
     fields += [f"std_{n}" for n in identify.parameter_names()]
     fields += [f"wald_{n}" for n in identify.parameter_names()]
+    fields += [f"rep_{n}" for n in identify.parameter_names()] if replicates else []
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
     fields += ["converged_by"]
     return _study(identification_task, specs, fields, out, client, workers, progress)
@@ -260,7 +273,7 @@ def summary_identification(df: Any) -> str:
         lines.append(
             "Table 5.5 (variation = std / |mean| over the trajectories; predicted: median relative "
             "σ CLOE reported, where it estimated the quantity — the larger of Wald and sandwich; "
-            "Wald: white-residual σ alone; error: mean and RMS of log(estimate / Table 5.2 truth); "
+            "Wald: white-residual σ alone; replicates: from noisy replicate runs, if asked; error: mean and RMS of log(estimate / Table 5.2 truth); "
             "covers: runs whose own 95 % interval holds the truth):"
         )
         lines.append(
@@ -278,12 +291,13 @@ def summary_identification(df: Any) -> str:
                     f"   error {100 * float(e.mean()):+.2f} % (RMS "
                     f"{100 * float(np.sqrt(np.mean(e * e))):.2f} %)"
                 )
-            for col, label in ((f"std_{c[4:]}", "predicted"), (f"wald_{c[4:]}", "Wald")):
+            cols = ((f"std_{c[4:]}", "predicted"), (f"wald_{c[4:]}", "Wald"))
+            for col, label in (*cols, (f"rep_{c[4:]}", "replicates")):
                 if col in ok.columns:
                     p = ok[col].replace("", np.nan).astype(float).dropna()
                     if len(p):
                         line += f"   {label} {float(p.median()):.3g}"
-                        if label == "predicted" and spread > 0:
+                        if label != "Wald" and spread > 0:
                             line += f" ({float(p.median()) / spread:.2f}× the spread)"
                         if label == "predicted" and t > 0 and bool((v > 0).all()):
                             both = pd.concat([np.log(v / t), p], axis=1, join="inner").to_numpy()

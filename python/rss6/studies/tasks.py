@@ -99,21 +99,31 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     if data.fault is not None:
         rec.update(status="faulted", error=f"visual PID fault at {data.fault[0]:.2f} s")
         return rec
-    res = identify_sim.estimate_from_initial(
-        data,
-        kp,
-        friction_law=law,
-        lp=pid_true[0],
-        parameters=spec.get("parameters", "base"),
-        max_iterations=int(
-            spec.get("iterations", (10 if quick else 20) * (1 + (law == "implicit")))
-        ),
-        derivative_filter=t_f,
-        friction_smoothing=eps,
-        pot_noise=str(spec.get("pot_noise", "recorded")),
-    )
+
+    def fit(d: Any) -> Any:
+        return identify_sim.estimate_from_initial(
+            d,
+            kp,
+            friction_law=law,
+            lp=pid_true[0],
+            parameters=spec.get("parameters", "base"),
+            max_iterations=int(
+                spec.get("iterations", (10 if quick else 20) * (1 + (law == "implicit")))
+            ),
+            derivative_filter=t_f,
+            friction_smoothing=eps,
+            pot_noise=str(spec.get("pot_noise", "recorded")),
+        )
+
+    res = fit(data)
     for name, v in quantities(res.dynamics, res.pid).items():
         rec[f"est_{name}"] = v
+    if int(spec.get("replicates", 0)) >= 2:
+        # Replicates by the model twin at the estimate: linearised, or each identified again.
+        refit = fit if spec.get("bootstrap", False) else None
+        res = identify.with_replicates(res, data, n=int(spec["replicates"]), refit=refit)
+        for name, sd in zip(res.identified, res.relative_std_replicates, strict=True):
+            rec[f"rep_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std, strict=True):
         rec[f"std_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std_wald, strict=True):

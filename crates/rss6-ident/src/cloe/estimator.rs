@@ -531,7 +531,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     let (ga, _) = augment(g, &cur.residual, &psi);
     let dof = (n_data as f64 - active.len() as f64).max(1.0);
     let sigma2 = cur.cost / dof;
-    let (relative_std_wald, relative_std) = match ga.tr_mul(&ga).cholesky() {
+    let (relative_std_wald, relative_std, estimator_map) = match ga.tr_mul(&ga).cholesky() {
         Some(c) => {
             let inv = c.inverse();
             let wald: Vec<f64> = (0..active.len())
@@ -548,11 +548,13 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     wald[k].max(v.sqrt())
                 })
                 .collect();
-            (wald, robust)
+            let map = &inv * gs.transpose();
+            (wald, robust, map)
         }
         None => (
             vec![f64::INFINITY; active.len()],
             vec![f64::INFINITY; active.len()],
+            DMatrix::zeros(0, 0),
         ),
     };
     let identified: Vec<String> = active.iter().map(|&k| names[k].clone()).collect();
@@ -570,6 +572,8 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         aliases,
         relative_std,
         relative_std_wald,
+        estimator_map,
+        residual_weight: weight,
         poorly_identified,
         rms_before,
         rms_after: cur.rms,

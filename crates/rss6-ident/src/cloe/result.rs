@@ -2,6 +2,7 @@
 //! the standard deviations, the fit and the stopping rule that ended it.
 
 use super::config::LoopParams;
+use nalgebra::DMatrix;
 use rss6_core::Vec6;
 
 /// Default of [`CloeOptions::settle_steps`](super::CloeOptions::settle_steps): the accepted steps
@@ -74,6 +75,14 @@ pub struct CloeResult {
     pub relative_std: Vec<f64>,
     /// The Wald relative standard deviation alone: sqrt(Φ/(N − p) · (GᵀG)⁻¹_kk).
     pub relative_std_wald: Vec<f64>,
+    /// The estimator's linear map at the estimate, (GᵀG)⁻¹ G_sᵀ (p × 6F; GᵀG with the prior's rows,
+    /// G_s the output rows of the estimated quantities, columns in the residual's order: frame k's
+    /// axis i at 6k + i, weighted by [`residual_weight`](Self::residual_weight)): a change δr of the
+    /// weighted residual moves the estimated logs by this times δr. It carries noise realisations
+    /// to the estimate (the Python `rss6.identify_replicates`). 0 × 0 if GᵀG is singular.
+    pub estimator_map: DMatrix<f64>,
+    /// The residual's weights 1/σ per axis (x, y, z, α, β, γ; from `CloeOptions::noise`).
+    pub residual_weight: [f64; 6],
     /// Estimated quantities whose relative standard deviation exceeds `poor_std`.
     pub poorly_identified: Vec<String>,
     /// RMS of χ_m − χ_s per axis at the guess (m, rad).
