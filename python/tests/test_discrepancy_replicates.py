@@ -79,3 +79,24 @@ def test_the_consistency_test_with_replicates_keeps_its_size() -> None:
 
     assert refused(0.0) <= 0.02
     assert refused(0.8) >= 0.30
+
+
+def test_the_replays_spread_enters_the_errors_only_where_the_loop_is_non_smooth() -> None:
+    """Stick–slip friction in the model, or noisy replays whose mean leaves the clean replay (the
+    part's bias): the replicates; a smooth loop: none (the sandwiches alone)."""
+    from types import SimpleNamespace
+    from typing import Any
+
+    from rss6.discrepancy._steps import _Part, error_replicates
+
+    reps = np.ones((4, 10))
+    cal: Any = SimpleNamespace(replicates=reps)
+    smooth: Any = SimpleNamespace(implicit_friction=False)
+    stick_slip: Any = SimpleNamespace(implicit_friction=True)
+    run: Any = None
+    part = _Part(run, slice(0, 10), cal)
+    assert error_replicates(part, smooth) is None
+    assert error_replicates(part, stick_slip) is reps
+    part.bias = np.zeros(10)
+    assert error_replicates(part, smooth) is reps
+    assert error_replicates(_Part(run, slice(0, 10)), stick_slip) is None

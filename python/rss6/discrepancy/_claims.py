@@ -10,7 +10,7 @@ from functools import partial
 import numpy as np
 from numpy.typing import NDArray
 
-from rss6.discrepancy._steps import _def, _Part, _physical
+from rss6.discrepancy._steps import _def, _Part, _physical, error_replicates
 from rss6.discrepancy.effects import Change, EffectDef
 from rss6.discrepancy.model import AppliedEffect, Model, replay
 from rss6.discrepancy.nominal import NominalFit, nominal_difference
@@ -93,7 +93,8 @@ def _consistency(
         return 1.0, 1.0, transfer, text + "; every parameter on a bound: not tested", hfit
     j = hfit.jacobian[:, free]
     d = (np.array(_flat(best.values)) - np.array(_flat(hfit.values)))[free]
-    v_h = robust_cov(hfit, hcal.whitener, len(held.t), replicates=hcal.replicates)
+    reps = error_replicates(held, base_model)
+    v_h = robust_cov(hfit, hcal.whitener, len(held.t), replicates=reps)
     vf = v_fit if v_fit is not None and v_fit.shape == v_h.shape else wald_cov(best)
     cov = (vf + v_h)[np.ix_(free, free)]
     model_cov = np.zeros_like(cov)

@@ -249,6 +249,19 @@ def check_frames(parts: Sequence[tuple[str, _Part]]) -> None:
             )
 
 
+def error_replicates(part: _Part, model: Model) -> F64 | None:
+    """The part's noisy replays for the runs' errors (:func:`fit_se`, ``search.robust_cov``) where
+    the loop is non-smooth — stick–slip friction in ``model``, or noisy replays whose mean leaves
+    the clean replay (``part.bias``) —, else None. The replays' spread was added for the
+    stick–slip loop, where the sandwiches understate the spread between noise draws ≈ 3×; in a
+    smooth loop the sandwiches are consistent and taking the largest of several estimates of one
+    variance only biases it up (the twin's intervals held the truth in 152 of 153 runs with the
+    replays' spread, above the 98 % the benchmark allows; docs/discrepancy.md)."""
+    if part.calibration is None or not (model.implicit_friction or part.bias is not None):
+        return None
+    return part.calibration.replicates
+
+
 def fit_se(
     fit: Fit, whitener: Whitener, n_frames: int, replicates: F64 | None = None
 ) -> list[dict[str, float]]:

@@ -54,6 +54,7 @@ from rss6.discrepancy._steps import (
     _start,
     _tell,
     check_frames,
+    error_replicates,
     fit_se,
     held_detection,
     intervals,
@@ -391,7 +392,7 @@ def _diagnose(
         rms_cur = _rms((held.measured - current_held[held.rows])[:, :6])
         # Standard errors from the fitting run (`fit_se`); every effect of the joint fit gets its
         # interval inside its bounds, and the spread between the runs once the held-out run refits.
-        se_fit = fit_se(best, cal.whitener, len(fit.t), cal.replicates)
+        se_fit = fit_se(best, cal.whitener, len(fit.t), error_replicates(fit, base_model))
         defs = [_def(a.name) for a in prev] + [s.effect]
         cis = intervals(defs, best.values, se_fit)
         ci = cis[-1]
@@ -468,13 +469,14 @@ def _diagnose(
         res_new = hcal.whitener.vec(held.measured - new_held[held.rows])
         if jn_held is None and last is not None:
             jn_held = held_sensitivity(cur, held, current_held, last, sim.many)
-        v_fit = robust_cov(best, cal.whitener, len(fit.t), replicates=cal.replicates)
+        reps = error_replicates(fit, base_model)
+        v_fit = robust_cov(best, cal.whitener, len(fit.t), replicates=reps)
         p_cons, p_exact, transfer, cons_text, hfit = _consistency(
             base_model, held, hcal, prev, s, best, res_new, hres, last, jn_held, v_fit
         )
         heldout: list[dict[str, tuple[float, float]]] = [{} for _ in best.values]
         if hfit is not None:
-            se_h = fit_se(hfit, hcal.whitener, len(held.t), hcal.replicates)
+            se_h = fit_se(hfit, hcal.whitener, len(held.t), error_replicates(held, base_model))
             heldout = [
                 {k: (float(v[k]), float(e[k])) for k in v}
                 for v, e in zip(hfit.values, se_h, strict=True)
