@@ -108,6 +108,8 @@ class IdentifyReport:
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
     inexact_friction_ticks: int = 0
+    #: Why the σ are CLOE's alone although replicates were asked for ("" when they were used).
+    sigma_note: str = ""
     #: One validation run with the visual PID's gains at ``identify_sim.OTHER_OUTER_GAINS``.
     validation_other_gains: identify.Validation | None = None
     #: What each unidentifiable quantity combines into (IdentificationResult.alias_text()).
@@ -250,6 +252,8 @@ class IdentifyReport:
             if self.converged
             else f"DID NOT CONVERGE ({self.error}); tables show the last accepted iterate"
         )
+        if self.sigma_note:
+            status += f"; {self.sigma_note}"
         if self.inexact_friction_ticks:
             status += (
                 f"; WARNING: {self.inexact_friction_ticks} ticks of the model's loop used an inexact "

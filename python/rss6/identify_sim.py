@@ -326,16 +326,20 @@ def run(
             b.update(k - last[0])
             last[0] = k
 
-    error, converged_by = "", ""
+    error, converged_by, sigma_note = "", "", ""
     try:
         res = estimate(data, step)
         if replicates:
             if b is not None:
                 b.close()
             b = bar(replicates, "σ replicates")
-            res = identify.with_replicates(
-                res, data, n=replicates, progress=lambda k, n: b.update(1) if b else None
-            )
+            try:
+                res = identify.with_replicates(
+                    res, data, n=replicates, progress=lambda k, n: b.update(1) if b else None
+                )
+            except IdentificationError as e:
+                # CLOE converged; a replicate that cannot run leaves its σ, and the report says so.
+                sigma_note = f"σ from CLOE alone: the noisy replicates failed ({e})"
         converged = True
         est_dp, est_pid = res.dynamics, res.pid
         identified, rel, unid = res.identified, res.relative_std, res.unidentifiable
@@ -487,6 +491,7 @@ def run(
         validation_other_gains=other,
         error=error,
         converged_by=converged_by,
+        sigma_note=sigma_note,
         files=files,
         elapsed=elapsed,
         variation=var,
