@@ -272,3 +272,28 @@ def test_spec_ids_say_whether_the_bias_was_refreshed():
         s["bias_refresh"] is False and s["spec_id"].startswith("plant-implicit-it100:") for s in off
     )
     assert {s["spec_id"] for s in on}.isdisjoint(s["spec_id"] for s in off)
+
+
+def test_the_summary_recomputes_intervals_by_todays_rule():
+    # Two tilts 2.5 s.e. off the truth (s.e. 0.01) whose recorded intervals hold it. The held-out
+    # run agrees with the truth in one (runs 2.5 s.e. apart: Q = 3.1 < 1.96², no τ², half-width
+    # 0.0196 misses) and differs by 5 s.e. in the other (Q = 12.5: τ² = 1.15e-3, half-width
+    # 0.069 holds the truth).
+    tilt = "base_tilt (base)"
+    recs = [
+        _record(
+            tilt,
+            5.0,
+            tilt,
+            truth=json.dumps({"roll": 0.1}),
+            estimate=json.dumps({"roll": 0.125}),
+            ci=json.dumps({"roll": [0.09, 0.16]}),
+            se=json.dumps({"roll": 0.01}),
+            heldout=json.dumps({"roll": [h, 0.01]}),
+        )
+        for h in (0.1, 0.075)
+    ]
+    text = summary(recs)
+    assert "95 % intervals containing the truth: 2/2 (100 %)" in text
+    assert "the fitting run's alone 0/2" in text
+    assert "today's rule from the records' errors 1/2" in text

@@ -277,6 +277,20 @@ Z95 = 1.959963984540054
 """The two-sided 95 % normal quantile."""
 
 
+def interval_variance(
+    sf: float, heldout: tuple[float, float] | None, d: float, nom: float
+) -> float:
+    """The variance behind a 95 % interval (:func:`intervals`): the fitting run's s.e. ``sf``, the
+    model's own ``nom``, and τ² when the held-out run's (estimate − fitting estimate ``d``, s.e.)
+    ``heldout`` differs beyond both runs' errors at 5 %."""
+    var = sf * sf + nom * nom
+    if heldout is not None and np.isfinite(d) and np.isfinite(heldout[1]):
+        pooled = sf * sf + heldout[1] ** 2
+        if d * d > Z95 * Z95 * pooled:
+            var += 0.5 * (d * d - pooled)
+    return var
+
+
 def intervals(
     defs: Sequence[EffectDef],
     values: Sequence[dict[str, float]],
@@ -288,8 +302,11 @@ def intervals(
     parameter's bounds. With the held-out run's own estimates ``heldout`` {name: (value, se)}, the
     interval also holds model error that differs between excitations: a random-effects model
     θ_run = θ + b_run + e_run, b ~ N(0, τ²) — DerSimonian–Laird's τ² from the two runs,
-    max(0, (d² − s_f² − s_h²)/2) for d = θ_f − θ_h — and the half-width 1.96·√(s_f² + τ²). Runs
-    that agree within their noise leave the fitting run's interval as it was. ``nominal``
+    (d² − s_f² − s_h²)/2 for d = θ_f − θ_h — and the half-width 1.96·√(s_f² + τ²), but only if the
+    runs differ beyond their errors at 5 % (Cochran's Q = d²/(s_f² + s_h²) > 1.96²). Otherwise the
+    fitting run's interval stays as it was: τ² from one difference is noisy, and added whenever it
+    is positive it takes an exact model's coverage from 95 % to 98.7 % (96.7 % gated; 95.0 % and
+    90.9 % at τ = σ). ``nominal``
     {name: s.e.}: what the model's own uncertainty adds (:func:`nominal_se`), a bias both runs
     share, added in quadrature."""
     out: list[dict[str, tuple[float, float]]] = []
@@ -297,12 +314,10 @@ def intervals(
         ho = heldout[i] if heldout is not None else {}
         ci: dict[str, tuple[float, float]] = {}
         for name, v in vals.items():
-            sf = se[i][name]
-            var = sf * sf + (nominal[i].get(name, 0.0) ** 2 if nominal is not None else 0.0)
-            if name in ho and np.isfinite(ho[name][0]) and np.isfinite(ho[name][1]):
-                d = v - ho[name][0]
-                var += max(0.0, 0.5 * (d * d - sf * sf - ho[name][1] ** 2))
-            h = Z95 * float(np.sqrt(var))
+            nom = nominal[i].get(name, 0.0) if nominal is not None else 0.0
+            held = ho.get(name)
+            d = v - held[0] if held is not None else 0.0
+            h = Z95 * float(np.sqrt(interval_variance(se[i][name], held, d, nom)))
             lo, hi = defs[i].param(name).bounds
             ci[name] = (max(v - h, lo), min(v + h, hi))
         out.append(ci)
