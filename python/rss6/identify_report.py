@@ -108,7 +108,7 @@ class IdentifyReport:
     files: list[Path] = field(default_factory=list)
     elapsed: dict[str, float] = field(default_factory=dict)
     inexact_friction_ticks: int = 0
-    #: Why the σ are CLOE's alone although replicates were asked for ("" when they were used).
+    #: Where the σ come from: CLOE's alone, or with the noisy replicates' spread (and why not).
     sigma_note: str = ""
     #: One validation run with the visual PID's gains at ``identify_sim.OTHER_OUTER_GAINS``.
     validation_other_gains: identify.Validation | None = None

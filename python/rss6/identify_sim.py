@@ -176,6 +176,8 @@ def run(
     periods = (1 if quick else 10) if periods is None else int(periods)
     if periods < 1:
         raise rss6.InvalidInputError(f"periods must be >= 1, got {periods}")
+    if replicates == 1 or replicates < 0:
+        raise rss6.InvalidInputError(f"replicates must be 0 or >= 2, got {replicates}")
     outdir = Path(out)
     outdir.mkdir(parents=True, exist_ok=True)
     kp = rss6.KinematicParams.nominal()
@@ -326,7 +328,8 @@ def run(
             b.update(k - last[0])
             last[0] = k
 
-    error, converged_by, sigma_note = "", "", ""
+    error, converged_by = "", ""
+    sigma_note = "" if replicates else "σ from CLOE alone (no replicates asked for)"
     try:
         res = estimate(data, step)
         if replicates:
@@ -336,6 +339,9 @@ def run(
             try:
                 res = identify.with_replicates(
                     res, data, n=replicates, progress=lambda k, n: b.update(1) if b else None
+                )
+                sigma_note = (
+                    f"σ: the larger of CLOE's and the spread over {replicates} noisy replicates"
                 )
             except IdentificationError as e:
                 # CLOE converged; a replicate that cannot run leaves its σ, and the report says so.

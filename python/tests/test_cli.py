@@ -210,6 +210,10 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
     assert run("identify").returncode == 2  # --simulate is the only mode
     bad = run("identify", "--simulate", "--periods", "0", "--quiet", "--out", str(out / "bad"))
     assert bad.returncode == 1 and "periods must be >= 1" in bad.stderr, bad.stderr
+    # Each σ is also the spread over 16 noisy replicates (the default; `--replicates 0`: CLOE's).
+    assert "the spread over 16 noisy replicates" in text
+    bad = run("identify", "--simulate", "--replicates", "1", "--quiet", "--out", str(out / "bad"))
+    assert bad.returncode == 1 and "replicates must be 0 or >= 2" in bad.stderr, bad.stderr
 
 
 def test_identify_simulate_quick_with_tanh_friction_does_not_converge_and_says_so(tmp_path):

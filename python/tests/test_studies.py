@@ -234,3 +234,23 @@ def test_the_plants_solver_iterations_reach_the_identification_plant(
 
     base = ["study", "discrepancy", "--n", "1", "--out", "unused.csv", "--solver-iterations", "100"]
     assert main(base) == 1
+
+
+def test_a_replicate_failure_keeps_the_estimate_and_cloes_sigma(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A study's replicates that cannot run leave the record's estimate and CLOE's σ, with the
+    reason in its error field (it was an error record, the estimate lost)."""
+    from rss6 import identify
+    from rss6.errors import IdentificationError
+    from rss6.studies.tasks import identification_task
+
+    def fail(*args: Any, **kw: Any) -> Any:
+        raise IdentificationError("replicate 2 faulted")
+
+    monkeypatch.setattr(identify, "with_replicates", fail)
+    spec = {"robot": "twin", "quick": True, "seed": 0, "parameters": ["lp", "li", "ld"]}
+    rec = identification_task({**spec, "replicates": 3})
+    assert "replicates failed (replicate 2 faulted)" in rec["error"]
+    assert rec.get("status", "ok") == "ok" and not any(k.startswith("rep_") for k in rec)
+    assert 0.0 < rec["std_li"] < 1.0 and rec["est_li"] > 0.0

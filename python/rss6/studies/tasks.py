@@ -67,6 +67,7 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
     on the trajectory."""
     import rss6
     from rss6 import identify, identify_sim
+    from rss6.errors import IdentificationError
 
     kp = rss6.KinematicParams.nominal()
     quick = bool(spec.get("quick", False))
@@ -120,10 +121,15 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         rec[f"est_{name}"] = v
     if int(spec.get("replicates", 0)) >= 2:
         # Replicates by the model twin at the estimate: linearised, or each identified again.
+        # A replicate that cannot run keeps the estimate and CLOE's σ; the record says why.
         refit = fit if spec.get("bootstrap", False) else None
-        res = identify.with_replicates(res, data, n=int(spec["replicates"]), refit=refit)
-        for name, sd in zip(res.identified, res.relative_std_replicates, strict=True):
-            rec[f"rep_{name}"] = float(sd)
+        try:
+            res = identify.with_replicates(res, data, n=int(spec["replicates"]), refit=refit)
+        except IdentificationError as e:
+            rec["error"] = f"σ from CLOE alone: the noisy replicates failed ({e})"
+        else:
+            for name, sd in zip(res.identified, res.relative_std_replicates, strict=True):
+                rec[f"rep_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std, strict=True):
         rec[f"std_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std_wald, strict=True):
