@@ -177,6 +177,10 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     assert runs == 2 and inside >= 1, li
     lo, hi = map(float, text.split("would lie in [")[1].split("]")[0].split(", "))
     assert lo < 1.0 < hi, text
+    # All the friction and gain quantities at once (Bonferroni): a wider range.
+    fam = text.split("friction and gain quantities in [")[1].split("]")[0]
+    flo, fhi = map(float, fam.split(", "))
+    assert flo < lo and fhi > hi, text
     # Issue 13's check on the well-identified estimates (σ < 5 %); measured 4 of 4 within 10 %.
     k, n = map(int, text.split("estimates with σ < 5 %: ")[1].split(" within")[0].split(" of "))
     assert n >= 2 and k == n, text

@@ -9,6 +9,7 @@ How to run on a cluster: docs/studies.md.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -276,9 +277,20 @@ def summary_identification(df: Any) -> str:
             "Wald: white-residual σ alone; replicates: from noisy replicate runs, if asked; error: mean and RMS of log(estimate / Table 5.2 truth); "
             "covers: runs whose own 95 % interval holds the truth):"
         )
+        # The same for the friction and drive gains all at once (Bonferroni over those with a σ):
+        # one of 14 outside the first range is what right σ give in about half of all studies.
+        m = sum(
+            re.fullmatch(r"f[cv]\d+|l[pid]", c[4:]) is not None
+            and f"std_{c[4:]}" in ok.columns
+            and bool(ok[f"std_{c[4:]}"].replace("", np.nan).astype(float).notna().any())
+            for c in est
+        )
+        a = 0.05 / max(m, 1)
+        flo, fhi = (float(np.sqrt(dof / chi2.ppf(q, dof))) for q in (1 - a / 2, a / 2))
         lines.append(
             f"  (were every σ right, predicted / spread would lie in [{lo:.2f}, {hi:.2f}] for 95 % "
-            f"of studies of {len(ok)} trajectories)"
+            f"of studies of {len(ok)} trajectories, and that of all {m} friction and gain "
+            f"quantities in [{flo:.2f}, {fhi:.2f}] for 95 %)"
         )
         for c in est:
             v = ok[c].astype(float)
