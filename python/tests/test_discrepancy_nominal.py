@@ -214,8 +214,8 @@ def test_the_consistency_test_allows_for_what_the_model_does_to_each_excitation(
             diff = est - np.linalg.lstsq(jh, yh, rcond=None)[0]
             model = nominal_difference(-jf, yf - jf @ est, -jh, -jnh, nf)
             out += [
-                difference_test(diff, cov, model)[1] < 0.01,
-                difference_test(diff, cov)[1] < 0.01,
+                difference_test(diff, [(cov, np.inf)], model)[1] < 0.01,
+                difference_test(diff, [(cov, np.inf)])[1] < 0.01,
             ]
         return out[0] / 2000, out[1] / 2000
 
@@ -225,7 +225,7 @@ def test_the_consistency_test_allows_for_what_the_model_does_to_each_excitation(
     assert not nominal_difference(-jf, noise[0], -jf, -jnf, nf).any()
     assert not nominal_difference(-jf, noise[0], -jh, None, nf).any()
     with pytest.raises(InvalidInputError, match="for a difference of 2"):
-        difference_test(np.zeros(2), np.eye(2), np.zeros((3, 3)))
+        difference_test(np.zeros(2), [(np.eye(2), np.inf)], np.zeros((3, 3)))
 
 
 def test_an_interval_without_the_models_uncertainty_says_so(

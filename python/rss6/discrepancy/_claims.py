@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import partial
+from math import inf
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,7 +25,7 @@ from rss6.discrepancy.search import (
     difference_test,
     fit_effects,
     heldout_test,
-    robust_cov,
+    robust_cov_dof,
     wald_cov,
 )
 from rss6.errors import Rss6Error
@@ -43,12 +44,13 @@ def _consistency(
     res_before: F64,
     nf: NominalFit | None = None,
     jn_held: F64 | None = None,
-    v_fit: F64 | None = None,
+    v_fit: tuple[F64, float] | None = None,
 ) -> tuple[float, float, float, str, Fit | None]:
     """Refits the effects on the held-out run from the fitting run's values and tests that the two
     runs' estimates are of the same parameters: T² of their difference against the sum of their
-    covariances as the intervals state them (:func:`~rss6.discrepancy.search.robust_cov` — ``v_fit``
-    the fitting run's, the held-out fit's computed here — the misfit-scaled Wald or a sandwich,
+    covariances as the intervals state them (:func:`~rss6.discrepancy.search.robust_cov_dof` —
+    ``v_fit`` the fitting run's with its degrees of freedom, the held-out fit's computed here;
+    Hotelling's T² where one is the replicates' — the misfit-scaled Wald or a sandwich,
     whichever is larger: on the rapier plant the residual is 1.4–4× the noise and slow, and a test
     that knew only the noise refused true effects at T² 50–500; without ``v_fit`` the Wald
     covariance scaled by the misfit). Also the *transfer*: the share of the held-out run's own
@@ -94,14 +96,17 @@ def _consistency(
     j = hfit.jacobian[:, free]
     d = (np.array(_flat(best.values)) - np.array(_flat(hfit.values)))[free]
     reps = error_replicates(held, base_model)
-    v_h = robust_cov(hfit, hcal.whitener, len(held.t), replicates=reps)
-    vf = v_fit if v_fit is not None and v_fit.shape == v_h.shape else wald_cov(best)
-    cov = (vf + v_h)[np.ix_(free, free)]
-    model_cov = np.zeros_like(cov)
+    v_h, dof_h = robust_cov_dof(hfit, hcal.whitener, len(held.t), replicates=reps)
+    vf, dof_f = (
+        v_fit if v_fit is not None and v_fit[0].shape == v_h.shape else (wald_cov(best), inf)
+    )
+    sub = np.ix_(free, free)
+    parts = [(vf[sub], dof_f), (v_h[sub], dof_h)]
+    model_cov = np.zeros_like(parts[0][0])
     if best.jacobian.shape[1] == free.size:
         model_cov = nominal_difference(best.jacobian[:, free], best.residual_w, j, jn_held, nf)
-    t2, p = difference_test(d, cov, model_cov)
-    t2_exact, p_exact = difference_test(d, cov)
+    t2, p = difference_test(d, parts, model_cov)
+    t2_exact, p_exact = difference_test(d, parts)
     text += f"; T² {t2:.3g} on {j.shape[1]} parameters"
     if model_cov.any():
         text += f" ({t2_exact:.3g} with the model taken as exact)"

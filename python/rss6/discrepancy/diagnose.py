@@ -83,7 +83,7 @@ from rss6.discrepancy.report import (
     NamedEffect,
     unexplained,
 )
-from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry, robust_cov
+from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry, robust_cov_dof
 from rss6.errors import InvalidInputError, Rss6Error
 
 __all__ = [
@@ -470,7 +470,7 @@ def _diagnose(
         if jn_held is None and last is not None:
             jn_held = held_sensitivity(cur, held, current_held, last, sim.many)
         reps = error_replicates(fit, base_model)
-        v_fit = robust_cov(best, cal.whitener, len(fit.t), replicates=reps)
+        v_fit = robust_cov_dof(best, cal.whitener, len(fit.t), replicates=reps)
         p_cons, p_exact, transfer, cons_text, hfit = _consistency(
             base_model, held, hcal, prev, s, best, res_new, hres, last, jn_held, v_fit
         )

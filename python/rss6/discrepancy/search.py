@@ -432,38 +432,66 @@ def robust_cov(
     ``replicates``), the largest relative to the Wald one
     (trace of JᵀJ·C: free of the parameters' units) — the full matrix behind the errors of the
     intervals, whose correlations a test of several parameters needs."""
+    return robust_cov_dof(fit, whitener, n_frames, lags, replicates)[0]
+
+
+def robust_cov_dof(
+    fit: Fit, whitener: Whitener, n_frames: int, lags: int = HAC_LAGS, replicates: F64 | None = None
+) -> tuple[F64, float]:
+    """:func:`robust_cov` and the degrees of freedom of its estimate: K − 1 when the covariance of
+    the K replicates is the largest, ∞ otherwise (the misfit-scaled Wald covariance and the
+    sandwiches rest on hundreds of frames and are taken as known)."""
     wald = wald_cov(fit)
     sw = _sandwiches(fit, whitener, n_frames, lags)
     rep = replicate_cov(fit, replicates)
     cands = [wald, *(sw or ()), *(() if rep is None else (rep,))]
     info = fit.jacobian.T @ fit.jacobian
-    best = max(cands, key=lambda c: float(np.trace(info @ c)))
-    return np.asarray(best, dtype=np.float64)
+    k = max(range(len(cands)), key=lambda i: float(np.trace(info @ cands[i])))
+    if rep is None or replicates is None or k != len(cands) - 1:
+        return np.asarray(cands[k], dtype=np.float64), np.inf
+    return np.asarray(rep, dtype=np.float64), float(len(replicates) - 1)
 
 
-def difference_test(d: F64, cov: F64, extra: F64 | None = None) -> tuple[float, float]:
+def difference_test(
+    d: F64, parts: Sequence[tuple[F64, float]], extra: F64 | None = None
+) -> tuple[float, float]:
     """(T², p) that two estimates differing by ``d`` (q,) are of the same parameters: T² =
-    dᵀ(C + extra)⁻¹d against χ² on the directions the covariance sees (its rank). ``cov`` (q, q):
-    the two estimates' covariances summed; ``extra``: a known covariance of the difference (e.g.
-    the model's own uncertainty)."""
-    from scipy.stats import chi2
+    dᵀ(C + extra)⁻¹d on the directions the covariance sees (its rank q). ``parts``: the two
+    estimates' covariances (q, q) with the degrees of freedom of each (∞: known), C their sum;
+    ``extra``: a known covariance of the difference (e.g. the model's own uncertainty). With
+    every part known, T² is χ²(q). A part estimated from K replicates makes T² Hotelling's:
+    (ν − q + 1)/(νq)·T² ~ F(q, ν − q + 1), ν from the parts by Krishnamoorthy and Yu's
+    approximation (2004) — treating a 16-sample covariance as known rejected true effects."""
+    from scipy.stats import chi2, f
 
-    c = np.array(cov, dtype=np.float64)
-    if c.shape != (len(d), len(d)) or (extra is not None and extra.shape != c.shape):
-        raise InvalidInputError(
-            f"covariances {c.shape} and {None if extra is None else extra.shape} for a "
-            f"difference of {len(d)}"
-        )
+    c = np.zeros((len(d), len(d)))
+    for cov, _ in parts:
+        if cov.shape != c.shape:
+            raise InvalidInputError(f"covariance {cov.shape} for a difference of {len(d)}")
+        c = c + cov
     if extra is not None:
+        if extra.shape != c.shape:
+            raise InvalidInputError(f"covariance {extra.shape} for a difference of {len(d)}")
         c = c + extra
     u, sv, _ = np.linalg.svd(0.5 * (c + c.T))
     keep = sv > 1e-12 * max(float(sv[0]), 1e-300) if len(sv) else sv > 0
     q = int(keep.sum())
     if q == 0:
         return 0.0, 1.0
-    z = u[:, keep].T @ d
+    uk = u[:, keep]
+    z = uk.T @ d
     t2 = float(np.sum(z * z / sv[keep]))
-    return t2, float(chi2.sf(t2, q))
+    # Krishnamoorthy–Yu: ν = (q + q²) / Σ_i [tr((C_i C⁻¹)²) + tr(C_i C⁻¹)²] / ν_i.
+    inv = uk @ np.diag(1.0 / sv[keep]) @ uk.T
+    den = 0.0
+    for cov, nu in parts:
+        if np.isfinite(nu):
+            a = cov @ inv
+            den += (float(np.trace(a @ a)) + float(np.trace(a)) ** 2) / max(nu, 1.0)
+    if den <= 0.0:
+        return t2, float(chi2.sf(t2, q))
+    nu = max((q + q * q) / den, float(q))
+    return t2, float(f.sf(t2 * (nu - q + 1) / (nu * q), q, nu - q + 1))
 
 
 def per_effect(flat: F64, like: Sequence[dict[str, float]]) -> list[dict[str, float]]:
