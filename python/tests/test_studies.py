@@ -204,6 +204,9 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     assert "confusion" in text
     # The study keeps both runs' errors, so the summary can say how their own intervals did.
     assert "the fitting run's alone 1/1, the held-out run's own 1/1" in text, text
+    # … and the model's own uncertainty, so the summary can recompute the intervals by today's rule.
+    assert "today's rule from the records' errors 1/1" in text, text
+    assert by.loc["latency", "nominal_se"].startswith("{"), by.loc["latency", "nominal_se"]
 
 
 class _Built(Exception):

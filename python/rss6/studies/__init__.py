@@ -228,6 +228,7 @@ def discrepancy_benchmark(
         fields += [f"{p}_{a}" for a in _AXES]
     fields += ["se", "heldout"]  # the two runs' errors behind the intervals (sixth session)
     fields += ["ambiguous_sets"]  # which candidates were ambiguous, with their |ρ| (eighth session)
+    fields += ["nominal_se"]  # the model's own uncertainty in the intervals (thirty-second session)
     return _study(discrepancy_task, specs, fields, out, client, workers, progress)
 
 
