@@ -541,7 +541,8 @@ def test_intervals_hold_model_error_that_differs_between_the_two_runs() -> None:
             alone += c0[0] <= mid <= c0[1]
         assert low <= hits / n <= high, (tau, hits / n)
         if tau > 0:
-            assert alone / n < low, alone / n
+            # The fitting run's own interval fails the bound (83 % at σ, 47 % at 3σ).
+            assert alone / n < min(low, 0.6 if tau >= 3.0 else 1.0), alone / n
     # Runs that agree within their noise leave the fitting run's interval as it was.
     a = intervals([eff], [{name: mid}], [{name: 1e-4}], [{name: (mid + 1e-4, 1e-4)}])[0][name]
     b = intervals([eff], [{name: mid}], [{name: 1e-4}])[0][name]
