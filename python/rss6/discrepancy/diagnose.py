@@ -494,7 +494,8 @@ def _diagnose(
             excluded.add((s.effect.name, s.scope))
             notes_fit.append(
                 f"{s.effect.name} ({s.scope}) not named: the held-out run wants other parameters "
-                f"({cons_text}; p = {p_cons:.2g}) — it mimics something outside the library"
+                f"({cons_text}; p = {p_cons:.2g}) — a mimic of something outside the library, or "
+                "model error beyond the model's stated uncertainty"
             )
             mimics += 1
             if mimics > MAX_MIMICS:
