@@ -267,7 +267,7 @@ def summary_identification(df: Any) -> str:
     truth = quantities(*identify.table_5_2_truth())
     if len(ok) >= 2:
         import pandas as pd
-        from scipy.stats import chi2
+        from scipy.stats import chi2, norm
 
         # With a right σ, (n − 1)·spread²/σ² is χ²(n − 1): the range the ratio σ/spread falls in.
         dof = len(ok) - 1
@@ -327,8 +327,6 @@ def summary_identification(df: Any) -> str:
         # Issue 13: every estimate with a relative σ below 5 % within 10 % of the truth.
         # A σ near 5 % misses 10 % now and then even when right: the count right σ would give
         # (log(estimate / truth) normal with that σ) says whether the misses are too many.
-        from scipy.stats import norm
-
         well, misses, expected = 0, [], 0.0
         for name, t in truth.items():
             col = f"std_{name}"
