@@ -72,6 +72,12 @@ def main() -> int:
         "the default; --no-bias-refresh takes the bias of the model as given)",
     )
     ap.add_argument(
+        "--pot-noise",
+        default="none",
+        choices=("none", "recorded"),
+        help="replay the robot's estimated potentiometer noise in the model's drive (run_of)",
+    )
+    ap.add_argument(
         "--effects",
         nargs="+",
         default=None,
@@ -92,6 +98,7 @@ def main() -> int:
         hold_nominal=args.hold_nominal,
         model_error=args.model_error,
         bias_refresh=args.bias_refresh,
+        pot_noise=args.pot_noise,
     )
     if args.effects is not None:
         wanted = [None if e == "none" else e for e in args.effects]

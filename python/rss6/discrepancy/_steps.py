@@ -171,7 +171,13 @@ def _tell(progress: Progress | None, stage: str, done: int, total: int) -> None:
 
 
 def _noise(model: Model, run: Run, clean: Replay, seed: int) -> F64:
-    return simulate(model, run, seed=seed).noise(clean, run)
+    """One noisy replay minus ``clean``; for a run whose replays add its potentiometer noise,
+    minus the noise-free replay of the noisy one's own estimate of its noise (what the clean
+    replay of the run is to the run)."""
+    noisy = simulate(model, run, seed=seed)
+    if noisy.dither is not None:
+        clean = simulate(model, replace(run, pot_dither=noisy.dither))
+    return noisy.noise(clean, run)
 
 
 def _calibrate(parts: Sequence[_Part], model: Model, k: int, sim: _Sim, seed: int) -> list[F64]:

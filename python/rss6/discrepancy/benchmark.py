@@ -43,7 +43,7 @@ from rss6 import identify
 from rss6.discrepancy.benchmark_summary import names_model_error, summary
 from rss6.discrepancy.diagnose import diagnose
 from rss6.discrepancy.effects import Change, EffectDef, get, joint_index
-from rss6.discrepancy.model import Model, Run, replay, run_of
+from rss6.discrepancy.model import POT_NOISE_MODES, Model, Run, replay, run_of
 from rss6.discrepancy.nominal import NOMINAL_SPREAD, PRIOR_SIGMAS
 from rss6.errors import InvalidInputError
 
@@ -393,13 +393,15 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
             "verdict": "run faulted: " + "; ".join(faults),
             "seconds": time.perf_counter() - t0,
         }
+    commands = str(spec.get("commands", "recorded"))
+    pot = str(spec.get("pot_noise", "none"))
     rep = diagnose(
-        case.fit,
+        run_of(case.fit, commands=commands, pot_noise=pot),
         case.model,
-        validation=case.validation,
+        validation=run_of(case.validation, commands=commands, pot_noise=pot),
         replicates=int(spec.get("replicates", 16)),
         seed=7919 + seed,
-        commands=str(spec.get("commands", "recorded")),
+        commands=commands,
         nominal=spec.get("nominal", NOMINAL_SPREAD),
         bias_refresh=bool(spec.get("bias_refresh", True)),
     )
@@ -418,6 +420,7 @@ def benchmark_case(spec: Mapping[str, Any]) -> dict[str, Any]:
         "friction": str(spec.get("friction", "table")),
         "friction_law": friction_law_of(spec),
         "commands": str(spec.get("commands", "recorded")),
+        "pot_noise": str(spec.get("pot_noise", "none")),
         "seed": seed,
         "kind": "none"
         if not names
@@ -493,6 +496,7 @@ def cases(
     hold_nominal: bool = False,
     model_error: bool = False,
     bias_refresh: bool = True,
+    pot_noise: str = "none",
 ) -> list[dict[str, Any]]:
     """The benchmark's specs: every effect (default: one scope of each library effect plus a
     second joint for the per-joint ones) × magnitude × seed, ``n_null`` no-effect cases, the
@@ -504,7 +508,8 @@ def cases(
     held instead of refitted, ``hold_nominal=True``, + "-uncertain" with the model's friction and
     gains drawn from the nominal refit's prior around the truth, ``model_error=True``, + "-refresh"
     with the loop's bias refreshed at each candidate, ``bias_refresh=True``, the default; ids
-    without it were run with the bias of the model as given)."""
+    without it were run with the bias of the model as given), + "-potrec" with the robot's
+    potentiometer noise replayed, ``pot_noise="recorded"`` (:func:`~rss6.discrepancy.model.run_of`)."""
     friction_law = friction_law_of({"robot": robot, "friction_law": friction_law})
     tag = robot if friction_law == "tanh" else f"{robot}-{friction_law}"
     if commands != "recorded":
@@ -533,6 +538,13 @@ def cases(
     common["bias_refresh"] = bias_refresh
     if bias_refresh:
         tag += "-refresh"
+    if pot_noise != "none":
+        if pot_noise not in POT_NOISE_MODES:
+            raise InvalidInputError(
+                f"pot_noise must be one of {POT_NOISE_MODES}, got {pot_noise!r}"
+            )
+        tag += "-potrec"
+        common["pot_noise"] = pot_noise
     effs = (
         list(effects)
         if effects is not None

@@ -43,11 +43,13 @@ else:  # pragma: no cover - Python < 3.11
 from rss6 import identify
 from rss6.discrepancy.effects import Change, get
 from rss6.errors import InvalidInputError, ShapeError
+from rss6.identify_linear import potentiometer_noise
 
 __all__ = [
     "CHANNELS",
     "COMMAND_MODES",
     "MODEL_FORMAT",
+    "POT_NOISE_MODES",
     "AppliedEffect",
     "Model",
     "Replay",
@@ -73,6 +75,10 @@ files without the key (format 1) numbered them from 0 and are read in today's nu
 
 COMMAND_MODES: tuple[str, ...] = ("recorded", "simulated")
 """How a replay drives the model: the run's per-tick commands, or the model's own visual PID."""
+
+POT_NOISE_MODES: tuple[str, ...] = ("none", "recorded")
+"""What a replay driven by recorded commands does about the robot's potentiometer noise, which its
+drive reacted to: nothing, or replay an estimate of it (:func:`run_of`)."""
 
 
 @dataclass(frozen=True)
@@ -222,7 +228,9 @@ class Run:
     frame times ``t`` (N,) s and ``channels`` (N, C) at them (:data:`CHANNELS`' first C: 6 without
     the per-tick channels, 12 with recorded ``commands``, 18 without), the joint tick ``dt`` (s),
     and ``commands`` (T, 6): the joint commands the robot received, one per tick from t = 0
-    (drive convention, rad), which replays then send instead of closing the model's loop."""
+    (drive convention, rad), which replays then send instead of closing the model's loop;
+    ``pot_dither`` (T, 6) rad: an estimate of the potentiometer noise the robot's drive saw at each
+    tick, which noise-free replays then add to their drive's readings (``run_of(pot_noise=...)``)."""
 
     reference: identify.Excitation
     duration: float
@@ -230,6 +238,7 @@ class Run:
     channels: F64
     dt: float = 1e-3
     commands: F64 | None = None
+    pot_dither: F64 | None = None
 
     @property
     def poses(self) -> F64:
@@ -253,19 +262,28 @@ def _interval_means(tick_t: F64, values: F64, frame_t: F64) -> F64:
     return np.asarray((csum[idx] - csum[starts]) / counts, dtype=np.float64)
 
 
-def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> Run:
+def run_of(
+    data: Any, *, kinematics: Any = None, commands: str = "recorded", pot_noise: str = "none"
+) -> Run:
     """A :class:`Run` from :class:`rss6.identify.IdentificationData` (every channel it has) or from
     an MCAP path written by :func:`rss6.identify.collect` (its reference is refitted from the
     logged desired poses with the logged f0 and harmonics; ``kinematics`` checks it).
     ``commands``: "recorded" — replays send the run's per-tick commands when it has them (the
     channels are then poses and potentiometers); "simulated" — replays close the model's visual
-    PID and the commands are compared too. A :class:`Run` is returned as it is."""
+    PID and the commands are compared too. ``pot_noise`` (with recorded commands): "none" — the
+    noise-free replays read noise-free potentiometers; "recorded" — they replay
+    :func:`rss6.identify.potentiometer_noise` of the run in their drive (its motion then follows
+    the robot's noise realisation as far as the estimate goes), and the noisy replays that learn
+    the noise are compared with noise-free replays of their own estimate. A :class:`Run` is
+    returned as it is."""
     if commands not in COMMAND_MODES:
         raise InvalidInputError(f"commands must be one of {COMMAND_MODES}, got {commands!r}")
+    if pot_noise not in POT_NOISE_MODES:
+        raise InvalidInputError(f"pot_noise must be one of {POT_NOISE_MODES}, got {pot_noise!r}")
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, Path)):
-        return _run_from_mcap(Path(data), kinematics, commands)
+        return _run_from_mcap(Path(data), kinematics, commands, pot_noise)
     if not isinstance(data, identify.IdentificationData):
         raise InvalidInputError(
             "measured data must be rss6.identify.IdentificationData, a Run or an MCAP path; "
@@ -277,7 +295,7 @@ def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> 
             "loop was open after it; use data.before_fault() or another run"
         )
     ch = [np.asarray(data.measured, dtype=np.float64)]
-    recorded = None
+    recorded = dither = None
     if data.tick_t is not None and data.kappa is not None and data.theta_cmd is not None:
         tt = np.asarray(data.tick_t, dtype=np.float64)
         cmd = np.asarray(data.theta_cmd, dtype=np.float64)
@@ -290,6 +308,8 @@ def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> 
                     f"{ticks} ticks from 0: not a whole run (use commands='simulated')"
                 )
             recorded = cmd[:ticks]
+            if pot_noise == "recorded":
+                dither = potentiometer_noise(data)[:ticks]
         else:
             ch.append(_interval_means(tt, cmd, data.t))
     return Run(
@@ -299,12 +319,13 @@ def run_of(data: Any, *, kinematics: Any = None, commands: str = "recorded") -> 
         np.hstack(ch),
         float(data.dt),
         recorded,
+        dither,
     )
 
 
-def _run_from_mcap(path: Path, kinematics: Any, commands: str) -> Run:
+def _run_from_mcap(path: Path, kinematics: Any, commands: str, pot_noise: str) -> Run:
     data = identify.IdentificationData.from_mcap(path, kinematics=kinematics)
-    return run_of(data, commands=commands)
+    return run_of(data, commands=commands, pot_noise=pot_noise)
 
 
 def dynamics_with(dp: Any, change: Change) -> Any:
@@ -322,7 +343,8 @@ class Replay:
     """One simulated run at the model's own camera frames: ``frame_t`` (F,) s, ``poses`` (F, 6),
     the per-tick channels averaged over the measured run's camera intervals (N, 6 or 12) or None;
     for a replay driven by recorded commands also the model's true pose per tick (``tick_t``,
-    ``true_pose``) and its total camera ``latency`` (s)."""
+    ``true_pose``) and its total camera ``latency`` (s); a noisy replay of a run with
+    ``pot_dither`` also the estimate of its own potentiometer noise (``dither``, T × 6 rad)."""
 
     frame_t: F64
     poses: F64
@@ -330,6 +352,7 @@ class Replay:
     tick_t: F64 | None = None
     true_pose: F64 | None = None
     latency: float = 0.0
+    dither: F64 | None = None
 
     def _index(self, run: Run) -> NDArray[np.int64] | None:
         """Frame k of the model for frame k of the run when both cameras capture on the same
@@ -405,7 +428,9 @@ def simulate(
 ) -> Replay:
     """The model (with its effects and ``change`` on top) in the run's loop from a fresh model twin
     at rest at the reference's start. Noise-free unless ``seed`` is given (then the twin's sensors
-    add Table 4.1's noise with that seed). Raises :class:`rss6.InvalidInputError` if the change is
+    add Table 4.1's noise with that seed); noise-free replays of a run with ``pot_dither`` add it
+    to their drive's readings (sent as commands minus the dither: the drive's PID sees only their
+    difference), noisy ones estimate their own (:attr:`Replay.dither`). Raises :class:`rss6.InvalidInputError` if the change is
     not physical (e.g. friction below 0) and :class:`rss6.IdentificationError` if the replay's
     visual PID faults."""
     c = model.change() if change is None else model.change().merged(change)
@@ -441,6 +466,8 @@ def simulate(
     commands = run.commands
     if commands is not None:
         need = round(periods * run.reference.duration / run.dt)
+        if seed is None and run.pot_dither is not None:
+            commands = commands - run.pot_dither
         if commands.shape[0] < need:
             commands = np.vstack([commands, np.repeat(commands[-1:], need - len(commands), 0)])
     data = identify.collect(
@@ -469,6 +496,9 @@ def simulate(
     if data.true_pose is None or not np.all(np.isfinite(data.true_pose)):
         raise ShapeError("the model twin gave no true poses")
     latency = model.camera_latency + c.twin.get("camera_latency", {}).get("latency", 0.0)
+    dither = None
+    if seed is not None and run.pot_dither is not None:
+        dither = potentiometer_noise(data)[: run.commands.shape[0]]
     return Replay(
         np.asarray(data.t),
         np.asarray(data.measured),
@@ -476,4 +506,5 @@ def simulate(
         np.asarray(data.tick_t, dtype=np.float64),
         np.asarray(data.true_pose, dtype=np.float64),
         float(latency),
+        dither,
     )
