@@ -93,3 +93,46 @@ def test_the_estimated_potentiometer_noise_brings_the_replay_closer(case: Any) -
     assert sample.shape == rec.channels.shape and np.all(np.isfinite(sample))
     with pytest.raises(rss6.InvalidInputError, match="pot_noise must be one of"):
         run_of(data, pot_noise="model")
+
+
+def test_rss6_diagnose_pot_noise_hands_diagnose_runs_with_their_noise(
+    case: Any, monkeypatch: Any
+) -> None:
+    """`rss6 diagnose --pot-noise recorded` gives diagnose the runs with their estimated noise;
+    without the flag it gets the data as collected."""
+    from types import SimpleNamespace
+
+    from rss6 import discrepancy
+    from rss6.cli import main
+    from rss6.discrepancy import benchmark
+
+    data, model = case
+    seen: list[tuple[bool, bool]] = []
+
+    def fake_diagnose(measured: Any, m: Any, *, validation: Any = None, **kw: Any) -> Any:
+        seen.append(
+            tuple(getattr(r, "pot_dither", None) is not None for r in (measured, validation))
+        )
+        raise rss6.InvalidInputError("stopped before diagnosing")
+
+    ns = SimpleNamespace(fit=data, validation=data, model=model, hidden=[], params={})
+    monkeypatch.setattr(benchmark, "hidden_case", lambda spec, progress=None: ns)
+    monkeypatch.setattr(discrepancy, "diagnose", fake_diagnose)
+    base = ["diagnose", "--simulate", "none", "--plant", "model", "--quiet"]
+    assert main(base) == 1 and main([*base, "--pot-noise", "recorded"]) == 1
+    assert seen == [(False, False), (True, True)]
+
+
+def test_the_benchmark_tags_the_cases_that_replay_the_noise() -> None:
+    """`discrepancy_benchmark.py --pot-noise recorded`: ids tagged "-potrec", the spec says it."""
+    from rss6.discrepancy import benchmark
+
+    plain = benchmark.cases(robot="plant", n_null=1, seeds=(0,), magnitudes=(2.0,))
+    rec = benchmark.cases(
+        robot="plant", n_null=1, seeds=(0,), magnitudes=(2.0,), pot_noise="recorded"
+    )
+    assert len(plain) == len(rec)
+    assert all("-potrec" not in s["spec_id"] and "pot_noise" not in s for s in plain)
+    assert all("-refresh-potrec:" in s["spec_id"] and s["pot_noise"] == "recorded" for s in rec)
+    with pytest.raises(rss6.InvalidInputError, match="pot_noise must be one of"):
+        benchmark.cases(robot="plant", n_null=1, pot_noise="exact")

@@ -91,6 +91,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="replays driven by the run's recorded joint commands (default) or closing the "
         "model's own visual PID",
     )
+    p.add_argument(
+        "--pot-noise",
+        choices=("none", "recorded"),
+        default="none",
+        help="with recorded commands: replay the robot's estimated potentiometer noise in the "
+        "model's drive (run_of(pot_noise=...)); default none",
+    )
     p.add_argument("--alpha", type=float, default=0.01)
     p.add_argument("--reidentify", action="store_true", help="re-identify friction and gains")
     p.add_argument(
@@ -179,6 +186,16 @@ def run(args: argparse.Namespace) -> int:
         model = discrepancy.Model.load(args.model)
         measured, validation = Path(args.run), (Path(args.validation) if args.validation else None)
         header = f"run {args.run}" + (f", held out: {args.validation}" if args.validation else "")
+    if args.pot_noise != "none":
+        from rss6.discrepancy.model import run_of
+
+        kw = {
+            "kinematics": model.kinematics,
+            "commands": args.commands,
+            "pot_noise": args.pot_noise,
+        }
+        measured = run_of(measured, **kw)
+        validation = None if validation is None else run_of(validation, **kw)
     rep = discrepancy.diagnose(
         measured,
         model,
