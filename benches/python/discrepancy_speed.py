@@ -5,7 +5,10 @@ excitation; every one of the 19 candidates screened. Prints seconds without an e
 hidden camera latency (one fit round, the held-out checks, a second screening round).
 
     python benches/python/discrepancy_speed.py [--workers 2] [--commands recorded|simulated]
-        [--hold-nominal]
+        [--hold-nominal] [--pot-noise recorded]
+
+``--pot-noise recorded`` replays each run's estimated potentiometer noise (``run_of``; the
+estimate is inside the timed part).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import time
 
 import rss6
 from rss6 import discrepancy, identify
+from rss6.discrepancy.model import run_of
 
 
 def main() -> None:
@@ -24,6 +28,7 @@ def main() -> None:
     ap.add_argument(
         "--hold-nominal", action="store_true", help="no nominal refit (the model taken as exact)"
     )
+    ap.add_argument("--pot-noise", default="none", choices=("none", "recorded"))
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp, pid = identify.table_5_2_truth()
@@ -60,17 +65,19 @@ def main() -> None:
             friction_smoothing=1.0,
         )
         t0 = time.perf_counter()
+        fit, val = (run_of(r, commands=args.commands, pot_noise=args.pot_noise) for r in runs)
         rep = discrepancy.diagnose(
-            runs[0],
+            fit,
             model,
-            validation=runs[1],
+            validation=val,
             workers=args.workers,
             commands=args.commands,
             nominal=None if args.hold_nominal else discrepancy.NOMINAL_SPREAD,
         )
         dt = time.perf_counter() - t0
         print(
-            f"30 s run ({args.commands} commands), {len(discrepancy.effects.candidates())} "
+            f"30 s run ({args.commands} commands, potentiometer noise {args.pot_noise}), "
+            f"{len(discrepancy.effects.candidates())} "
             f"candidates, hidden {hidden}: "
             f"{dt:.1f} s -> {rep.verdict}"
         )
