@@ -121,8 +121,8 @@ def diagnose(
     the library, adds them and shows the gap on the held-out run (module docs).
 
     ``measured`` / ``validation``: :class:`rss6.identify.IdentificationData`, a
-    :class:`~rss6.discrepancy.model.Run`, or the path of an MCAP written by
-    :func:`rss6.identify.collect`. Without ``validation`` the run's second half is held out (the
+    :class:`~rss6.discrepancy.model.Run` (``run_of(data, pot_noise="recorded")`` replays the run's
+    potentiometer noise), or the path of an MCAP written by :func:`rss6.identify.collect`. Without ``validation`` the run's second half is held out (the
     first half selects). ``candidates``: effect names (optionally "name@scope"), default the whole
     library. ``alpha``: family-wise level of the Detect step, of each round's screening (Holm over
     the candidates) and of the held-out claim. ``replicates``: noisy replays of the model that
