@@ -16,12 +16,13 @@ from rss6.identify_linear import _fresh_samples, _held
 from twin_case import KP, T_F
 
 
-@pytest.fixture(scope="module")
-def case(truth: Any, excitation: identify.Excitation) -> tuple[Any, Model]:
-    """A noisy run of the stick–slip twin (the plant's friction law) and its truth as the model."""
+def _stick_slip_run(
+    truth: Any, excitation: identify.Excitation, seed: int
+) -> tuple[identify.IdentificationData, Any]:
+    """A noisy run of the stick–slip twin (the plant's friction law) and the twin's truth."""
     dp, pid = truth
     twin = rss6.ModelSim(
-        KP, dp, pid=pid, seed=3, drive_derivative_filter=T_F, implicit_friction=True
+        KP, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True
     )
     tr = twin.truth()
     data = identify.collect(
@@ -31,6 +32,14 @@ def case(truth: Any, excitation: identify.Excitation) -> tuple[Any, Model]:
         sensor_in_base=tr["sensor_in_base"],
         target_in_effector=tr["target_in_effector"],
     )
+    return data, tr
+
+
+@pytest.fixture(scope="module")
+def case(truth: Any, excitation: identify.Excitation) -> tuple[Any, Model]:
+    """A noisy run of the stick–slip twin and its truth as the model."""
+    dp, pid = truth
+    data, tr = _stick_slip_run(truth, excitation, 3)
     model = Model(
         KP,
         dp,
@@ -146,22 +155,11 @@ def test_no_missing_effect_with_the_noise_replayed(
     the replay in ``test_no_missing_effect_with_stick_slip_friction``)."""
     from rss6 import discrepancy
 
-    dp, pid = truth
     _, model = case
-    runs = []
-    for seed in (11, 12):
-        twin = rss6.ModelSim(
-            KP, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True
-        )
-        tr = twin.truth()
-        data = identify.collect(
-            twin,
-            excitation,
-            kp_model=KP,
-            sensor_in_base=tr["sensor_in_base"],
-            target_in_effector=tr["target_in_effector"],
-        )
-        runs.append(run_of(data, pot_noise="recorded"))
+    runs = [
+        run_of(_stick_slip_run(truth, excitation, seed)[0], pot_noise="recorded")
+        for seed in (11, 12)
+    ]
     rep = discrepancy.diagnose(runs[0], model, validation=runs[1])
     print(rep.table())
     assert rep.verdict == "no missing effect", rep.table()
