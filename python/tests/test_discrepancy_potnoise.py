@@ -102,6 +102,16 @@ def test_the_estimated_potentiometer_noise_brings_the_replay_closer(case: Any) -
     assert sample.shape == rec.channels.shape and np.all(np.isfinite(sample))
     with pytest.raises(rss6.InvalidInputError, match="pot_noise must be one of"):
         run_of(data, pot_noise="model")
+    # Without recorded per-tick commands there is nothing to replay the noise through: raised,
+    # not silently ignored.
+    with pytest.raises(rss6.InvalidInputError, match="use commands='recorded'"):
+        run_of(data, commands="simulated", pot_noise="recorded")
+    poses = identify.IdentificationData.from_arrays(data.t, data.reference, data.measured)
+    with pytest.raises(rss6.InvalidInputError, match="no per-tick potentiometers"):
+        run_of(poses, pot_noise="recorded")
+    with pytest.raises(rss6.InvalidInputError, match="Run was made without them"):
+        run_of(plain, pot_noise="recorded")
+    assert run_of(rec, pot_noise="recorded") is rec
 
 
 def test_rss6_diagnose_pot_noise_hands_diagnose_runs_with_their_noise(

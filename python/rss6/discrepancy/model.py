@@ -281,6 +281,11 @@ def run_of(
     if pot_noise not in POT_NOISE_MODES:
         raise InvalidInputError(f"pot_noise must be one of {POT_NOISE_MODES}, got {pot_noise!r}")
     if isinstance(data, Run):
+        if pot_noise == "recorded" and data.pot_dither is None:
+            raise InvalidInputError(
+                "pot_noise='recorded' needs the run's per-tick commands and potentiometers; this "
+                "Run was made without them (build it with run_of(data, pot_noise='recorded'))"
+            )
         return data
     if isinstance(data, (str, Path)):
         return _run_from_mcap(Path(data), kinematics, commands, pot_noise)
@@ -312,6 +317,16 @@ def run_of(
                 dither = potentiometer_noise(data)[:ticks]
         else:
             ch.append(_interval_means(tt, cmd, data.t))
+    if pot_noise == "recorded" and dither is None:
+        raise InvalidInputError(
+            "pot_noise='recorded' replays the robot's potentiometer noise through its recorded "
+            "per-tick commands: "
+            + (
+                "use commands='recorded'"
+                if commands != "recorded"
+                else "this run has no per-tick potentiometers and commands"
+            )
+        )
     return Run(
         data.reference,
         float(data.duration),

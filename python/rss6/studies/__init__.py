@@ -322,8 +322,10 @@ def summary_identification(df: Any) -> str:
                             rms = float(np.sqrt(np.mean(both[:, 1] ** 2)))
                             lsp = float(np.std(both[:, 0], ddof=1)) if len(both) > 1 else 0.0
                             if lsp > 0:
-                                line += f" RMS {rms:.3g} ({rms / lsp:.2f}× the log spread, " + (
-                                    "right σ: [{:.2f}, {:.2f}])".format(*_rms_range(both[:, 1]))
+                                lo, hi = _rms_range(both[:, 1])
+                                line += (
+                                    f" RMS {rms:.3g} ({rms / lsp:.2f}× the log spread, "
+                                    f"right σ: [{lo:.2f}, {hi:.2f}])"
                                 )
             lines.append(line)
         # Issue 13: every estimate with a relative σ below 5 % within 10 % of the truth.
