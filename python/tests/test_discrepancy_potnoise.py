@@ -13,43 +13,22 @@ from rss6 import identify
 from rss6.discrepancy._steps import _noise
 from rss6.discrepancy.model import Model, run_of, simulate
 from rss6.identify_linear import _fresh_samples, _held
-from twin_case import KP, T_F
+from twin_case import KP, collect, stick_slip_robot
+from twin_case import model as twin_model
 
 
 def _stick_slip_run(
     truth: Any, excitation: identify.Excitation, seed: int
-) -> tuple[identify.IdentificationData, Any]:
-    """A noisy run of the stick–slip twin (the plant's friction law) and the twin's truth."""
-    dp, pid = truth
-    twin = rss6.ModelSim(
-        KP, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True
-    )
-    tr = twin.truth()
-    data = identify.collect(
-        twin,
-        excitation,
-        kp_model=KP,
-        sensor_in_base=tr["sensor_in_base"],
-        target_in_effector=tr["target_in_effector"],
-    )
-    return data, tr
+) -> tuple[identify.IdentificationData, Model]:
+    """A noisy run of the stick–slip twin (the plant's friction law) and its truth as the model."""
+    twin = stick_slip_robot(truth, seed)
+    return collect(twin, excitation), twin_model(truth, twin, stick_slip=True)
 
 
 @pytest.fixture(scope="module")
 def case(truth: Any, excitation: identify.Excitation) -> tuple[Any, Model]:
     """A noisy run of the stick–slip twin and its truth as the model."""
-    dp, pid = truth
-    data, tr = _stick_slip_run(truth, excitation, 3)
-    model = Model(
-        KP,
-        dp,
-        pid,
-        tr["sensor_in_base"],
-        tr["target_in_effector"],
-        derivative_filter=T_F,
-        implicit_friction=True,
-    )
-    return data, model
+    return _stick_slip_run(truth, excitation, 3)
 
 
 def _gap(data: identify.IdentificationData, model: Model, run: Any) -> float:

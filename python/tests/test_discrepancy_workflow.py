@@ -17,7 +17,7 @@ import rss6
 from rss6 import discrepancy, identify
 from rss6.discrepancy import effects
 from rss6.discrepancy.model import AppliedEffect, Model, replay, run_of
-from twin_case import EPS, KP, T_F
+from twin_case import EPS, KP, T_F, stick_slip_robot
 from twin_case import collect as _collect
 from twin_case import held_out_costs as _held_out_costs
 from twin_case import model as _model
@@ -149,24 +149,8 @@ def test_no_missing_effect_with_stick_slip_friction(
     # With the implicit stick–slip law the loop's noise moves where joints stick, so a noisy run is
     # not centred on the clean replay (measured RMS/σ 1.17–1.29 against it): the baseline is the
     # mean of the noisy replays. Without that this run reported an unexplained discrepancy.
-    dp, pid = truth
-
-    def robot(seed: int) -> Any:
-        return rss6.ModelSim(
-            KP, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True
-        )
-
-    fit, val = robot(11), robot(12)
-    tr = fit.truth()
-    model = Model(
-        KP,
-        dp,
-        pid,
-        tr["sensor_in_base"],
-        tr["target_in_effector"],
-        derivative_filter=T_F,
-        implicit_friction=True,
-    )
+    fit, val = stick_slip_robot(truth, 11), stick_slip_robot(truth, 12)
+    model = _model(truth, fit, stick_slip=True)
     rep = discrepancy.diagnose(
         _collect(fit, excitation), model, validation=_collect(val, excitation)
     )

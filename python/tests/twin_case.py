@@ -43,10 +43,16 @@ def collect(twin: Any, exc: identify.Excitation, **kw: Any) -> identify.Identifi
     )
 
 
-def model(truth: Any, twin: Any, effects: tuple[Any, ...] = ()) -> Model:
-    """The truth as a discrepancy model (with ``effects``)."""
+def model(
+    truth: Any, twin: Any, effects: tuple[Any, ...] = (), *, stick_slip: bool = False
+) -> Model:
+    """The truth as a discrepancy model (with ``effects``); ``stick_slip``: with the implicit
+    stick–slip friction law of :func:`stick_slip_robot` instead of smoothing."""
     dp, pid = truth
     tr = twin.truth()
+    friction: dict[str, Any] = (
+        {"implicit_friction": True} if stick_slip else {"friction_smoothing": EPS}
+    )
     return Model(
         KP,
         dp,
@@ -55,7 +61,15 @@ def model(truth: Any, twin: Any, effects: tuple[Any, ...] = ()) -> Model:
         tr["target_in_effector"],
         effects=effects,
         derivative_filter=T_F,
-        friction_smoothing=EPS,
+        **friction,
+    )
+
+
+def stick_slip_robot(truth: Any, seed: int) -> Any:
+    """The model twin with the plant's implicit stick–slip friction law instead of smoothing."""
+    dp, pid = truth
+    return rss6.ModelSim(
+        KP, dp, pid=pid, seed=seed, drive_derivative_filter=T_F, implicit_friction=True
     )
 
 
