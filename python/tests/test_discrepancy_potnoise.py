@@ -119,6 +119,10 @@ def test_rss6_diagnose_pot_noise_hands_diagnose_runs_with_their_noise(
     base = ["diagnose", "--simulate", "none", "--plant", "model", "--quiet"]
     assert main(base) == 1 and main([*base, "--pot-noise", "recorded"]) == 1
     assert seen == [(False, False), (True, True)]
+    # With simulated commands there is nothing to replay it through: refused before collecting.
+    monkeypatch.setattr(benchmark, "hidden_case", lambda spec, progress=None: 1 / 0)
+    assert main([*base, "--pot-noise", "recorded", "--commands", "simulated"]) == 1
+    assert len(seen) == 2
 
 
 def test_the_benchmark_tags_the_cases_that_replay_the_noise() -> None:

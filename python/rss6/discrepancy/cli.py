@@ -124,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
     from rss6 import discrepancy
     from rss6.discrepancy.benchmark import PLANT_SOLVER_ITERATIONS, hidden_case
 
+    if args.pot_noise != "none" and args.commands != "recorded":
+        # Checked before any run is collected: the noise is replayed through recorded commands.
+        raise InvalidInputError("--pot-noise recorded needs --commands recorded")
     quiet = bool(args.quiet)
     bars: dict[str, Any] = {}
     measured: Any
