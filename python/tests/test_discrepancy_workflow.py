@@ -8,6 +8,8 @@ each 7–15 s."""
 
 from __future__ import annotations
 
+import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -106,6 +108,23 @@ def test_replay_with_an_effect_equals_the_twin_that_hides_it(
     (tmp_path / "model" / "model.toml").write_text("pid = [1, 2", encoding="utf-8")
     with pytest.raises(rss6.InvalidInputError, match="not valid TOML"):
         Model.load(tmp_path / "model")
+    # Valid TOML with wrong values: refused where the file is read, naming the file and the value
+    # (a two-gain pid used to load and fail as an IndexError in the first replay; an infinite
+    # latency as a run "without camera frames").
+    for text, match in (
+        (toml.replace("pid = [", "pid = [1.0, ", 1), "pid must be three"),
+        (toml.replace("pid = [", 'pid = ["a", ', 1), "could not convert"),
+        (toml.replace("camera_latency = 0.0", "camera_latency = inf"), "camera_latency must be"),
+        (toml.replace("derivative_filter = ", "derivative_filter = -"), "derivative_filter must"),
+        (re.sub(r"sensor_in_base = \[[^,]*, ", "sensor_in_base = [", toml), "sensor_in_base must"),
+    ):
+        assert text != toml
+        (tmp_path / "model" / "model.toml").write_text(text, encoding="utf-8")
+        with pytest.raises(rss6.InvalidInputError, match=match) as info:
+            Model.load(tmp_path / "model")
+        assert "model.toml" in str(info.value)
+    with pytest.raises(rss6.InvalidInputError, match="torque_limit must be finite and > 0"):
+        replace(model, torque_limit=0.0)
 
 
 def test_a_logged_run_reads_back_as_the_same_run(

@@ -117,6 +117,33 @@ class Model:
     torque_limit: float = 30.0
     camera_latency: float = 0.0
 
+    def __post_init__(self) -> None:
+        # Checked here, so a wrong model fails where it is made (or loaded), not as an index error
+        # or a run "without camera frames" deep inside a replay.
+        pid = np.asarray(self.pid, dtype=np.float64)
+        if pid.shape != (3,) or not np.all(np.isfinite(pid)) or np.any(pid < 0):
+            raise InvalidInputError(
+                f"pid must be three finite gains (l_p, l_i, l_d) >= 0, got {np.ravel(pid).tolist()}"
+            )
+        for name in ("sensor_in_base", "target_in_effector"):
+            v = np.asarray(getattr(self, name), dtype=np.float64)
+            if v.shape != (6,) or not np.all(np.isfinite(v)):
+                raise InvalidInputError(
+                    f"{name} must be 6 finite values (x, y, z, α, β, γ), got shape {v.shape}"
+                    + ("" if v.shape != (6,) else f" with {v.tolist()}")
+                )
+        for name, positive in (
+            ("derivative_filter", False),
+            ("friction_smoothing", False),
+            ("torque_limit", True),
+            ("camera_latency", False),
+        ):
+            x = float(getattr(self, name))
+            if not math.isfinite(x) or x < 0 or (positive and x == 0):
+                raise InvalidInputError(
+                    f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {x}"
+                )
+
     def applied(self) -> tuple[AppliedEffect, ...]:
         """The effects as :class:`AppliedEffect` (checked against the library)."""
         out = []
@@ -173,7 +200,7 @@ class Model:
     @classmethod
     def load(cls, directory: str | Path) -> Model:
         """The model :meth:`save` wrote into ``directory``. Raises
-        :class:`rss6.InvalidInputError` naming a missing file or key."""
+        :class:`rss6.InvalidInputError` naming a missing file or key or a wrong value."""
         d = Path(directory)
         for name in ("kinematics.toml", "dynamics.toml", "model.toml"):
             if not (d / name).is_file():
@@ -182,13 +209,15 @@ class Model:
             doc = tomllib.loads((d / "model.toml").read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as e:
             raise InvalidInputError(f"{d / 'model.toml'} is not valid TOML: {e}") from None
+        fmt = doc.get("format", 1)
+        if fmt not in (1, MODEL_FORMAT):
+            raise InvalidInputError(
+                f"{d / 'model.toml'} has format {fmt!r}; this rss6 reads formats 1 and "
+                f"{MODEL_FORMAT}"
+            )
+        kinematics = rss6.KinematicParams.load(d / "kinematics.toml")
+        dynamics = rss6.DynamicParams.load(d / "dynamics.toml")
         try:
-            fmt = doc.get("format", 1)
-            if fmt not in (1, MODEL_FORMAT):
-                raise InvalidInputError(
-                    f"{d / 'model.toml'} has format {fmt!r}; this rss6 reads formats 1 and "
-                    f"{MODEL_FORMAT}"
-                )
             effects = tuple(
                 AppliedEffect(
                     str(e["name"]), _scope_from(str(e["scope"]), fmt), dict(e.get("params", {}))
@@ -196,8 +225,8 @@ class Model:
                 for e in doc.get("effects", [])
             )
             model = cls(
-                kinematics=rss6.KinematicParams.load(d / "kinematics.toml"),
-                dynamics=rss6.DynamicParams.load(d / "dynamics.toml"),
+                kinematics=kinematics,
+                dynamics=dynamics,
                 pid=tuple(float(g) for g in doc["pid"]),
                 sensor_in_base=np.asarray(doc["sensor_in_base"], dtype=np.float64),
                 target_in_effector=np.asarray(doc["target_in_effector"], dtype=np.float64),
@@ -210,6 +239,9 @@ class Model:
             )
         except KeyError as e:
             raise InvalidInputError(f"{d / 'model.toml'} has no {e.args[0]!r}") from None
+        except (TypeError, ValueError) as e:
+            # InvalidInputError is a ValueError: the model's own checks land here too.
+            raise InvalidInputError(f"{d / 'model.toml'}: {e}") from None
         model.applied()
         return model
 
