@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
+from rss6._argtypes import count, positive, seed
 from rss6.types import CONTROLLERS, TRAJECTORIES, TUNINGS, PlantKind, Robot
 
 if TYPE_CHECKING:
@@ -327,7 +328,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     d.add_argument("--out", default="out", help="output directory (default: out/)")
     d.add_argument(
-        "--seed", type=int, default=0, help="seed of the robot's errors and the noise (default 0)"
+        "--seed", type=seed, default=0, help="seed of the robot's errors and the noise (default 0)"
     )
     d.add_argument(
         "--plant",
@@ -375,12 +376,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     c.add_argument("--quiet", action="store_true", help="no progress bar")
     c.add_argument(
-        "--robots", type=int, default=None, help="number of random robots (default 20, --quick 3)"
+        "--robots",
+        type=count(1),
+        default=None,
+        help="number of random robots (default 20, --quick 3)",
     )
     c.add_argument(
-        "--dwell", type=float, default=2.0, help="dwell per configuration (s, default 2)"
+        "--dwell", type=positive, default=2.0, help="dwell per configuration (s, default 2)"
     )
-    c.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    c.add_argument("--seed", type=seed, default=0, help="seed (default 0)")
     c.add_argument(
         "--quick",
         action="store_true",
@@ -401,7 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     t.add_argument("--controller", choices=CONTROLLERS, default="dsmc")
     t.add_argument("--trajectory", choices=TRAJECTORIES, default="exp1")
-    t.add_argument("--duration", type=float, default=20.0, help="seconds (default 20)")
+    t.add_argument("--duration", type=positive, default=20.0, help="seconds (default 20)")
     t.add_argument(
         "--tuning",
         choices=TUNINGS,
@@ -416,7 +420,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--model-kinematics", help="TOML file of the controller's kinematics (default nominal)"
     )
     t.add_argument("--plant", choices=("auto", "rapier", "model"), default="auto")
-    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--seed", type=seed, default=0)
     t.add_argument(
         "--mcap", help="log the run to this MCAP file (as it goes: on disk every simulated second)"
     )

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rss6._argtypes import count, seed
 from rss6.cli import _check_plant, _progress
 
 __all__ = ["DESCRIPTION", "add_arguments", "run"]
@@ -25,7 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of ``rss6 identify``."""
     p.add_argument("--simulate", action="store_true", help="identify a simulated robot")
     p.add_argument("--out", default="out-identify", help="output directory (default out-identify/)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the design, noise, validation")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the design, noise, validation")
     p.add_argument(
         "--quick",
         action="store_true",
@@ -33,7 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--periods",
-        type=int,
+        type=count(1),
         default=None,
         help="periods of the exciting trajectory in the identification run (default 10; 1 with "
         "--quick)",
@@ -68,7 +69,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--replicates",
-        type=int,
+        type=count(0),
         default=16,
         help="each σ is also the spread over N noisy replicate runs of the model twin at the "
         "estimate (default 16; 0: CLOE's σ alone)",

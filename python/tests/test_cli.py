@@ -181,6 +181,30 @@ def test_calibrate_modes_are_exclusive(capsys):
     assert e.value.code == 2 and "not allowed with" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["demo", "--seed", "-1"], "--seed: a seed must be in [0, 4294967295], got -1"),
+        (["calibrate", "--simulate", "--seed", "2**40"], "--seed: expected an integer"),
+        (["track", "--duration", "0"], "--duration: must be > 0, got 0"),
+        (["track", "--duration", "nan"], "--duration: expected a finite number"),
+        (["identify", "--simulate", "--replicates", "-1"], "--replicates: must be >= 0, got -1"),
+        (["diagnose", "--simulate", "payload", "--magnitude", "-2"], "--magnitude: must be > 0"),
+        (["diagnose", "--simulate", "none", "--seed", "4294967296"], "--seed: a seed must be"),
+        (["study", "identification", "--n", "0", "--out", "x.csv"], "--n: must be >= 1, got 0"),
+        (["study", "discrepancy", "--n", "2", "--out", "x.csv", "--workers", "0"], "--workers"),
+    ],
+)
+def test_a_bad_number_is_a_usage_error_naming_its_option(capsys, argv, message):
+    """Negative seeds, non-positive durations and counts stop at the parser (exit 2) with the
+    option's name; they used to end in a numpy or PyO3 traceback deep inside a run (a negative
+    seed, a negative magnitude) or run with nothing to do."""
+    with pytest.raises(SystemExit) as e:
+        cli.main(argv)
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and message in err, err
+
+
 @pytest.fixture(scope="module")
 def identify_quick(tmp_path_factory):
     """One `rss6 identify --simulate --quick` run: the default stick–slip law on the rapier plant
@@ -209,7 +233,8 @@ def test_identify_simulate_quick_writes_tables_figures_and_logs(identify_quick):
         assert log is not None
     assert run("identify").returncode == 2  # --simulate is the only mode
     bad = run("identify", "--simulate", "--periods", "0", "--quiet", "--out", str(out / "bad"))
-    assert bad.returncode == 1 and "periods must be >= 1" in bad.stderr, bad.stderr
+    # A usage error (exit 2) that names the option, before any work.
+    assert bad.returncode == 2 and "--periods: must be >= 1, got 0" in bad.stderr, bad.stderr
     # Each σ is also the spread over 16 noisy replicates (the default; `--replicates 0`: CLOE's).
     assert "the spread over 16 noisy replicates" in text
     bad = run("identify", "--simulate", "--replicates", "1", "--quiet", "--out", str(out / "bad"))

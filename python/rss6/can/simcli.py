@@ -18,6 +18,7 @@ from typing import Any
 
 import can
 
+from rss6._argtypes import count, nonnegative, seed
 from rss6.can.protocol import DRIVE_IDS, role_filters, split_nodes
 
 __all__ = ["add_arguments", "make_bus", "run"]
@@ -53,11 +54,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="model",
         help="the simulated robot: analytic-model twin (default) or rapier plant",
     )
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    p.add_argument("--tpdo-every", type=int, default=2, help="TPDO1 every n-th SYNC (default 2)")
+    p.add_argument("--seed", type=seed, default=0, help="noise seed (default 0)")
+    p.add_argument(
+        "--tpdo-every", type=count(1), default=2, help="TPDO1 every n-th SYNC (default 2)"
+    )
     p.add_argument(
         "--seconds",
-        type=float,
+        type=nonnegative,
         default=0.0,
         help="stop after this many seconds of wall clock (default: run until Ctrl-C)",
     )

@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from rss6._argtypes import count, positive, seed
 from rss6.errors import InvalidInputError
 
 __all__ = ["add_arguments", "nominal_of", "parse_effect", "run"]
@@ -67,12 +68,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="hide EFFECT[@SCOPE][:param=value,...] (or 'none', or 'vibration'/'camera_drift') in "
         "a simulated robot and diagnose it; SCOPE of a joint effect: 'all' or joint1 … joint6",
     )
-    p.add_argument("--magnitude", type=float, default=2.0, help="output × camera noise (default 2)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--magnitude", type=positive, default=2.0, help="output × camera noise (default 2)"
+    )
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument("--plant", choices=("rapier", "model"), default="rapier")
     p.add_argument(
         "--solver-iterations",
-        type=int,
+        type=count(1),
         default=None,
         help="the rapier plant's solver iterations (default 100 with the implicit law: "
         "docs/discrepancy.md)",
@@ -167,8 +170,6 @@ def run(args: argparse.Namespace) -> int:
             if its is None and (args.friction_law or "implicit") == "implicit":
                 its = PLANT_SOLVER_ITERATIONS
             if its is not None:
-                if its < 1:
-                    raise InvalidInputError(f"--solver-iterations must be >= 1, got {its}")
                 spec["solver_iterations"] = its
         elif args.solver_iterations is not None:
             raise InvalidInputError("--solver-iterations needs the rapier plant (--plant rapier)")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from rss6._argtypes import count, seed
 from rss6.errors import InvalidInputError
 
 __all__ = ["add_arguments", "run"]
@@ -17,17 +18,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("kind", choices=("calibration", "identification", "discrepancy"))
     p.add_argument(
         "--n",
-        type=int,
+        type=count(1),
         required=True,
         help="robots / trajectories / no-effect cases (discrepancy: with the effects)",
     )
     p.add_argument("--out", required=True, help="records file (CSV); rerun to resume")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://HOST:8786)")
-    p.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=count(1), default=2, help="local worker processes (default 2)")
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument(
         "--seeds",
-        type=int,
+        type=count(1),
         default=1,
         help="discrepancy: seeds per effect × magnitude (seed, seed + 1, …; default 1)",
     )
@@ -61,7 +62,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--replicates",
-        type=int,
+        type=count(0),
         default=16,
         help="identification: each σ is also the spread over N noisy replicate runs of the model "
         "twin at the estimate, the larger kept (default 16; 0: CLOE's σ alone)",
@@ -74,7 +75,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--solver-iterations",
-        type=int,
+        type=count(1),
         default=None,
         help="identification, and discrepancy with --plant: the rapier plant's solver "
         "iterations (default: identification 48, discrepancy 100 — docs/sim.md)",
