@@ -20,6 +20,7 @@ True
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -252,6 +253,33 @@ def _finish(problem: _rss6.ExcitationProblem, c: F64, f0: float) -> Excitation:
     )
 
 
+#: The limits :func:`excitation` and :func:`random_excitation` take as keywords.
+LIMITS = ("start", "stroke", "stroke_margin", "max_joint_rate", "samples", "rank_threshold")
+
+
+def _problem(
+    kp: _rss6.KinematicParams, harmonics: int, f0: float, seed: int, limits: dict[str, Any]
+) -> Any:
+    """The Rust problem for these options; :class:`rss6.InvalidInputError` for an unknown limit,
+    a harmonics count that is not an int ≥ 2 or a seed outside numpy's [0, 2³² − 1]."""
+    unknown = sorted(set(limits) - set(LIMITS))
+    if unknown:
+        raise InvalidInputError(
+            f"unknown limit(s) {', '.join(unknown)}; known: {', '.join(LIMITS)}"
+        )
+    try:
+        n, k = operator.index(harmonics), operator.index(seed)
+    except TypeError:
+        raise InvalidInputError(
+            f"harmonics and seed must be ints, got {harmonics!r} and {seed!r}"
+        ) from None
+    if n < 2:
+        raise InvalidInputError(f"harmonics must be >= 2, got {n}")
+    if not 0 <= k < 2**32:
+        raise InvalidInputError(f"seed must be in [0, 2**32 - 1], got {k}")
+    return _rss6.ExcitationProblem(kp, harmonics=n, f0=f0, **limits)
+
+
 def excitation(
     kp: _rss6.KinematicParams,
     *,
@@ -278,7 +306,7 @@ def excitation(
     """
     from scipy.optimize import Bounds, differential_evolution
 
-    problem = _rss6.ExcitationProblem(kp, harmonics=harmonics, f0=f0, **limits)
+    problem = _problem(kp, harmonics, f0, seed, limits)
     d = problem.dimension
     k = d // 6
     half = np.array([amplitude[0] if j // k < 3 else amplitude[1] for j in range(d)])
@@ -333,7 +361,7 @@ def random_excitation(
     """A random feasible trajectory (validation, §5.5): free coefficients drawn uniformly within
     ``amplitude`` (as in :func:`excitation`) with ``seed``, the first of ``batch`` candidates that meets
     every limit. Raises :class:`rss6.IdentificationError` after ``attempts`` batches without one."""
-    problem = _rss6.ExcitationProblem(kp, harmonics=harmonics, f0=f0, **limits)
+    problem = _problem(kp, harmonics, f0, seed, limits)
     d = problem.dimension
     k = d // 6
     half = np.array([amplitude[0] if j // k < 3 else amplitude[1] for j in range(d)])

@@ -24,6 +24,7 @@ from rss6.identify_linear import (
     linear_guess,
     lowpass_measured,
     model_noise_passes,
+    pid_of,
     potentiometer_noise,
     replayed_noise,
     requested_names,
@@ -316,12 +317,12 @@ def simulate(
     (each must be a frame time of the loop within half a tick, e.g. :attr:`IdentificationData.t`;
     otherwise :class:`rss6.IdentificationError` names the first one that is not)."""
     tt = np.asarray(times, dtype=np.float64).reshape(-1)
-    if tt.size == 0 or not np.all(np.isfinite(tt)):
-        raise InvalidInputError("times must be a non-empty array of finite times")
+    if tt.size == 0 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
+        raise InvalidInputError("times must be non-empty, finite and strictly increasing")
     ts, chi, _, _ = _rss6.simulate_identification(
         kp,
         dynamics,
-        (float(pid[0]), float(pid[1]), float(pid[2])),
+        pid_of(pid, "pid"),
         excitation.f0,
         excitation.coefficients,
         start=excitation.sample(0.0)[0],
@@ -509,11 +510,11 @@ def cloe(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
             "frames after it do not follow the loop: use data.before_fault()"
         )
-    check_options(consistent, settle_steps, commands)
+    check_options(consistent, settle_steps, commands, max_iterations, tol_cost, tol_step)
     names = requested_names(parameters, parameter_names())
     held = data.frame_commands() if commands == "recorded" else None
     dither = replayed_noise(data, pot_noise)
-    pid = (float(pid_guess[0]), float(pid_guess[1]), float(pid_guess[2]))
+    pid = pid_of(pid_guess)
     measured = data.measured if measured_cutoff is None else lowpass_measured(data, measured_cutoff)
     r = _rss6.cloe_identify(
         data.t,

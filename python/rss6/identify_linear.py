@@ -29,6 +29,7 @@ estimate needs no simulation: every quantity it uses was recorded.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -383,8 +384,20 @@ def requested_names(parameters: str | Sequence[str], known: Sequence[str]) -> li
 SETTLE_STEPS: int = _rss6.SETTLE_STEPS
 
 
-def check_options(consistent: bool, settle_steps: int, commands: str) -> None:
+def check_options(
+    consistent: bool,
+    settle_steps: int,
+    commands: str,
+    max_iterations: int = 20,
+    tol_cost: float = 0.0,
+    tol_step: float = 0.0,
+) -> None:
     """Raises :class:`rss6.InvalidInputError` for :func:`rss6.identify.cloe` options it refuses."""
+    if int(max_iterations) != max_iterations or max_iterations < 0:
+        raise InvalidInputError(f"max_iterations must be an int ≥ 0, got {max_iterations!r}")
+    for name, tol in (("tol_cost", tol_cost), ("tol_step", tol_step)):
+        if not (math.isfinite(tol) and tol >= 0):
+            raise InvalidInputError(f"{name} must be finite and ≥ 0, got {tol!r}")
     if not consistent:
         raise InvalidInputError(
             "consistent=False is not implemented: CLOE estimates logs of physical quantities"
@@ -393,6 +406,20 @@ def check_options(consistent: bool, settle_steps: int, commands: str) -> None:
         raise InvalidInputError(f"settle_steps must be an int ≥ 0, got {settle_steps!r}")
     if commands not in ("simulated", "recorded"):
         raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
+
+
+def pid_of(pid: Any, name: str = "pid_guess") -> tuple[float, float, float]:
+    """``pid`` as three floats (l_p, l_i, l_d); :class:`rss6.InvalidInputError` unless it is three
+    finite numbers."""
+    try:
+        g = tuple(float(x) for x in pid)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{name} must be three gains (l_p, l_i, l_d), got {pid!r}"
+        ) from None
+    if len(g) != 3 or not all(math.isfinite(x) for x in g):
+        raise InvalidInputError(f"{name} must be three finite gains (l_p, l_i, l_d), got {pid!r}")
+    return (g[0], g[1], g[2])
 
 
 def model_potentiometer_noise(

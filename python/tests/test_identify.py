@@ -52,6 +52,25 @@ def test_an_infeasible_trajectory_is_refused_with_its_constraint_and_time(
         identify.Excitation.from_coefficients(kp, np.zeros((5, 11)), 0.1)
 
 
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"harmonics": -1}, "harmonics must be >= 2, got -1"),
+        ({"harmonics": 2.5}, "must be ints"),
+        ({"seed": -1}, r"seed must be in \[0, 2\*\*32 - 1\], got -1"),
+        ({"stroke_margn": 0.2}, "unknown limit.*stroke_margn; known: start, stroke, stroke_margin"),
+    ],
+)
+def test_excitation_options_are_checked_before_the_search(
+    kp: rss6.KinematicParams, kw: dict[str, object], match: str
+) -> None:
+    """A negative harmonics count or seed used to end as an OverflowError or a numpy ValueError,
+    a misspelt limit as a TypeError from the binding's constructor."""
+    for design in (identify.excitation, identify.random_excitation):
+        with pytest.raises(rss6.InvalidInputError, match=match):
+            design(kp, **kw)
+
+
 # --- The identification loop, CLOE, simulate (thesis §5.3, issue 13) ---------------------------
 
 import dataclasses  # noqa: E402
@@ -213,6 +232,21 @@ def test_cloe_names_what_it_cannot_identify_and_reports_non_convergence(
         identify.cloe(data, kp, dp, pid, parameters=["platform.Ixx"])
     with pytest.raises(rss6.InvalidInputError, match="consistent"):
         identify.cloe(data, kp, dp, pid, consistent=False)
+    # Options that used to end as an OverflowError or IndexError from the binding, or as a
+    # "did not converge" that blamed the data for a NaN tolerance.
+    for kw, match in (
+        ({"max_iterations": -1}, "max_iterations must be an int ≥ 0"),
+        ({"tol_cost": float("nan")}, "tol_cost must be finite"),
+        ({"tol_step": -1.0}, "tol_step must be finite and ≥ 0"),
+    ):
+        with pytest.raises(rss6.InvalidInputError, match=match):
+            identify.cloe(data, kp, dp, pid, **kw)
+    with pytest.raises(rss6.InvalidInputError, match="pid_guess must be three finite gains"):
+        identify.cloe(data, kp, dp, pid[:2])
+    with pytest.raises(rss6.InvalidInputError, match="pid must be three finite gains"):
+        identify.simulate(kp, dp, (float("nan"), *pid[1:]), exc, times=data.t)
+    with pytest.raises(rss6.InvalidInputError, match="strictly increasing"):
+        identify.simulate(kp, dp, pid, exc, times=data.t[::-1])
     # Frames after a visual-PID fault (command held) do not follow the loop: refused, and
     # before_fault() keeps the frames before it.
     faulted = dataclasses.replace(data, fault=(1.0, "pose unreachable"))
