@@ -24,7 +24,7 @@ from typing import Any, Union
 import numpy as np
 from numpy.typing import NDArray
 
-from rss6 import _rss6, logs
+from rss6 import _checks, _rss6, logs
 from rss6 import thesis as _thesis
 from rss6._rss6 import (
     CalibrationData,
@@ -87,7 +87,7 @@ def default_placement() -> tuple[F64, F64]:
 
 def draw_errors(seed: int = 0) -> F64:
     """A 60-vector b of kinematic errors drawn with Table 4.2's sizes (DESIGN.md order)."""
-    rng = np.random.default_rng(seed)
+    rng = _checks.rng(seed)
     sd = np.r_[
         np.full(48, TABLE_4_2["length"]),
         np.full(6, TABLE_4_2["eta"]),
@@ -98,8 +98,8 @@ def draw_errors(seed: int = 0) -> F64:
 
 def draw_external(pose: Any, seed: int = 0) -> F64:
     """An external pose (ᴼχ_C or ᴱχ_t) perturbed with Table 4.2's sizes (0.5 mm, 0.017 rad)."""
-    rng = np.random.default_rng(seed)
-    p = np.asarray(pose, dtype=np.float64)
+    rng = _checks.rng(seed)
+    p = _checks.pose6(pose, "pose")
     sd = np.r_[np.full(3, TABLE_4_2["ext_position"]), np.full(3, TABLE_4_2["ext_angle"])]
     return np.asarray(p + rng.normal(0.0, sd), dtype=np.float64)
 

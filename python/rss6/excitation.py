@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rss6 import _rss6
+from rss6 import _checks, _rss6
 from rss6.errors import IdentificationError, InvalidInputError
 
 __all__ = [
@@ -268,15 +268,12 @@ def _problem(
             f"unknown limit(s) {', '.join(unknown)}; known: {', '.join(LIMITS)}"
         )
     try:
-        n, k = operator.index(harmonics), operator.index(seed)
+        n = operator.index(harmonics)
     except TypeError:
-        raise InvalidInputError(
-            f"harmonics and seed must be ints, got {harmonics!r} and {seed!r}"
-        ) from None
+        raise InvalidInputError(f"harmonics must be an int, got {harmonics!r}") from None
     if n < 2:
         raise InvalidInputError(f"harmonics must be >= 2, got {n}")
-    if not 0 <= k < 2**32:
-        raise InvalidInputError(f"seed must be in [0, 2**32 - 1], got {k}")
+    _checks.seed(seed)
     return _rss6.ExcitationProblem(kp, harmonics=n, f0=f0, **limits)
 
 

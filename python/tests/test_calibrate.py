@@ -130,3 +130,15 @@ def test_calibration_data_bad_input():
         rss6.CalibrationData.from_arrays(np.full((3, 6), np.nan), np.zeros((3, 6)))
     with pytest.raises(rss6.InvalidInputError, match="method"):
         calibrate.select_configurations(NOMINAL, "magic")
+    # Seeds and poses that used to give numpy's "expected non-negative integer", PyO3's
+    # OverflowError, or (a NaN pose) a NaN external pose returned as if drawn.
+    with pytest.raises(rss6.InvalidInputError, match="seed must be an integer"):
+        calibrate.select_configurations(NOMINAL, "rpba", -1)
+    with pytest.raises(rss6.InvalidInputError, match=r"seed must be in \[0, 2\*\*32 - 1\], got -1"):
+        calibrate.draw_errors(-1)
+    with pytest.raises(rss6.InvalidInputError, match=r"seed must be an int, got 0\.5"):
+        calibrate.draw_external(rss6.home_pose(), 0.5)
+    with pytest.raises(rss6.NonFiniteError, match="pose contains NaN"):
+        calibrate.draw_external([np.nan] * 6)
+    with pytest.raises(rss6.ShapeError, match=r"pose must have shape \(6,\)"):
+        calibrate.draw_external(np.zeros(5))

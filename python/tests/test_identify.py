@@ -56,7 +56,7 @@ def test_an_infeasible_trajectory_is_refused_with_its_constraint_and_time(
     ("kw", "match"),
     [
         ({"harmonics": -1}, "harmonics must be >= 2, got -1"),
-        ({"harmonics": 2.5}, "must be ints"),
+        ({"harmonics": 2.5}, "harmonics must be an int, got 2.5"),
         ({"seed": -1}, r"seed must be in \[0, 2\*\*32 - 1\], got -1"),
         ({"stroke_margn": 0.2}, "unknown limit.*stroke_margn; known: start, stroke, stroke_margin"),
     ],

@@ -91,6 +91,12 @@ def test_sim_bad_input():
         sim.reset([0, 0, 0.5, 0, 0, 0])
     with pytest.raises(rss6.InvalidParameterError):
         rss6.ModelSim(KP, DP, dt=0.5)
+    # A negative seed was PyO3's OverflowError "can't convert negative int to unsigned".
+    for cls in SIMS:
+        with pytest.raises(
+            rss6.InvalidInputError, match=r"seed must be an integer in \[0, 2\*\*64 - 1\], got -1"
+        ):
+            cls(KP, DP, seed=-1)
 
 
 @pytest.mark.parametrize("cls", SIMS)

@@ -374,12 +374,13 @@ pub(crate) fn select_configurations<'py>(
     py: Python<'py>,
     kp: &PyKinematicParams,
     method: &str,
-    seed: u64,
+    seed: i128,
     start: usize,
     candidates: usize,
     stroke: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let m = self::method(method)?;
+    let seed = crate::convert::seed(seed)?;
     let k = kp.inner;
     let opts = SelectionOptions {
         start,
@@ -474,7 +475,7 @@ pub(crate) fn relative_pose_errors_raw<'py>(
     true_sensor_in_base: &Bound<'py, PyAny>,
     true_target_in_effector: &Bound<'py, PyAny>,
     n: usize,
-    seed: u64,
+    seed: i128,
     stroke: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let truth = TrueRobot {
@@ -483,6 +484,7 @@ pub(crate) fn relative_pose_errors_raw<'py>(
         target_in_effector: vec6(true_target_in_effector, "true_target_in_effector")?,
     };
     let target = vec6(target_in_effector, "target_in_effector")?;
+    let seed = crate::convert::seed(seed)?;
     let nominal = KinematicParams::nominal();
     let stroke = match stroke {
         Some(s) => s,
@@ -511,7 +513,7 @@ pub(crate) fn calibration_study<'py>(
     rpba_thetas: &Bound<'py, PyAny>,
     implicit_thetas: &Bound<'py, PyAny>,
     robots: usize,
-    seed: u64,
+    seed: i128,
     dwell: f64,
     test_configurations: usize,
     stroke: Option<(f64, f64)>,
@@ -519,7 +521,7 @@ pub(crate) fn calibration_study<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let opts = StudyOptions {
         robots,
-        seed,
+        seed: crate::convert::seed(seed)?,
         rpba_thetas: rows6(rpba_thetas, "rpba_thetas")?,
         implicit_thetas: rows6(implicit_thetas, "implicit_thetas")?,
         dwell,

@@ -190,3 +190,13 @@ pub(crate) fn out_mat6<'py>(py: Python<'py>, m: &Mat6) -> Bound<'py, PyArray2<f6
         .collect();
     out_rows::<6>(py, &r)
 }
+
+/// A seed given from Python as any int: `rss6.InvalidInputError` outside [0, 2⁶⁴ − 1] (PyO3's own
+/// `u64` extraction raises an `OverflowError` that names neither the argument nor the range).
+pub(crate) fn seed(s: i128) -> PyResult<u64> {
+    u64::try_from(s).map_err(|_| {
+        invalid(format!(
+            "seed must be an integer in [0, 2**64 - 1], got {s}"
+        ))
+    })
+}

@@ -112,7 +112,7 @@ fn sim_config(
     dp: &PyDynamicParams,
     pid: (f64, f64, f64),
     effects: Option<&Bound<'_, PyAny>>,
-    seed: u64,
+    seed: i128,
     dt: f64,
     sensor_in_base: Option<&Bound<'_, PyAny>>,
     target_in_effector: Option<&Bound<'_, PyAny>>,
@@ -131,7 +131,7 @@ fn sim_config(
     cfg.friction_smoothing = friction_smoothing;
     cfg.implicit_friction = implicit_friction;
     cfg.solver.velocity_projection = velocity_projection;
-    cfg.seed = seed;
+    cfg.seed = crate::convert::seed(seed)?;
     cfg.dt = dt;
     cfg.torque_limit = torque_limit;
     cfg.cmm.latency = camera_latency;
@@ -262,7 +262,7 @@ macro_rules! sim_class {
                 dp: &PyDynamicParams,
                 pid: (f64, f64, f64),
                 effects: Option<&Bound<'_, PyAny>>,
-                seed: u64,
+                seed: i128,
                 dt: f64,
                 sensor_in_base: Option<&Bound<'_, PyAny>>,
                 target_in_effector: Option<&Bound<'_, PyAny>>,

@@ -1,0 +1,42 @@
+"""Checks of common arguments shared by the Python API: they raise the project's typed errors
+where numpy would raise a bare ``ValueError`` or ``OverflowError`` that names nothing."""
+
+from __future__ import annotations
+
+import operator
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
+
+__all__ = ["pose6", "rng", "seed"]
+
+
+def seed(value: Any, name: str = "seed") -> int:
+    """``value`` as a seed numpy takes everywhere: an int in [0, 2³² − 1]."""
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise InvalidInputError(f"{name} must be an int, got {value!r}") from None
+    if not 0 <= n < 2**32:
+        raise InvalidInputError(f"{name} must be in [0, 2**32 - 1], got {n}")
+    return n
+
+
+def rng(value: Any, name: str = "seed") -> np.random.Generator:
+    """numpy's default generator seeded with the checked ``value``."""
+    return np.random.default_rng(seed(value, name))
+
+
+def pose6(value: Any, name: str) -> NDArray[np.float64]:
+    """``value`` as a finite pose (x, y, z, α, β, γ)."""
+    p = np.asarray(value, dtype=np.float64)
+    if p.shape != (6,):
+        raise ShapeError(f"{name} must have shape (6,), got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise NonFiniteError(
+            f"{name} contains NaN or infinity at index [{np.argmin(np.isfinite(p))}]"
+        )
+    return p
