@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import rss6
 from numpy.typing import NDArray
 from rss6 import discrepancy
 from rss6.discrepancy import stats
@@ -280,6 +281,35 @@ def test_noise_estimators_recover_sigma_and_colour() -> None:
     assert np.all(np.abs(rep.sigma / SIGMA - 1) < 0.15)  # measured 0.96–1.02
     sim = dif.simulate(20000, np.random.default_rng(0))
     assert np.allclose(sim.std(axis=0), dif.sigma, rtol=0.05)
+    # max_order 0 asks for white noise (it was an IndexError inside statsmodels' Levinson–Durbin).
+    white = discrepancy.noise_from_periods(r, 300, max_order=0)
+    assert all(len(a) == 0 for a in white.ar) and np.all(np.abs(white.sigma / per.sigma - 1) < 0.5)
+    with pytest.raises(rss6.InvalidInputError, match="max_order must be an int >= 0"):
+        discrepancy.noise_from_repeats([r, r + SIGMA], max_order=-1)
+
+
+def test_detect_refuses_options_it_would_otherwise_bend(
+    run: tuple[F64, F64, dict[str, F64]],
+) -> None:
+    """A zero window or negative lag used to be clipped silently, zero Ljung–Box lags and a noise
+    floor of the wrong length ended as numpy's IndexError or broadcast ValueError, a correlation
+    matrix of the wrong size gave "nothing ambiguous"."""
+    t, _, sig = run
+    r = ar1(np.random.default_rng(3), 0.0)
+    for kw, match in (
+        ({"window": 0.0}, "window must be finite and > 0"),
+        ({"max_lag": -0.1}, "max_lag finite and >= 0"),
+        ({"lb_lags": 0}, "lb_lags must be an int >= 1"),
+    ):
+        with pytest.raises(rss6.InvalidInputError, match=match):
+            discrepancy.detect(t, r, sig, noise_floor=SIGMA, **kw)
+    with pytest.raises(rss6.ShapeError, match=r"noise_floor must be one σ or one per axis"):
+        discrepancy.detect(t, r, sig, noise_floor=np.full(3, SIGMA))
+    assert not discrepancy.detect(t, r, sig, noise_floor=np.full(6, SIGMA)).detected
+    with pytest.raises(rss6.ShapeError, match=r"corr must be \(2, 2\)"):
+        discrepancy.ambiguities(["a", "b"], np.eye(3), ["a", "b"], {})
+    with pytest.raises(rss6.InvalidInputError, match="needs an identification result"):
+        discrepancy.nominal_from(None)
 
 
 # (f) ---------------------------------------------------------------------------------------------

@@ -150,8 +150,12 @@ def _noise(r: F64, noise_floor: ArrayLike | NoiseModel | None, period: int | Non
         return noise_floor
     if noise_floor is None:
         return noise_from_periods(r, period) if period else noise_from_differences(r)
-    s = np.broadcast_to(np.asarray(noise_floor, dtype=np.float64), (r.shape[1],))
-    return NoiseModel.white(s)
+    s = np.asarray(noise_floor, dtype=np.float64)
+    if s.shape not in ((), (1,), (r.shape[1],)):
+        raise ShapeError(
+            f"noise_floor must be one σ or one per axis ({r.shape[1]},); got {s.shape}"
+        )
+    return NoiseModel.white(np.broadcast_to(s, (r.shape[1],)))
 
 
 def detect(
@@ -182,6 +186,12 @@ def detect(
         raise ShapeError(f"t must be increasing with shape ({n},); got {tt.shape}")
     if not 0 < alpha < 1:
         raise InvalidInputError(f"alpha must be in (0, 1); got {alpha}")
+    if not (np.isfinite(window) and window > 0 and np.isfinite(max_lag) and max_lag >= 0):
+        raise InvalidInputError(
+            f"window must be finite and > 0 s and max_lag finite and >= 0 s; got {window}, {max_lag}"
+        )
+    if int(lb_lags) != lb_lags or lb_lags < 1:
+        raise InvalidInputError(f"lb_lags must be an int >= 1, got {lb_lags!r}")
     rate = 1.0 / float(np.median(np.diff(tt)))
     noise = _noise(r, noise_floor, None if period is None else round(period * rate))
     if noise.axes != m:

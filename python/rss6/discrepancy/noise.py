@@ -145,7 +145,14 @@ def fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
     variance about zero)."""
     from statsmodels.tsa.stattools import acovf
 
-    return _ar_from_acov(acovf(x, nlag=max_order, fft=False, demean=False), len(x))
+    return _ar_from_acov(acovf(x, nlag=_order(max_order), fft=False, demean=False), len(x))
+
+
+def _order(max_order: int) -> int:
+    """``max_order`` checked: an int ≥ 0 (0: white noise)."""
+    if int(max_order) != max_order or max_order < 0:
+        raise InvalidInputError(f"max_order must be an int >= 0, got {max_order!r}")
+    return int(max_order)
 
 
 def _ar_from_acov(acov: F64, n: int) -> tuple[F64, float]:
@@ -154,6 +161,8 @@ def _ar_from_acov(acov: F64, n: int) -> tuple[F64, float]:
     max_order = len(acov) - 1
     if acov[0] <= 0:
         raise InvalidInputError("a residual axis is identically zero: no noise to model")
+    if max_order == 0:
+        return np.zeros(0), float(acov[0])
     _, _, _, sig, phi = levinson_durbin(acov, nlags=max_order, isacov=True)
     var = np.r_[acov[0], np.asarray(sig)[1:]]
     aic = n * np.log(np.maximum(var, 1e-300)) + 2.0 * np.arange(max_order + 1)
@@ -178,6 +187,7 @@ def noise_from_repeats(residuals: Sequence[ArrayLike], *, max_order: int = 30) -
             f"noise from repeats needs >= 2 residuals of one shape; got {[r.shape for r in rs]}"
         )
     k_runs, (n, m) = len(rs), rs[0].shape
+    max_order = _order(max_order)
     mean = np.mean(rs, axis=0)
     dev = [(r - mean) * np.sqrt(k_runs / (k_runs - 1)) for r in rs]
     sig = np.empty(m)

@@ -96,8 +96,13 @@ def nominal_from(
     for)."""
     if not 0 < cap < 1 or not sigmas > 0:
         raise InvalidInputError(f"need sigmas > 0 and cap in (0, 1); got {sigmas}, {cap}")
-    identified = tuple(getattr(result, "identified", ()))
-    std = np.asarray(getattr(result, "relative_std", ()), dtype=np.float64)
+    if not (hasattr(result, "identified") and hasattr(result, "relative_std")):
+        raise InvalidInputError(
+            "nominal_from needs an identification result (.identified, .relative_std); got "
+            f"{type(result).__name__}"
+        )
+    identified = tuple(result.identified)
+    std = np.asarray(result.relative_std, dtype=np.float64)
     if len(identified) != len(std):
         raise InvalidInputError(
             f"the result names {len(identified)} quantities but gives {len(std)} relative σ"

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from rss6.discrepancy import figures, stats
 from rss6.discrepancy.detect import AXES, Detection
+from rss6.errors import ShapeError
 
 __all__ = [
     "AMBIGUOUS",
@@ -403,6 +404,8 @@ def ambiguities(
     :func:`stats.score_test`): ``describe(index)`` names a residual element (e.g. "axis z near
     t = 4.2 s"); by default its index."""
     c = np.abs(np.asarray(corr, dtype=np.float64))
+    if c.shape != (len(names), len(names)):
+        raise ShapeError(f"corr must be ({len(names)}, {len(names)}) like names; got {c.shape}")
     out = []
     for group in stats.ambiguous_groups(names, c, among, threshold):
         idx = [list(names).index(g) for g in group]
