@@ -134,6 +134,8 @@ def test_calibration_data_bad_input():
     # OverflowError, or (a NaN pose) a NaN external pose returned as if drawn.
     with pytest.raises(rss6.InvalidInputError, match="seed must be an integer"):
         calibrate.select_configurations(NOMINAL, "rpba", -1)
+    with pytest.raises(rss6.InvalidInputError, match=r"candidates must be an integer >= 0"):
+        calibrate.select_configurations(NOMINAL, candidates=-5)
     with pytest.raises(rss6.InvalidInputError, match=r"seed must be in \[0, 2\*\*32 - 1\], got -1"):
         calibrate.draw_errors(-1)
     with pytest.raises(rss6.InvalidInputError, match=r"seed must be an int, got 0\.5"):

@@ -97,6 +97,10 @@ def test_sim_bad_input():
             rss6.InvalidInputError, match=r"seed must be an integer in \[0, 2\*\*64 - 1\], got -1"
         ):
             cls(KP, DP, seed=-1)
+        with pytest.raises(
+            rss6.InvalidInputError, match=r"solver_iterations must be an integer >= 0"
+        ):
+            cls(KP, DP, solver_iterations=-1)
 
 
 @pytest.mark.parametrize("cls", SIMS)

@@ -375,10 +375,12 @@ pub(crate) fn select_configurations<'py>(
     kp: &PyKinematicParams,
     method: &str,
     seed: i128,
-    start: usize,
-    candidates: usize,
+    start: i64,
+    candidates: i64,
     stroke: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let start: usize = crate::convert::count(start, "start")?;
+    let candidates: usize = crate::convert::count(candidates, "candidates")?;
     let m = self::method(method)?;
     let seed = crate::convert::seed(seed)?;
     let k = kp.inner;
@@ -395,9 +397,10 @@ pub(crate) fn select_configurations<'py>(
 }
 
 fn options(
-    max_iterations: usize,
+    max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<CalibrationOptions> {
+    let max_iterations: usize = crate::convert::count(max_iterations, "max_iterations")?;
     let mut o = CalibrationOptions {
         max_iterations,
         ..CalibrationOptions::default()
@@ -418,7 +421,7 @@ pub(crate) fn rpba(
     py: Python<'_>,
     data: &PyCalibrationData,
     kp: &PyKinematicParams,
-    max_iterations: usize,
+    max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyCalibrationResult> {
@@ -449,7 +452,7 @@ pub(crate) fn implicit(
     data: &PyCalibrationData,
     kp: &PyKinematicParams,
     sensor_pose_guess: &Bound<'_, PyAny>,
-    max_iterations: usize,
+    max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyCalibrationResult> {
     let opts = options(max_iterations, target_guess)?;
@@ -474,10 +477,11 @@ pub(crate) fn relative_pose_errors_raw<'py>(
     true_kp: &PyKinematicParams,
     true_sensor_in_base: &Bound<'py, PyAny>,
     true_target_in_effector: &Bound<'py, PyAny>,
-    n: usize,
+    n: i64,
     seed: i128,
     stroke: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let n: usize = crate::convert::count(n, "n")?;
     let truth = TrueRobot {
         kp: true_kp.inner,
         sensor_in_base: vec6(true_sensor_in_base, "true_sensor_in_base")?,
@@ -512,13 +516,16 @@ pub(crate) fn calibration_study<'py>(
     py: Python<'py>,
     rpba_thetas: &Bound<'py, PyAny>,
     implicit_thetas: &Bound<'py, PyAny>,
-    robots: usize,
+    robots: i64,
     seed: i128,
     dwell: f64,
-    test_configurations: usize,
+    test_configurations: i64,
     stroke: Option<(f64, f64)>,
     plant: bool,
 ) -> PyResult<Bound<'py, PyList>> {
+    let robots: usize = crate::convert::count(robots, "robots")?;
+    let test_configurations: usize =
+        crate::convert::count(test_configurations, "test_configurations")?;
     let opts = StudyOptions {
         robots,
         seed: crate::convert::seed(seed)?,

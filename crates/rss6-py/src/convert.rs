@@ -200,3 +200,13 @@ pub(crate) fn seed(s: i128) -> PyResult<u64> {
         ))
     })
 }
+
+/// A count or size given from Python as any int: `rss6.InvalidInputError` naming the argument when
+/// it does not fit `T` (PyO3's own unsigned extraction raises a bare `OverflowError`).
+pub(crate) fn count<T: TryFrom<i64>>(v: i64, name: &str) -> PyResult<T> {
+    T::try_from(v).map_err(|_| {
+        invalid(format!(
+            "{name} must be an integer >= 0 (and in range), got {v}"
+        ))
+    })
+}

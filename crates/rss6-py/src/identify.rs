@@ -104,15 +104,17 @@ impl PyExcitationProblem {
     fn py_new(
         py: Python<'_>,
         kp: &PyKinematicParams,
-        harmonics: usize,
+        harmonics: i64,
         f0: f64,
         start: Option<&Bound<'_, PyAny>>,
         stroke: Option<(f64, f64)>,
         stroke_margin: f64,
         max_joint_rate: f64,
-        samples: usize,
+        samples: i64,
         rank_threshold: f64,
     ) -> PyResult<Self> {
+        let harmonics: usize = crate::convert::count(harmonics, "harmonics")?;
+        let samples: usize = crate::convert::count(samples, "samples")?;
         if harmonics < 2 || !(f0.is_finite() && f0 > 0.0) || samples < 10 {
             return Err(invalid(format!(
                 "need harmonics >= 2, f0 > 0 Hz and samples >= 10 (got {harmonics}, {f0}, {samples})"

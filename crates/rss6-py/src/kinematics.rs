@@ -92,10 +92,11 @@ pub(crate) fn fk<'py>(
     kp: &PyKinematicParams,
     theta: &Bound<'py, PyAny>,
     guess: Option<&Bound<'py, PyAny>>,
-    max_iterations: u32,
+    max_iterations: i64,
     tol: f64,
     method: &str,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let max_iterations: u32 = crate::convert::count(max_iterations, "max_iterations")?;
     let theta = vec6(theta, "theta")?;
     let guess = match guess {
         Some(g) => vec6(g, "guess")?,
@@ -115,10 +116,11 @@ pub(crate) fn fk_batch<'py>(
     kp: &PyKinematicParams,
     thetas: &Bound<'py, PyAny>,
     guess: Option<&Bound<'py, PyAny>>,
-    max_iterations: u32,
+    max_iterations: i64,
     tol: f64,
     method: &str,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let max_iterations: u32 = crate::convert::count(max_iterations, "max_iterations")?;
     let thetas = rows6(thetas, "thetas")?;
     let mut g = match guess {
         Some(g) => vec6(g, "guess")?,

@@ -118,7 +118,7 @@ fn sim_config(
     target_in_effector: Option<&Bound<'_, PyAny>>,
     torque_limit: f64,
     camera_latency: f64,
-    solver_iterations: Option<usize>,
+    solver_iterations: Option<i64>,
     potentiometer_noise: Option<f64>,
     pixel_noise: Option<f64>,
     drive_derivative_filter: f64,
@@ -126,6 +126,9 @@ fn sim_config(
     implicit_friction: bool,
     velocity_projection: bool,
 ) -> PyResult<SimConfig> {
+    let solver_iterations = solver_iterations
+        .map(|v| crate::convert::count::<usize>(v, "solver_iterations"))
+        .transpose()?;
     let mut cfg = SimConfig::new(kp.inner, dp.inner, pid_gains(pid)?);
     cfg.drive_derivative_filter = drive_derivative_filter;
     cfg.friction_smoothing = friction_smoothing;
@@ -268,7 +271,7 @@ macro_rules! sim_class {
                 target_in_effector: Option<&Bound<'_, PyAny>>,
                 torque_limit: f64,
                 camera_latency: f64,
-                solver_iterations: Option<usize>,
+                solver_iterations: Option<i64>,
                 potentiometer_noise: Option<f64>,
                 pixel_noise: Option<f64>,
                 drive_derivative_filter: f64,
