@@ -79,6 +79,19 @@ def test_records_are_written_once_and_a_rerun_skips_them(client: Any, tmp_path: 
             progress=False,
         )
     assert out.read_text(encoding="utf-8") == before
+    # A file that is no study's records (another CSV, binary) is refused before any task runs:
+    # the records used to be appended under its header, where no rerun could read them.
+    for name, content in (("table.csv", b"a,b\n1,2\n"), ("blob.csv", bytes(range(256)))):
+        other = tmp_path / name
+        other.write_bytes(content)
+        with pytest.raises(InvalidInputError, match="is not a study's records file"):
+            run_study(probe_task, _probe_specs(2, 0.0), out=other, fields=["value"], client=client)
+        assert other.read_bytes() == content
+    # A partly written last line (a killed writer) is dropped, the file rewritten atomically.
+    cut = tmp_path / "cut.csv"
+    cut.write_text(before + "p9,ok,,0.1", encoding="utf-8")
+    assert len(read_records(cut)) == 8 and cut.read_text(encoding="utf-8") == before
+    assert not list(tmp_path.glob("*.tmp"))
 
 
 def test_a_worker_killed_mid_study_costs_only_a_retry(client: Any, tmp_path: Path) -> None:

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import os
 import time
 import traceback
@@ -61,14 +62,32 @@ def read_records(out: str | Path) -> list[dict[str, str]]:
     path = Path(out)
     if not path.exists():
         return []
-    with path.open(newline="", encoding="utf-8") as f:
-        text = f.read()
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            text = f.read()
+    except UnicodeDecodeError:
+        raise InvalidInputError(f"{path} is not a study's records file (not UTF-8 text)") from None
+    if text and "spec_id" not in next(csv.reader(text.splitlines()[:1]), []):
+        # Appending under another file's header would make every record unreadable.
+        raise InvalidInputError(
+            f"{path} is not a study's records file (its first line has no spec_id column)"
+        )
     if text and not text.endswith("\n"):
         text = text[: text.rfind("\n") + 1]
-        with path.open("w", newline="", encoding="utf-8") as f:
-            f.write(text)
+        _replace(path, text)
     rows = list(csv.DictReader(text.splitlines()))
     return [r for r in rows if r.get("spec_id")]
+
+
+def _replace(path: Path, text: str) -> None:
+    """Writes ``text`` to ``path`` atomically (a temporary file, then a rename): a crash leaves the
+    old file or the new one, never neither."""
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("w", newline="", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
 
 
 def _widen(path: Path, have: list[dict[str, str]], columns: list[str]) -> bool:
@@ -79,14 +98,11 @@ def _widen(path: Path, have: list[dict[str, str]], columns: list[str]) -> bool:
     old = list(have[0])
     if len(old) >= len(columns) or columns[: len(old)] != old:
         return False
-    tmp = path.with_name(path.name + ".widen")
-    with tmp.open("w", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=columns, restval="")
-        w.writeheader()
-        w.writerows(have)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=columns, restval="")
+    w.writeheader()
+    w.writerows(have)
+    _replace(path, buf.getvalue())
     return True
 
 
