@@ -392,6 +392,29 @@ def test_a_run_the_robot_left_the_loop_in_is_refused_naming_the_run(truth: Any) 
         discrepancy.diagnose(run, _model(truth, robot), validation=faulted)
 
 
+def test_options_and_runs_that_would_bend_the_claims_are_refused_up_front(truth: Any) -> None:
+    """Refused before any replay: the measured run given again as the validation run (every
+    claim would be made on the fitting data; it used to say "no missing effect"), no effect
+    allowed to be named (max_effects=0 turned any discrepancy into silence), a re-identification
+    name CLOE does not know (found only after an effect was named), a run whose per-tick records
+    do not match its dt (it ended as an unreachable pose deep inside a replay)."""
+    import dataclasses
+
+    robot = _robot(truth, 23, None)
+    run = _collect(robot, identify.random_excitation(KP, seed=2, harmonics=3, f0=0.5))
+    model = _model(truth, robot)
+    for kw, match in (
+        ({"validation": run}, "the validation run is the measured run itself"),
+        ({"max_effects": 0}, "max_effects must be an int >= 1"),
+        ({"workers": 0}, "workers must be an int >= 1"),
+        ({"reidentify": ["fc1", "fc7"]}, r"unknown parameter\(s\) fc7"),
+    ):
+        with pytest.raises(rss6.InvalidInputError, match=match):
+            discrepancy.diagnose(run, model, **kw)
+    with pytest.raises(rss6.InvalidInputError, match=r"records are 0\.001 s apart but its dt"):
+        run_of(dataclasses.replace(run, dt=2e-3))
+
+
 def test_a_named_parameter_on_its_bound_is_noted(truth: Any) -> None:
     """A 5× tilt of (0.3, 0.3) rad on the plant (seed 6) was named at pitch 0.3, the library's
     bound, with nothing saying the data might want more; friction may not take the model's own

@@ -244,6 +244,37 @@ def replays_note(run: Run) -> str:
     )
 
 
+def check_options(
+    alpha: float, counts: dict[str, tuple[int, int]], reidentify: bool | Sequence[str]
+) -> None:
+    """``diagnose``'s options checked before any replay: ``alpha`` in (0, 0.5), each count (value,
+    least) an int ≥ least, ``reidentify``'s names known to CLOE (not found only once named)."""
+    if not 0 < alpha < 0.5:
+        raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
+    for name, (value, least) in counts.items():
+        if int(value) != value or value < least:
+            raise InvalidInputError(f"{name} must be an int >= {least} (got {value!r})")
+    if not isinstance(reidentify, bool):
+        from rss6.identify import parameter_names
+        from rss6.identify_linear import requested_names
+
+        requested_names(list(reidentify), parameter_names())
+
+
+def check_held_out(run: Run, held: Run) -> None:
+    """Raises unless ``held`` can be the held-out run of ``run``: the same channels, not the same
+    data (every claim is made on the held-out run: on the fitting run none would be held out)."""
+    if held.width != run.width:
+        raise InvalidInputError(
+            f"the validation run has {held.width} channels, the measured run {run.width}"
+        )
+    if np.array_equal(held.t, run.t) and np.array_equal(held.channels, run.channels):
+        raise InvalidInputError(
+            "the validation run is the measured run itself: its claims would not be held out "
+            "(give another run, or none to hold out the run's second half)"
+        )
+
+
 def check_frames(parts: Sequence[tuple[str, _Part]]) -> None:
     """Raises unless every part has at least :data:`MIN_FRAMES` camera frames."""
     for what, part in parts:

@@ -54,6 +54,8 @@ from rss6.discrepancy._steps import (
     _start,
     _tell,
     check_frames,
+    check_held_out,
+    check_options,
     error_replicates,
     fit_se,
     held_detection,
@@ -84,7 +86,7 @@ from rss6.discrepancy.report import (
     unexplained,
 )
 from rss6.discrepancy.search import Fit, Screen, fit_effects, heldout_test, mimicry, robust_cov_dof
-from rss6.errors import InvalidInputError, Rss6Error
+from rss6.errors import Rss6Error
 
 __all__ = [
     "MAX_MIMICS",
@@ -140,10 +142,8 @@ def diagnose(
     {} holds them: the model taken as exact). ``bias_refresh`` (the default since the twenty-sixth
     session, docs/discrepancy.md): in a stick–slip loop, fit and hold out each candidate against the
     replays' bias at its values; False takes the bias of the model as given for every candidate."""
-    if not 0 < alpha < 0.5:
-        raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
-    if replicates < 8:
-        raise InvalidInputError(f"replicates must be >= 8 (got {replicates})")
+    counts = {"replicates": (replicates, 8), "max_effects": (max_effects, 1), "refit": (refit, 1)}
+    check_options(alpha, {**counts, "workers": (workers, 1)}, reidentify)
     pool = library(candidates)
     spread = spreads(nominal)
     run = _named_run("measured", measured, model, commands)
@@ -153,10 +153,7 @@ def diagnose(
         held = _Part(run, slice(n // 2, n))
     else:
         vrun = _named_run("validation", validation, model, commands)
-        if vrun.width != run.width:
-            raise InvalidInputError(
-                f"the validation run has {vrun.width} channels, the measured run {run.width}"
-            )
+        check_held_out(run, vrun)
         fit_part = _Part(run, slice(0, n))
         held = _Part(vrun, slice(0, len(vrun.t)))
     check_frames((("fitting", fit_part), ("held-out", held)))

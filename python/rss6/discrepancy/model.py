@@ -336,6 +336,11 @@ def run_of(
     if data.tick_t is not None and data.kappa is not None and data.theta_cmd is not None:
         tt = np.asarray(data.tick_t, dtype=np.float64)
         cmd = np.asarray(data.theta_cmd, dtype=np.float64)
+        step = float(np.median(np.diff(tt))) if tt.size > 1 else float(data.dt)
+        if not np.isclose(step, float(data.dt), rtol=1e-6):
+            raise InvalidInputError(
+                f"the run's per-tick records are {step:.6g} s apart but its dt is {data.dt} s"
+            )
         ch.append(_interval_means(tt, np.asarray(data.kappa, dtype=np.float64), data.t))
         if commands == "recorded":
             ticks = round(float(data.duration) / float(data.dt))
