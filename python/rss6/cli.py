@@ -67,11 +67,29 @@ def _check_plant(kind: PlantKind) -> None:
         raise SystemExit("rss6: this build has no rapier plant (rss6.Plant); use --plant model")
 
 
+def out_dir(path: str) -> str:
+    """``--out``'s directory, made now: a file in its place or a directory that cannot be made is an
+    :class:`rss6.InvalidInputError` before the work, not an ``OSError`` after it."""
+    from pathlib import Path
+
+    from rss6.errors import InvalidInputError
+
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InvalidInputError(f"--out {path} is a file; give a directory")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InvalidInputError(f"--out {path}: cannot make the directory ({e.strerror})") from None
+    return path
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     from rss6 import demo
 
     quiet = bool(args.quiet)
     _check_plant(args.plant)
+    out_dir(args.out)
     report = demo.run(
         args.out,
         quick=args.quick,
@@ -495,6 +513,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args))
     except Rss6Error as e:
         print(f"rss6: error: {type(e).__name__}: {e}", file=sys.stderr)
+        return 1
+    except OSError as e:
+        # A disk that fills or a path that vanishes mid-run: one line, and what was kept.
+        print(f"rss6: error: {type(e).__name__}: {e}{_kept(args)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         # Ctrl-C: one line instead of a traceback, and where the work done so far is.

@@ -7,7 +7,7 @@ import argparse
 import sys
 
 from rss6._argtypes import count, seed
-from rss6.cli import _check_plant, _progress
+from rss6.cli import _check_plant, _progress, out_dir
 
 __all__ = ["DESCRIPTION", "add_arguments", "run"]
 
@@ -86,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
     quiet = bool(args.quiet)
     if args.plant == "rapier":
         _check_plant("rapier")
+    out_dir(args.out)
     report = identify_sim.run(
         args.out,
         quick=args.quick,

@@ -205,6 +205,34 @@ def test_a_bad_number_is_a_usage_error_naming_its_option(capsys, argv, message):
     assert e.value.code == 2 and message in err, err
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["demo", "--quick", "--plant", "model"],
+        ["identify", "--simulate", "--quick", "--plant", "model"],
+        ["diagnose", "--simulate", "none", "--plant", "model"],
+    ],
+)
+def test_an_out_directory_that_is_a_file_is_refused_before_the_work(
+    capsys, monkeypatch, tmp_path, argv
+):
+    """`--out` naming a file used to fail with a FileExistsError traceback after the whole run
+    (the diagnosis's report could not be written); now the command stops first."""
+    from rss6 import demo, identify_sim
+    from rss6.discrepancy import benchmark
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the run started")
+
+    for module, name in ((demo, "run"), (identify_sim, "run"), (benchmark, "hidden_case")):
+        monkeypatch.setattr(module, name, no_work)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("keep me", encoding="utf-8")
+    assert cli.main([*argv, "--quiet", "--out", str(blocker)]) == 1
+    assert f"--out {blocker} is a file; give a directory" in capsys.readouterr().err
+    assert blocker.read_text(encoding="utf-8") == "keep me"
+
+
 @pytest.fixture(scope="module")
 def identify_quick(tmp_path_factory):
     """One `rss6 identify --simulate --quick` run: the default stick–slip law on the rapier plant
