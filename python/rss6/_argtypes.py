@@ -9,8 +9,9 @@ from collections.abc import Callable
 
 __all__ = ["count", "nonnegative", "positive", "seed"]
 
-#: Seeds go to numpy's and the Rust side's 32- and 64-bit generators: the range both take.
-SEED_MAX = 2**32 - 1
+#: Seeds go to numpy's 32-bit and the Rust side's 64-bit seeding; the commands derive further seeds
+#: by adding offsets (seed + 2, 7000 + seed, …), so the command line keeps below 2³¹.
+SEED_MAX = 2**31 - 1
 
 
 def _int(text: str) -> int:

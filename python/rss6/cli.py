@@ -212,6 +212,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if args.out:
+        from rss6.errors import InvalidInputError
+
+        raise InvalidInputError("--out writes the kinematics calibrated by --mcap or --from-mcap")
     t0 = time.perf_counter()
     nominal = rss6.KinematicParams.nominal()
     lo, hi = calibrate.stroke(nominal)

@@ -179,18 +179,22 @@ def test_calibrate_modes_are_exclusive(capsys):
     with pytest.raises(SystemExit) as e:
         cli.main(["calibrate", "--simulate", "--from-mcap", "x.mcap"])
     assert e.value.code == 2 and "not allowed with" in capsys.readouterr().err
+    # --out (the calibrated kinematics) has nothing to write in the --simulate study: refused,
+    # not silently ignored.
+    assert cli.main(["calibrate", "--simulate", "--out", "k.toml"]) == 1
+    assert "--out writes the kinematics calibrated by --mcap" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["demo", "--seed", "-1"], "--seed: a seed must be in [0, 4294967295], got -1"),
+        (["demo", "--seed", "-1"], "--seed: a seed must be in [0, 2147483647], got -1"),
         (["calibrate", "--simulate", "--seed", "2**40"], "--seed: expected an integer"),
         (["track", "--duration", "0"], "--duration: must be > 0, got 0"),
         (["track", "--duration", "nan"], "--duration: expected a finite number"),
         (["identify", "--simulate", "--replicates", "-1"], "--replicates: must be >= 0, got -1"),
         (["diagnose", "--simulate", "payload", "--magnitude", "-2"], "--magnitude: must be > 0"),
-        (["diagnose", "--simulate", "none", "--seed", "4294967296"], "--seed: a seed must be"),
+        (["diagnose", "--simulate", "none", "--seed", "2147483648"], "--seed: a seed must be"),
         (["study", "identification", "--n", "0", "--out", "x.csv"], "--n: must be >= 1, got 0"),
         (["study", "discrepancy", "--n", "2", "--out", "x.csv", "--workers", "0"], "--workers"),
     ],
