@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from rss6 import _rss6
 from rss6 import thesis as _thesis
-from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
+from rss6.errors import InvalidInputError, NonFiniteError, Rss6Error, ShapeError
 from rss6.logs import write_run
 
 __all__ = [
@@ -187,6 +187,24 @@ def _tabulate(fn: Callable[[float], Any], dt: float, duration: float) -> tuple[F
     return p, v, a
 
 
+def _check_reach(traj: Any, kp: _rss6.KinematicParams, duration: float) -> None:
+    """Raises :class:`rss6.UnreachableError` (or the IK's other error) naming the first time, on a
+    100 Hz sampling, at which the desired pose is out of the controller model's reach. Without it
+    the task-space controllers (DSMC, KCSC) ran on with the robot pressed against its limit and
+    returned a "finished" run; KJSC faulted."""
+    ts = np.arange(0.0, duration + 1e-9, 0.01)
+    poses = traj[0][:: max(1, round(0.01 / traj[3]))] if isinstance(traj, tuple) else None
+    if poses is None:
+        poses = np.asarray(traj.sample_many(ts)[0])
+    for k, pose in enumerate(poses):
+        try:
+            _rss6.ik(kp, pose)
+        except Rss6Error as e:
+            # The same error, its attributes (e.g. the leg) kept, saying when.
+            e.args = (f"the trajectory's pose at t = {k * 0.01:.2f} s is out of reach: {e}",)
+            raise
+
+
 def track(
     plant: Any,
     controller: str = "dsmc",
@@ -244,6 +262,7 @@ def track(
         raise InvalidInputError(
             "trajectory must be 'exp1', 'exp2', an rss6.Trajectory or a callable"
         )
+    _check_reach((*traj, float(plant.dt)) if isinstance(traj, tuple) else traj, kp, duration)
 
     def on_segment(seg: dict[str, Any]) -> None:
         if progress is not None and len(seg["t"]):

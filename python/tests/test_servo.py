@@ -53,6 +53,25 @@ def test_callable_trajectory_is_tabulated():
         servo.track(plant, "dsmc", "exp3", duration=0.1)
 
 
+@pytest.mark.parametrize("controller", ["dsmc", "kcsc", "kjsc"])
+def test_a_trajectory_out_of_reach_is_refused_naming_when(controller):
+    """The platform raised 5 cm/s leaves the workspace near 1.15 s. DSMC and KCSC used to run on
+    with the robot pressed against its limits and return a run without a fault (z RMSE 45 mm);
+    KJSC faulted at 1.155 s. Now every controller refuses the trajectory before it runs."""
+    home = np.asarray(rss6.home_pose())
+    rate = np.r_[0.0, 0.0, 0.05, 0.0, 0.0, 0.0]
+
+    def rising(t):
+        return home + rate * t, rate, np.zeros(6)
+
+    plant = rss6.ModelSim(KP, DP, seed=4)
+    with pytest.raises(rss6.UnreachableError, match=r"pose at t = 1\.1\d s is out of reach") as e:
+        servo.track(plant, controller, rising, duration=3.0)
+    assert e.value.leg == 1  # the IK's own attributes are kept
+    # Within reach (the first second) it runs.
+    assert servo.track(plant, controller, rising, duration=1.0).fault is None
+
+
 def test_track_writes_and_reads_back_an_mcap_log(tmp_path):
     plant = rss6.ModelSim(KP, DP, seed=5)
     path = tmp_path / "run.mcap"
