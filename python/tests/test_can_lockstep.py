@@ -23,6 +23,32 @@ def _plant(seed: int = 3) -> rss6.ModelSim:
     return rss6.ModelSim(rss6.KinematicParams.nominal(), rss6.DynamicParams.nominal(), seed=seed)
 
 
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"v_max": float("nan")}, "v_max must be finite and > 0, got nan"),
+        ({"following_error": -0.1}, "following_error must be finite and > 0"),
+        ({"limits": (0.5, -0.5)}, "limits must be finite with lower < upper"),
+        ({"dt": 0.0}, "dt must be finite and > 0"),
+        ({"position_margin": -1.0}, "position_margin must be finite and >= 0"),
+        ({"tpdo_every": 0}, "tpdo_every must be an int >= 1"),
+        ({"tpdo_timeout": 0}, "tpdo_timeout must be None or an int >= 1"),
+        ({"node_ids": (1, 2, 3, 4, 5, 5)}, "node_ids must be distinct CANopen ids"),
+        ({"node_ids": (1, 2, 3, 4, 5, 128)}, "node_ids must be distinct CANopen ids"),
+        ({"max_load": 1.5}, "max_load is a fraction of the bus"),
+    ],
+)
+def test_a_bridge_config_that_would_switch_a_check_off_is_refused(
+    kw: dict[str, object], match: str
+) -> None:
+    """A NaN v_max or following-error bound compared False with every step and error, so the
+    bridge's safety checks went quiet; reversed limits refused every command. Each is refused
+    where the configuration is made."""
+    with pytest.raises(rss6.InvalidInputError, match=match):
+        rcan.BridgeConfig(**kw)  # type: ignore[arg-type]
+    assert rcan.BridgeConfig().v_max == 10.0  # the defaults pass
+
+
 def test_frame_bits_and_the_issue_figures() -> None:
     assert [frame_bits(n) for n in (0, 4, 6, 8)] == [47, 79, 95, 111]
     assert [frame_bits(n, stuffed=True) for n in (0, 4, 6, 8)] == [55, 95, 115, 135]

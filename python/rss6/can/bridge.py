@@ -18,7 +18,6 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from os import PathLike
 from typing import Any
 
 import can
@@ -27,10 +26,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rss6.can.busio import BridgeNetwork, BusLog, BusWatch
-from rss6.can.load import MAX_LOAD, BusLoad, bus_load, check_bus_load
+from rss6.can.config import BridgeConfig
+from rss6.can.load import BusLoad, bus_load, check_bus_load
 from rss6.can.protocol import (
     BRIDGE_NODE_ID,
-    DRIVE_IDS,
     EMCY_CODES,
     MODE_CSP,
     SW_FAULT_BIT,
@@ -52,45 +51,6 @@ from rss6.errors import InvalidInputError
 __all__ = ["Bridge", "BridgeConfig", "Reading"]
 
 F64 = NDArray[np.float64]
-
-
-@dataclass
-class BridgeConfig:
-    """What the bridge needs to know about the drives and the bus. Angles in the drive's convention.
-
-    ``dt``: SYNC period (s). ``tpdo_every``: TPDO1 every n-th SYNC. ``heartbeat_ms``: the drives'
-    producer heartbeat (written to 0x1017); ``bridge_heartbeat_ms``: the bridge's own; a heartbeat
-    older than ``heartbeat_timeout`` periods is a fault on either side (0x1016 on the drives).
-    ``tpdo_timeout``: cycles without an accepted TPDO1 before a fault (default 2·tpdo_every in
-    lockstep: one lost TPDO is tolerated; 5·tpdo_every on the wall clock, where TPDOs arrive a cycle
-    or two after their SYNC and a late cycle ages them too). ``v_max`` (rad/s): larger command steps are refused, larger position jumps
-    rejected. ``limits`` (rad): the software position limits (0x607D); commands outside are refused,
-    positions beyond ``position_margin`` outside them rejected. ``following_error`` (rad, 0x6065).
-    ``bitrate``: the bus bitrate; when given, a configuration above ``max_load`` (worst-case
-    stuffed) is refused. ``lockstep``: wait for each cycle's TPDOs (simulated drives; real drives:
-    False). ``log``: a bus log (``.asc``/``.log``/``.blf``) written through python-can's ``Logger``.
-    """
-
-    node_ids: tuple[int, ...] = DRIVE_IDS
-    count_map: CountMap | None = None
-    dt: float = 1e-3
-    tpdo_every: int = 2
-    heartbeat_ms: int = 10
-    bridge_heartbeat_ms: int = 10
-    heartbeat_timeout: float = 2.5
-    tpdo_timeout: int | None = None
-    v_max: float = 10.0
-    limits: tuple[float, float] = (-math.pi / 2, math.pi / 2)
-    position_margin: float = 0.05
-    noise_bits: float = 4.0
-    following_error: float = 0.1
-    bitrate: int | None = None
-    max_load: float = MAX_LOAD
-    lockstep: bool = True
-    wait_timeout: float = 0.25
-    sdo_timeout: float = 1.0
-    log: str | PathLike[str] | None = None
-    eds: str | None = None
 
 
 @dataclass(frozen=True)
