@@ -3,6 +3,7 @@ where numpy would raise a bare ``ValueError`` or ``OverflowError`` that names no
 
 from __future__ import annotations
 
+import math
 import operator
 from typing import Any
 
@@ -11,7 +12,7 @@ from numpy.typing import NDArray
 
 from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
 
-__all__ = ["pose6", "rng", "seed"]
+__all__ = ["gains3", "pose6", "rng", "seed"]
 
 
 def seed(value: Any, name: str = "seed") -> int:
@@ -40,3 +41,20 @@ def pose6(value: Any, name: str) -> NDArray[np.float64]:
             f"{name} contains NaN or infinity at index [{np.argmin(np.isfinite(p))}]"
         )
     return p
+
+
+def gains3(value: Any, name: str, *, nonnegative: bool = False) -> tuple[float, float, float]:
+    """``value`` as three finite drive gains (l_p, l_i, l_d), each ≥ 0 with ``nonnegative``."""
+    try:
+        g = tuple(float(x) for x in value)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"{name} must be three gains (l_p, l_i, l_d), got {value!r}"
+        ) from None
+    if len(g) != 3 or not all(math.isfinite(x) and (x >= 0 or not nonnegative) for x in g):
+        raise InvalidInputError(
+            f"{name} must be three finite gains (l_p, l_i, l_d)"
+            + (" >= 0" if nonnegative else "")
+            + f", got {value!r}"
+        )
+    return (g[0], g[1], g[2])

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rss6 import _rss6, identify_hops, identify_log
+from rss6 import _checks, _rss6, identify_hops, identify_log
 from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, ShapeError
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
@@ -24,7 +24,6 @@ from rss6.identify_linear import (
     linear_guess,
     lowpass_measured,
     model_noise_passes,
-    pid_of,
     potentiometer_noise,
     replayed_noise,
     requested_names,
@@ -322,7 +321,7 @@ def simulate(
     ts, chi, _, _ = _rss6.simulate_identification(
         kp,
         dynamics,
-        pid_of(pid, "pid"),
+        _checks.gains3(pid, "pid"),
         excitation.f0,
         excitation.coefficients,
         start=excitation.sample(0.0)[0],
@@ -514,7 +513,7 @@ def cloe(
     names = requested_names(parameters, parameter_names())
     held = data.frame_commands() if commands == "recorded" else None
     dither = replayed_noise(data, pot_noise)
-    pid = pid_of(pid_guess)
+    pid = _checks.gains3(pid_guess, "pid_guess")
     measured = data.measured if measured_cutoff is None else lowpass_measured(data, measured_cutoff)
     r = _rss6.cloe_identify(
         data.t,

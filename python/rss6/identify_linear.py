@@ -408,20 +408,6 @@ def check_options(
         raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
 
 
-def pid_of(pid: Any, name: str = "pid_guess") -> tuple[float, float, float]:
-    """``pid`` as three floats (l_p, l_i, l_d); :class:`rss6.InvalidInputError` unless it is three
-    finite numbers."""
-    try:
-        g = tuple(float(x) for x in pid)
-    except (TypeError, ValueError):
-        raise InvalidInputError(
-            f"{name} must be three gains (l_p, l_i, l_d), got {pid!r}"
-        ) from None
-    if len(g) != 3 or not all(math.isfinite(x) for x in g):
-        raise InvalidInputError(f"{name} must be three finite gains (l_p, l_i, l_d), got {pid!r}")
-    return (g[0], g[1], g[2])
-
-
 def model_potentiometer_noise(
     data: IdentificationData, result: IdentificationResult, *, cutoff: float | None = 20.0
 ) -> np.ndarray:

@@ -40,7 +40,7 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python < 3.11
     import tomli as tomllib
-from rss6 import identify
+from rss6 import _checks, identify
 from rss6.discrepancy.effects import Change, get
 from rss6.errors import InvalidInputError, ShapeError
 from rss6.identify_linear import potentiometer_noise
@@ -120,18 +120,9 @@ class Model:
     def __post_init__(self) -> None:
         # Checked here, so a wrong model fails where it is made (or loaded), not as an index error
         # or a run "without camera frames" deep inside a replay.
-        pid = np.asarray(self.pid, dtype=np.float64)
-        if pid.shape != (3,) or not np.all(np.isfinite(pid)) or np.any(pid < 0):
-            raise InvalidInputError(
-                f"pid must be three finite gains (l_p, l_i, l_d) >= 0, got {np.ravel(pid).tolist()}"
-            )
-        for name in ("sensor_in_base", "target_in_effector"):
-            v = np.asarray(getattr(self, name), dtype=np.float64)
-            if v.shape != (6,) or not np.all(np.isfinite(v)):
-                raise InvalidInputError(
-                    f"{name} must be 6 finite values (x, y, z, α, β, γ), got shape {v.shape}"
-                    + ("" if v.shape != (6,) else f" with {v.tolist()}")
-                )
+        _checks.gains3(self.pid, "pid", nonnegative=True)
+        _checks.pose6(self.sensor_in_base, "sensor_in_base")
+        _checks.pose6(self.target_in_effector, "target_in_effector")
         for name, positive in (
             ("derivative_filter", False),
             ("friction_smoothing", False),
