@@ -291,6 +291,20 @@ impl Usable {
         self.index.remove(l);
         self.counts.remove(l);
     }
+
+    /// The configurations whose data index passes `keep`, in their order.
+    pub(super) fn only(&self, keep: impl Fn(usize) -> bool) -> Usable {
+        let mut u = Usable::default();
+        for (l, &i) in self.index.iter().enumerate() {
+            if keep(i) {
+                u.kappa.push(self.kappa[l]);
+                u.cam.push(self.cam[l]);
+                u.index.push(i);
+                u.counts.push(self.counts[l]);
+            }
+        }
+        u
+    }
 }
 
 /// The configurations without a defect (and, unless `include_faulty`, without a failed collection

@@ -434,6 +434,67 @@ fn outlier(fit: &Fit, opts: &CalibrationOptions) -> Option<(usize, f64, f64)> {
         .map(|&(l, z)| (l, z, threshold))
 }
 
+/// The configuration whose removal alone makes a failed fit acceptable, if there is one:
+/// (usable index, its normalised residual under the fit without it, that fit's outlier threshold).
+/// A gross error pulls a least-squares fit toward itself (LM may not even converge), so its own
+/// residual need not stand out; refitting without each configuration in turn finds it. Among the
+/// removals whose fit passes the verdict, the one with the lowest fit statistic is returned.
+/// Costs one solve per configuration: run only when the fit would otherwise be refused.
+fn deletion_outlier(
+    layout: Layout,
+    sel: &Selected,
+    x0: &DVector<f64>,
+    red: &Reduction,
+    opts: &CalibrationOptions,
+) -> Option<(usize, f64, f64)> {
+    let first = usize::from(layout.method == Method::Rpba); // RPBA's reference stays
+    let mut best: Option<(usize, f64, f64, f64)> = None;
+    for l in first..sel.usable.len() {
+        let drop = sel.usable.index[l];
+        let mut trial = Selected {
+            usable: sel.usable.only(|i| i != drop),
+            dropped: Vec::new(),
+        };
+        if trial.usable.len() < min_configurations(layout.method) {
+            return None;
+        }
+        let Ok((mut p, r, j)) = start(layout, &mut trial, x0, opts) else {
+            continue;
+        };
+        let Ok(end) = levenberg_marquardt(&mut p, red, x0.clone(), r, j, opts, &mut |_| {}) else {
+            continue;
+        };
+        let Ok(fit) = assess(&mut p, &end, red.q.ncols()) else {
+            continue;
+        };
+        let used = trial.usable.index.clone();
+        if verdict(layout.method, &fit, &end, &used, &[], opts).is_some() {
+            continue;
+        }
+        // Its residual under the fit that did not see it.
+        let mut with = Selected {
+            usable: sel.usable.clone(),
+            dropped: Vec::new(),
+        };
+        let Ok((mut pw, _, _)) = start(layout, &mut with, x0, opts) else {
+            continue;
+        };
+        let Some(z) = assess(&mut pw, &end, red.q.ncols())
+            .ok()
+            .and_then(|f| f.blocks.iter().find(|b| b.0 == l).map(|b| b.1))
+        else {
+            continue;
+        };
+        let threshold = opts
+            .outlier_threshold
+            .max(opts.outlier_ratio * fit.median());
+        if z > threshold && best.is_none_or(|b| fit.statistic() < b.3) {
+            best = Some((l, z, threshold, fit.statistic()));
+        }
+    }
+    best.map(|(l, z, t, _)| (l, z, t))
+}
+
 /// Calibrates `layout`'s parameters from `data`, starting at `x0`: solve, reject the worst gross
 /// outlier and solve again from `x0` (at most `opts.max_rejections` times), then check the fit.
 pub(super) fn solve(
@@ -457,6 +518,8 @@ pub(super) fn solve(
         opts.fix_sensor_pose && method == Method::Implicit,
     );
     let mut rejected: Vec<RejectedConfiguration> = Vec::new();
+    let all = sel.usable.clone();
+    let mut readmission_done = false;
     loop {
         let (mut problem, r, j) = start(layout, &mut sel, &x0, opts)?;
         check_rank(&layout, &red, &j, opts)?;
@@ -468,7 +531,12 @@ pub(super) fn solve(
             .map_err(fk_error)?;
         let fit = assess(&mut problem, &end, red.q.ncols()).map_err(fk_error)?;
         if rejected.len() < opts.max_rejections {
-            if let Some((l, z, threshold)) = outlier(&fit, opts) {
+            let used = &sel.usable.index;
+            let found = outlier(&fit, opts).or_else(|| {
+                verdict(method, &fit, &end, used, &rejected, opts)
+                    .and_then(|_| deletion_outlier(layout, &sel, &x0, &red, opts))
+            });
+            if let Some((l, z, threshold)) = found {
                 rejected.push(RejectedConfiguration {
                     index: sel.usable.index[l],
                     normalized_residual: z,
@@ -482,6 +550,39 @@ pub(super) fn solve(
         let used = sel.usable.index.clone();
         if let Some(e) = verdict(method, &fit, &end, &used, &rejected, opts) {
             return Err(e);
+        }
+        if !rejected.is_empty() && !readmission_done {
+            // A gross outlier pulls the first fits toward itself, so a good configuration can look
+            // worse than the outlier and be rejected before it. Once the fit is accepted, each
+            // rejected one is tested against it; those that fit it are taken back and the data
+            // solved again (once: a configuration rejected again stays out).
+            readmission_done = true;
+            let threshold = opts
+                .outlier_threshold
+                .max(opts.outlier_ratio * fit.median());
+            let mut back = Vec::new();
+            for r in &rejected {
+                let mut trial = Selected {
+                    usable: all.only(|i| i == r.index || used.contains(&i)),
+                    dropped: Vec::new(),
+                };
+                let Ok((mut p, _, _)) = start(layout, &mut trial, &x0, opts) else {
+                    continue;
+                };
+                let Some(l) = trial.usable.index.iter().position(|&i| i == r.index) else {
+                    continue;
+                };
+                if let Ok(f) = assess(&mut p, &end, red.q.ncols()) {
+                    if f.blocks.iter().any(|&(b, z)| b == l && z <= threshold) {
+                        back.push(r.index);
+                    }
+                }
+            }
+            if !back.is_empty() {
+                rejected.retain(|r| !back.contains(&r.index));
+                sel.usable = all.only(|i| used.contains(&i) || back.contains(&i));
+                continue;
+            }
         }
         let id = identifiability(&layout, &red, &end.j, opts);
         let x = &end.x;
