@@ -52,25 +52,6 @@ def test_an_infeasible_trajectory_is_refused_with_its_constraint_and_time(
         identify.Excitation.from_coefficients(kp, np.zeros((5, 11)), 0.1)
 
 
-@pytest.mark.parametrize(
-    ("kw", "match"),
-    [
-        ({"harmonics": -1}, "harmonics must be >= 2, got -1"),
-        ({"harmonics": 2.5}, "harmonics must be an int, got 2.5"),
-        ({"seed": -1}, r"seed must be in \[0, 2\*\*32 - 1\], got -1"),
-        ({"stroke_margn": 0.2}, "unknown limit.*stroke_margn; known: start, stroke, stroke_margin"),
-    ],
-)
-def test_excitation_options_are_checked_before_the_search(
-    kp: rss6.KinematicParams, kw: dict[str, object], match: str
-) -> None:
-    """A negative harmonics count or seed used to end as an OverflowError or a numpy ValueError,
-    a misspelt limit as a TypeError from the binding's constructor."""
-    for design in (identify.excitation, identify.random_excitation):
-        with pytest.raises(rss6.InvalidInputError, match=match):
-            design(kp, **kw)
-
-
 # --- The identification loop, CLOE, simulate (thesis §5.3, issue 13) ---------------------------
 
 import dataclasses  # noqa: E402

@@ -41,6 +41,24 @@ fn sensor_guess(truth: &TrueRobot) -> Vec6 {
     perturb_external(&truth.sensor_in_base, &mut ChaCha8Rng::seed_from_u64(3))
 }
 
+/// Both methods with their Table 4.5 row; implicit starts at `sensor_guess`.
+const METHODS: [(Method, [f64; 6]); 2] = [
+    (Method::Rpba, TABLE_4_5_RPBA),
+    (Method::Implicit, TABLE_4_5_IMPLICIT),
+];
+
+fn calibrate(
+    method: Method,
+    data: &CalibrationData,
+    truth: &TrueRobot,
+    opts: &CalibrationOptions,
+) -> std::result::Result<CalibrationResult, IdentError> {
+    match method {
+        Method::Rpba => rpba(data, &nominal(), opts),
+        Method::Implicit => implicit(data, &nominal(), &sensor_guess(truth), opts),
+    }
+}
+
 #[test]
 fn an_unreached_configuration_is_excluded_by_default_and_named_if_included() {
     let (truth, mut data) = robot_data(21, 22);
@@ -83,17 +101,9 @@ fn a_camera_pose_shifted_by_5_mm_is_rejected_and_named() {
     if let Some(p) = data.configurations[bad].sensor_pose.as_mut() {
         p[0] += 5e-3;
     }
-    let guess = sensor_guess(&truth);
     let opts = CalibrationOptions::default();
-    for (method, table) in [
-        (Method::Rpba, TABLE_4_5_RPBA),
-        (Method::Implicit, TABLE_4_5_IMPLICIT),
-    ] {
-        let r = match method {
-            Method::Rpba => rpba(&data, &nominal(), &opts),
-            Method::Implicit => implicit(&data, &nominal(), &guess, &opts),
-        }
-        .unwrap();
+    for (method, table) in METHODS {
+        let r = calibrate(method, &data, &truth, &opts).unwrap();
         assert_eq!(r.rejected.len(), 1, "{method}: {:?}", r.rejected);
         assert_eq!(r.rejected[0].index, bad);
         assert!(
@@ -132,17 +142,10 @@ fn a_gross_outlier_costs_only_its_own_configuration() {
             if let Some(p) = data.configurations[bad].sensor_pose.as_mut() {
                 p[0] += shift;
             }
-            let guess = sensor_guess(&truth);
             let opts = CalibrationOptions::default();
-            for (method, table) in [
-                (Method::Rpba, TABLE_4_5_RPBA),
-                (Method::Implicit, TABLE_4_5_IMPLICIT),
-            ] {
-                let r = match method {
-                    Method::Rpba => rpba(&data, &nominal(), &opts),
-                    Method::Implicit => implicit(&data, &nominal(), &guess, &opts),
-                }
-                .unwrap_or_else(|e| panic!("seed {seed}, {shift} m, {method}: {e}"));
+            for (method, table) in METHODS {
+                let r = calibrate(method, &data, &truth, &opts)
+                    .unwrap_or_else(|e| panic!("seed {seed}, {shift} m, {method}: {e}"));
                 let rejected: Vec<usize> = r.rejected.iter().map(|c| c.index).collect();
                 assert_eq!(rejected, vec![bad], "seed {seed}, {shift} m, {method}");
                 assert_eq!(r.used.len(), data.configurations.len() - 1);
@@ -164,14 +167,9 @@ fn data_no_model_explains_raise_calibration_error() {
     for (l, c) in data.configurations.iter_mut().enumerate() {
         c.sensor_pose = poses[(l + 1) % n];
     }
-    let guess = sensor_guess(&truth);
     let opts = CalibrationOptions::default();
-    for method in [Method::Rpba, Method::Implicit] {
-        let r = match method {
-            Method::Rpba => rpba(&data, &nominal(), &opts),
-            Method::Implicit => implicit(&data, &nominal(), &guess, &opts),
-        };
-        match r {
+    for (method, _) in METHODS {
+        match calibrate(method, &data, &truth, &opts) {
             Err(IdentError::Calibration {
                 method: m,
                 configurations,
