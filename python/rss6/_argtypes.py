@@ -32,7 +32,7 @@ def _float(text: str) -> float:
 
 
 def seed(text: str) -> int:
-    """A random seed: an integer in [0, 2³² − 1]."""
+    """A random seed: an integer in [0, SEED_MAX]."""
     n = _int(text)
     if not 0 <= n <= SEED_MAX:
         raise argparse.ArgumentTypeError(f"a seed must be in [0, {SEED_MAX}], got {n}")
