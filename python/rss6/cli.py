@@ -68,19 +68,24 @@ def _check_plant(kind: PlantKind) -> None:
 
 
 def out_dir(path: str) -> str:
-    """``--out``'s directory, made now: a file in its place or a directory that cannot be made is an
-    :class:`rss6.InvalidInputError` before the work, not an ``OSError`` after it."""
+    """``--out``'s directory checked before the work (made only when something is written): a file
+    in its place or in its way, or a place that cannot be written, is an
+    :class:`rss6.InvalidInputError` now, not an ``OSError`` after the run."""
+    import os
     from pathlib import Path
 
     from rss6.errors import InvalidInputError
 
-    p = Path(path)
+    p = Path(path).absolute()
     if p.exists() and not p.is_dir():
         raise InvalidInputError(f"--out {path} is a file; give a directory")
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise InvalidInputError(f"--out {path}: cannot make the directory ({e.strerror})") from None
+    q = p
+    while not q.exists():
+        q = q.parent
+    if not q.is_dir():
+        raise InvalidInputError(f"--out {path}: {q} is a file, so the directory cannot be made")
+    if not os.access(q, os.W_OK | os.X_OK):
+        raise InvalidInputError(f"--out {path}: {q} is not writable")
     return path
 
 

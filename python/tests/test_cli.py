@@ -234,6 +234,9 @@ def test_an_out_directory_that_is_a_file_is_refused_before_the_work(
     blocker.write_text("keep me", encoding="utf-8")
     assert cli.main([*argv, "--quiet", "--out", str(blocker)]) == 1
     assert f"--out {blocker} is a file; give a directory" in capsys.readouterr().err
+    # A file in the way of a directory to be made: refused too, and nothing is created.
+    assert cli.main([*argv, "--quiet", "--out", str(blocker / "sub")]) == 1
+    assert "is a file, so the directory cannot be made" in capsys.readouterr().err
     assert blocker.read_text(encoding="utf-8") == "keep me"
 
 

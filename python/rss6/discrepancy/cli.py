@@ -128,10 +128,10 @@ def run(args: argparse.Namespace) -> int:
     from rss6.cli import out_dir
     from rss6.discrepancy.benchmark import PLANT_SOLVER_ITERATIONS, hidden_case
 
-    out_dir(args.out)
     if args.pot_noise != "none" and args.commands != "recorded":
         # Checked before any run is collected: the noise is replayed through recorded commands.
         raise InvalidInputError("--pot-noise recorded needs --commands recorded")
+    out_dir(args.out)
     quiet = bool(args.quiet)
     bars: dict[str, Any] = {}
     measured: Any
