@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from rss6.errors import InvalidInputError, NonFiniteError, ShapeError
 
-__all__ = ["gains3", "pose6", "rng", "seed"]
+__all__ = ["count", "gains3", "pose6", "rng", "seed"]
 
 
 def seed(value: Any, name: str = "seed") -> int:
@@ -58,3 +58,14 @@ def gains3(value: Any, name: str, *, nonnegative: bool = False) -> tuple[float, 
             + f", got {value!r}"
         )
     return (g[0], g[1], g[2])
+
+
+def count(value: Any, name: str, least: int = 0) -> int:
+    """``value`` as an int ≥ ``least`` (a count, a number of iterations or lags)."""
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise InvalidInputError(f"{name} must be an int >= {least}, got {value!r}") from None
+    if n < least:
+        raise InvalidInputError(f"{name} must be an int >= {least}, got {value!r}")
+    return n

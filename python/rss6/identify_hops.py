@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rss6 import _rss6
+from rss6 import _checks, _rss6
 from rss6.errors import IdentificationError, InvalidInputError
 
 if TYPE_CHECKING:
@@ -93,8 +93,7 @@ def hopped(
 def check_restarts(restarts: int, spread: float) -> None:
     """Raises :class:`rss6.InvalidInputError` unless ``restarts`` is an int ≥ 0 and
     0 < ``spread`` < 1."""
-    if int(restarts) != restarts or restarts < 0:
-        raise InvalidInputError(f"restarts must be an int ≥ 0, got {restarts!r}")
+    _checks.count(restarts, "restarts")
     if not (math.isfinite(spread) and 0.0 < spread < 1.0):
         raise InvalidInputError(f"restart_spread must lie in (0, 1), got {spread!r}")
 

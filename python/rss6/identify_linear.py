@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import optimize, signal
 
-from rss6 import _rss6
+from rss6 import _checks, _rss6
 from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, ShapeError
 
 if TYPE_CHECKING:
@@ -393,8 +393,7 @@ def check_options(
     tol_step: float = 0.0,
 ) -> None:
     """Raises :class:`rss6.InvalidInputError` for :func:`rss6.identify.cloe` options it refuses."""
-    if int(max_iterations) != max_iterations or max_iterations < 0:
-        raise InvalidInputError(f"max_iterations must be an int ≥ 0, got {max_iterations!r}")
+    _checks.count(max_iterations, "max_iterations")
     for name, tol in (("tol_cost", tol_cost), ("tol_step", tol_step)):
         if not (math.isfinite(tol) and tol >= 0):
             raise InvalidInputError(f"{name} must be finite and ≥ 0, got {tol!r}")
@@ -402,8 +401,7 @@ def check_options(
         raise InvalidInputError(
             "consistent=False is not implemented: CLOE estimates logs of physical quantities"
         )
-    if int(settle_steps) != settle_steps or settle_steps < 0:
-        raise InvalidInputError(f"settle_steps must be an int ≥ 0, got {settle_steps!r}")
+    _checks.count(settle_steps, "settle_steps")
     if commands not in ("simulated", "recorded"):
         raise InvalidInputError(f"commands must be 'simulated' or 'recorded', got {commands!r}")
 

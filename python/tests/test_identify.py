@@ -216,7 +216,7 @@ def test_cloe_names_what_it_cannot_identify_and_reports_non_convergence(
     # Options that used to end as an OverflowError or IndexError from the binding, or as a
     # "did not converge" that blamed the data for a NaN tolerance.
     for kw, match in (
-        ({"max_iterations": -1}, "max_iterations must be an int ≥ 0"),
+        ({"max_iterations": -1}, "max_iterations must be an int >= 0"),
         ({"tol_cost": float("nan")}, "tol_cost must be finite"),
         ({"tol_step": -1.0}, "tol_step must be finite and ≥ 0"),
     ):

@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import rss6
+from rss6 import _checks
 from rss6.discrepancy.detect import Detection, detect, reference_signatures
 from rss6.discrepancy.effects import Change, EffectDef, joint_index
 from rss6.discrepancy.model import AppliedEffect, Model, Replay, Run, replay, run_of, simulate
@@ -252,8 +253,7 @@ def check_options(
     if not 0 < alpha < 0.5:
         raise InvalidInputError(f"alpha must be in (0, 0.5); got {alpha}")
     for name, (value, least) in counts.items():
-        if int(value) != value or value < least:
-            raise InvalidInputError(f"{name} must be an int >= {least} (got {value!r})")
+        _checks.count(value, name, least)
     if not isinstance(reidentify, bool):
         from rss6.identify import parameter_names
         from rss6.identify_linear import requested_names

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 
+from rss6 import _checks
 from rss6.discrepancy import stats
 from rss6.discrepancy.noise import (
     NoiseModel,
@@ -190,8 +191,7 @@ def detect(
         raise InvalidInputError(
             f"window must be finite and > 0 s and max_lag finite and >= 0 s; got {window}, {max_lag}"
         )
-    if int(lb_lags) != lb_lags or lb_lags < 1:
-        raise InvalidInputError(f"lb_lags must be an int >= 1, got {lb_lags!r}")
+    _checks.count(lb_lags, "lb_lags", 1)
     rate = 1.0 / float(np.median(np.diff(tt)))
     noise = _noise(r, noise_floor, None if period is None else round(period * rate))
     if noise.axes != m:

@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from rss6 import _checks
 from rss6.errors import InvalidInputError, ShapeError
 
 __all__ = [
@@ -150,9 +151,7 @@ def fit_ar(x: F64, max_order: int) -> tuple[F64, float]:
 
 def _order(max_order: int) -> int:
     """``max_order`` checked: an int ≥ 0 (0: white noise)."""
-    if int(max_order) != max_order or max_order < 0:
-        raise InvalidInputError(f"max_order must be an int >= 0, got {max_order!r}")
-    return int(max_order)
+    return _checks.count(max_order, "max_order")
 
 
 def _ar_from_acov(acov: F64, n: int) -> tuple[F64, float]:
