@@ -17,6 +17,10 @@ optional :mod:`rss6.can` (the CAN bridge: ``pip install rss6[can]``, imported on
 
 from __future__ import annotations
 
+import importlib
+from types import ModuleType
+from typing import TYPE_CHECKING
+
 from rss6 import errors
 from rss6._rss6 import (
     CalibrationData,
@@ -74,9 +78,26 @@ try:  # the rapier plant (rss6-sim) is optional in builds without it
 except ImportError:  # pragma: no cover - depends on the build
     Plant = None  # type: ignore[assignment,misc]
 
-from rss6 import calibrate, identify, logs, servo
+if TYPE_CHECKING:
+    from rss6 import calibrate, identify, logs, servo
 
 __version__ = "0.1.0"
+
+# calibrate, identify, logs and servo load scipy and mcap (≈ 0.8 s): they are imported when first
+# used, so that `import rss6` (and with it the `rss6` command, whose Ctrl-C handling starts only once
+# its module has loaded) takes a fraction of that.
+_LAZY = frozenset({"calibrate", "identify", "logs", "servo"})
+
+
+def __getattr__(name: str) -> ModuleType:
+    if name in _LAZY:
+        return importlib.import_module(f"rss6.{name}")
+    raise AttributeError(f"module 'rss6' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | _LAZY)
+
 
 __all__ = [
     "CalibrationData",

@@ -511,8 +511,12 @@ def _can_missing(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rss6`` console script."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:  # the parser imports the subcommands' modules (scipy among them: ≈ 0.7 s)
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:
+        print("rss6: interrupted", file=sys.stderr)
+        return 130
     if not getattr(args, "func", None):
         parser.print_help()
         return 0

@@ -124,6 +124,23 @@ def test_ctrl_c_stops_a_run_with_one_line_and_keeps_its_log(tmp_path):
     assert 0 < n < 3_000_000 and n % 1000 == 0  # whole simulated seconds, flushed as it went
 
 
+def test_ctrl_c_while_the_command_loads_is_one_line_too(monkeypatch, capsys):
+    """Before the work starts, a command spends most of a second importing (scipy, through the
+    subcommands' modules): `import rss6` itself loads none of it, and Ctrl-C while the parser is
+    built is the same one line and exit 130, not a traceback."""
+    code = "import sys, rss6.cli; print(sorted(m for m in ('scipy', 'mcap', 'matplotlib') if m in sys.modules))"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.strip() == "[]", r.stdout + r.stderr
+    from rss6 import cli
+
+    def interrupted() -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", interrupted)
+    assert cli.main(["demo", "--quick"]) == 130
+    assert capsys.readouterr().err.strip() == "rss6: interrupted"
+
+
 def test_calibrate_simulate_quick_prints_tables_4_3_to_4_5():
     r = run("calibrate", "--simulate", "--quick", "--robots", "2")
     assert r.returncode == 0, r.stderr[-2000:]
