@@ -21,12 +21,15 @@ from rss6.identify_linear import (
     LinearGuess,
     check_options,
     effect_kwargs,
+    frame_noise_passes,
     linear_guess,
     lowpass_measured,
     model_noise_passes,
+    noise_kwargs,
     potentiometer_noise,
     replayed_noise,
     requested_names,
+    table_5_2_truth,
 )
 
 __all__ = [
@@ -59,14 +62,6 @@ def parameter_names() -> list[str]:
     ``platform.Sxx``/``Syy``/``Szz``, ``wrench<i>.m``, ``wrench<i>.Iz``, ``link<i>.m``, the transverse
     ``link<i>.It``, ``fc<i>``, ``fv<i>``, and the drive gains ``lp``, ``li``, ``ld`` (43)."""
     return list(_rss6.cloe_parameter_names())
-
-
-def table_5_2_truth() -> tuple[_rss6.DynamicParams, tuple[float, float, float]]:
-    """The documented simulated truth shaped like Table 5.2 (``rss6_ident::table_5_2_truth``): the
-    table's identified masses and inertias, its friction × 40 (drive units to N·m) and the tuned
-    drive gains moved by its identified/initial ratios. Returns (dynamics, (l_p, l_i, l_d))."""
-    dp, pid = _rss6.table_5_2_truth_params()
-    return dp, (float(pid[0]), float(pid[1]), float(pid[2]))
 
 
 @dataclass(frozen=True)
@@ -376,8 +371,8 @@ class IdentificationResult:
     the guess as relative changes c·δ of those do (|c| ≥ 0.05, at most 4), ``residual`` the relative
     misfit of that combination (≈ 0: it combines into them; near 1: the output hardly sees it);
     :meth:`alias_text` says it in words. ``guess`` and ``model`` keep what :func:`validate` needs.
-    ``linear_map`` (map (p, 6F), weights (6,)): δψ = map · δr for a change δr of the weighted
-    residual; :func:`with_replicates` carries noisy replicate runs through it to
+    ``linear_map`` (map (p, 6F), whitening W (6, 6)): δψ = map · δr for a change δr of the
+    residual whitened frame by frame (W·(χ_m − χ_s)); ``residual`` (F, 6): χ_m − χ_s at the estimate; :func:`with_replicates` carries noisy replicate runs through it to
     ``relative_std_replicates`` (docs/identification.md, "σ from noisy replicates")."""
 
     dynamics: _rss6.DynamicParams
@@ -403,6 +398,7 @@ class IdentificationResult:
     start_spread: F64 = field(default_factory=lambda: np.zeros(0))
     linear_map: tuple[F64, F64] | None = None
     relative_std_replicates: F64 = field(default_factory=lambda: np.zeros(0))
+    residual: F64 = field(default_factory=lambda: np.zeros((0, 6)))
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -438,7 +434,7 @@ def cloe(
     friction_smoothing: float = 0.0,
     implicit_friction: bool = False,
     commands: str = "simulated",
-    noise: tuple[float, float] | None = None,
+    noise: tuple[float, float] | ArrayLike | str | None = None,
     per_tick_jacobians: bool = False,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-5,
@@ -470,7 +466,9 @@ def cloe(
     error sees Ξ and the drive gains only up to one common factor, so with ``"base"`` one known
     quantity (e.g. ``"lp"`` from the drive's data sheet) fixes the scale; ``consistent``: the estimator works on logs of physical quantities,
     so every iterate is a physical robot (the only parametrisation implemented: ``False`` is refused).
-    ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1).
+    ``noise`` (position m, angle rad): the residual weights' σ (default Table 4.1); a (6, 6) frame
+    covariance: the residual whitened by it; ``"frames"``: a second pass whitened by the first's
+    residual covariance (:func:`rss6.identify_linear.frame_noise_passes`).
     ``prior_log_std``: σ of a Gaussian prior on every estimated log-quantity centred at the guess
     (keeps quantities the run hardly sees near it); ``None``: the pure output error of eq. 5.7.
     ``cost_history`` includes the prior's term. ``gravity``, ``load``, ``offset_drift``: effects of
@@ -504,6 +502,8 @@ def cloe(
     identify_hops.check_restarts(restarts, restart_spread)
     if isinstance(pot_noise, str) and pot_noise == "model":
         return model_noise_passes(data, lambda g: cloe(**{**call, **g}))
+    if isinstance(noise, str):
+        return frame_noise_passes(noise, lambda g: cloe(**{**call, **g}))
     if data.fault is not None:
         raise IdentificationError(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
@@ -535,7 +535,6 @@ def cloe(
         friction_smoothing=friction_smoothing,
         implicit_friction=implicit_friction,
         commands=held,
-        noise=noise,
         per_tick_jacobians=per_tick_jacobians,
         tol_cost=tol_cost,
         tol_step=tol_step,
@@ -546,6 +545,7 @@ def cloe(
         settle_steps=settle_steps,
         initial=initial,
         **effect_kwargs(gravity, load, offset_drift),
+        **noise_kwargs(noise),
     )
     lp, li, ld = r["pid"]
     result = IdentificationResult(
@@ -559,7 +559,8 @@ def cloe(
         },
         relative_std=np.asarray(r["relative_std"]),
         relative_std_wald=np.asarray(r["relative_std_wald"]),
-        linear_map=(np.asarray(r["estimator_map"]), np.asarray(r["residual_weight"])),
+        linear_map=(np.asarray(r["estimator_map"]), np.asarray(r["residual_whitening"])),
+        residual=np.asarray(r["residual"]),
         poorly_identified=tuple(r["poorly_identified"]),
         rms_before=np.asarray(r["rms_before"]),
         rms_after=np.asarray(r["rms_after"]),

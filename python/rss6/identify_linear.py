@@ -471,3 +471,52 @@ def model_noise_passes(
         rms_before=first.rms_before,
         model=dataclasses.replace(second.model, pot_noise="model"),
     )
+
+
+def noise_kwargs(noise: Any) -> dict[str, Any]:
+    """The binding's keyword for :func:`rss6.identify.cloe`'s ``noise``: None (Table 4.1), a
+    (position m, angle rad) pair of σ, or a (6, 6) frame covariance (the residual whitened by it)."""
+    if noise is None:
+        return {}
+    a = np.asarray(noise, dtype=np.float64)
+    if a.shape == (2,):
+        return {"noise": (float(a[0]), float(a[1]))}
+    if a.shape == (6, 6):
+        return {"noise_covariance": a}
+    raise ShapeError(
+        f"noise must be (position, angle), a (6, 6) frame covariance or 'frames', got shape {a.shape}"
+    )
+
+
+def frame_noise_passes(
+    noise: str, rerun: Callable[[dict[str, Any]], IdentificationResult]
+) -> IdentificationResult:
+    """:func:`rss6.identify.cloe` with ``noise="frames"``: ``rerun`` (the same CLOE with some
+    arguments replaced) first with Table 4.1's per-axis weights, then from that estimate
+    (``initial``; the same guess, so the same prior) with the residual whitened by the frames'
+    covariance there, Σ = (1/F) Σ_k d_k d_kᵀ — a camera's pose noise is correlated between axes
+    (x with β, y with α: |ρ| ≈ 0.9 on the simulated camera), which per-axis weights ignore
+    (docs/identification.md, "Weighting by the frames' covariance"). The second result, with both
+    passes' iterations and simulations and the first's ``rms_before``."""
+    if noise != "frames":
+        raise InvalidInputError(
+            f"noise must be (position, angle), a (6, 6) covariance or 'frames', got {noise!r}"
+        )
+    first = rerun({"noise": None})
+    d = first.residual
+    cov = d.T @ d / max(len(d), 1)
+    second = rerun({"noise": cov, "initial": (first.dynamics, first.pid)})
+    return dataclasses.replace(
+        second,
+        iterations=first.iterations + second.iterations,
+        simulations=first.simulations + second.simulations,
+        rms_before=first.rms_before,
+    )
+
+
+def table_5_2_truth() -> tuple[_rss6.DynamicParams, tuple[float, float, float]]:
+    """The documented simulated truth shaped like Table 5.2 (``rss6_ident::table_5_2_truth``): the
+    table's identified masses and inertias, its friction × 40 (drive units to N·m) and the tuned
+    drive gains moved by its identified/initial ratios. Returns (dynamics, (l_p, l_i, l_d))."""
+    dp, pid = _rss6.table_5_2_truth_params()
+    return dp, (float(pid[0]), float(pid[1]), float(pid[2]))

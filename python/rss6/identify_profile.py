@@ -121,6 +121,10 @@ def profile(
     others = [n for n in result.identified if n != name]
     kw = {**cloe_kwargs, "parameters": others, "hops": (), "restarts": 0}
     kw.pop("initial", None)
+    if isinstance(kw.get("noise"), str) and result.linear_map is not None:
+        # noise="frames": every point is weighted by the fit's own frame covariance, Σ = (WᵀW)⁻¹.
+        w = np.asarray(result.linear_map[1])
+        kw["noise"] = np.linalg.inv(w.T @ w)
 
     def at(offset: float) -> float:
         held = psi_est[j] + offset

@@ -30,12 +30,13 @@ if TYPE_CHECKING:
 
 
 def weighted_residual(result: IdentificationResult, data: IdentificationData, chi_s: F64) -> F64:
-    """(6F,): CLOE's residual layout — frame k's axis i at 6k + i, (χ_m − χ_s)·w_i with the
-    weights of ``result``."""
+    """(6F,): CLOE's residual layout — frame k's axis i at 6k + i, W·(χ_m − χ_s) with the
+    whitening W of ``result`` (diag(1/σ) unless CLOE weighted by a frame covariance)."""
     if result.linear_map is None:
         raise InvalidInputError("this result carries no linear map (CLOE's σ was not computed)")
-    w = result.linear_map[1]
-    d = (np.asarray(data.measured) - np.asarray(chi_s)) * w[None, :]
+    w = np.asarray(result.linear_map[1])
+    whiten = np.diag(w) if w.ndim == 1 else w
+    d = (np.asarray(data.measured) - np.asarray(chi_s)) @ whiten.T
     return np.asarray(d.reshape(-1), dtype=np.float64)
 
 

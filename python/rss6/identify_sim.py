@@ -32,7 +32,7 @@ from rss6.errors import IdentificationError
 from rss6.excitation import loop_observability
 from rss6.identify_report import IdentifyReport, loop_text, quantities
 
-__all__ = ["IdentifyReport", "estimate_from_initial", "initial_model", "run"]
+__all__ = ["IdentifyReport", "cloe_settings", "estimate_from_initial", "initial_model", "run"]
 
 #: The visual PID's gains (k_p, k_i 1/s, k_d s) of the extra validation run (§5.6.3: the identified
 #: model must also predict the loop with gains other than the identification run's 0.3, 2.4, 0.001).
@@ -80,6 +80,48 @@ def collect_on_plant(
     )  # fmt: skip
 
 
+def cloe_settings(
+    d: identify.IdentificationData,
+    kp: rss6.KinematicParams,
+    *,
+    friction_law: str = "implicit",
+    lp: float | None = None,
+    max_iterations: int = 40,
+    derivative_filter: float = DRIVE_DERIVATIVE_FILTER,
+    friction_smoothing: float = FRICTION_SMOOTHING,
+    parameters: str | list[str] = "base",
+    pot_noise: str = "recorded",
+    hops: tuple[float, ...] = (),
+    noise: str | None = None,
+) -> tuple[tuple[rss6.DynamicParams, tuple[float, float, float]], dict[str, Any]]:
+    """The CLOE :func:`estimate_from_initial` runs: its guess (dp, pid) — the initial model, or
+    with the implicit law the linear guess from it — and the keyword arguments. What
+    :func:`rss6.identify_profile.profile` needs to profile that fit."""
+    dp0, pid0 = initial_model()
+    t_f = derivative_filter
+    if friction_law == "tanh":
+        kw: dict[str, Any] = {
+            "parameters": parameters, "max_iterations": max_iterations, "per_tick_jacobians": True,
+            "derivative_filter": t_f, "friction_smoothing": friction_smoothing,
+            "pot_noise": pot_noise, "noise": noise,
+        }  # fmt: skip
+        return (dp0, pid0), kw
+    if friction_law != "implicit":
+        raise rss6.InvalidInputError(
+            f"friction_law must be 'tanh' or 'implicit', got {friction_law!r}"
+        )
+    if lp is None:
+        raise rss6.InvalidInputError("the implicit law needs the drive's l_p (lp=)")
+    g = identify.linear_guess(d, kp, dp0, pid0, lp=lp, derivative_filter=t_f)
+    kw = {
+        "parameters": parameters, "max_iterations": max_iterations, "per_tick_jacobians": True,
+        "commands": "recorded", "hold": [] if parameters != "base" else ["lp"],
+        "derivative_filter": t_f, "implicit_friction": True, "pot_noise": pot_noise, "hops": hops,
+        "noise": noise,
+    }  # fmt: skip
+    return (g.dynamics, g.pid), kw
+
+
 def estimate_from_initial(
     d: identify.IdentificationData,
     kp: rss6.KinematicParams,
@@ -93,6 +135,7 @@ def estimate_from_initial(
     progress: Callable[[int, float], Any] | None = None,
     pot_noise: str = "recorded",
     hops: tuple[float, ...] = (),
+    noise: str | None = None,
 ) -> identify.IdentificationResult:
     """CLOE on ``d`` from :func:`initial_model`. ``friction_law="tanh"``: CLOE from the initial
     model with tanh friction (ε = ``friction_smoothing``). ``"implicit"``: the stick–slip law, a
@@ -102,28 +145,18 @@ def estimate_from_initial(
     potentiometer noise estimated from the recorded readings (docs/identification.md, "Replaying
     the potentiometer noise"). ``max_iterations``: 40, as ``rss6 identify --simulate`` and the
     identification study give the stick–slip law. ``hops``: :func:`rss6.identify.cloe`'s, with the
-    implicit law (l_p held). Raises what :func:`rss6.identify.cloe` raises."""
+    implicit law (l_p held). ``noise``: :func:`rss6.identify.cloe`'s (``"frames"``: whitened by the
+    frames' covariance). Raises what :func:`rss6.identify.cloe` raises."""
     dp0, pid0 = initial_model()
     t_f = derivative_filter
-    if friction_law == "tanh":
-        return identify.cloe(
-            d, kp, dp0, pid0, parameters=parameters, max_iterations=max_iterations,
-            per_tick_jacobians=True, progress=progress, derivative_filter=t_f,
-            friction_smoothing=friction_smoothing, pot_noise=pot_noise,
-        )  # fmt: skip
-    if friction_law != "implicit":
-        raise rss6.InvalidInputError(
-            f"friction_law must be 'tanh' or 'implicit', got {friction_law!r}"
-        )
-    if lp is None:
-        raise rss6.InvalidInputError("the implicit law needs the drive's l_p (lp=)")
-    g = identify.linear_guess(d, kp, dp0, pid0, lp=lp, derivative_filter=t_f)
-    res = identify.cloe(
-        d, kp, g.dynamics, g.pid, parameters=parameters, max_iterations=max_iterations,
-        per_tick_jacobians=True, progress=progress, commands="recorded",
-        hold=[] if parameters != "base" else ["lp"], derivative_filter=t_f,
-        implicit_friction=True, pot_noise=pot_noise, hops=hops,
+    guess, kw = cloe_settings(
+        d, kp, friction_law=friction_law, lp=lp, max_iterations=max_iterations,
+        derivative_filter=t_f, friction_smoothing=friction_smoothing, parameters=parameters,
+        pot_noise=pot_noise, hops=hops, noise=noise,
     )  # fmt: skip
+    res = identify.cloe(d, kp, *guess, progress=progress, **kw)
+    if friction_law == "tanh":
+        return res
     chi0 = identify.simulate(
         kp, dp0, pid0, d.reference, times=d.t, dt=d.dt, commands=d.frame_commands(),
         derivative_filter=t_f, implicit_friction=True,

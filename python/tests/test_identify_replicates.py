@@ -57,8 +57,10 @@ def test_the_linear_map_is_cloes_own(
     assert res.linear_map is not None
     lmap, w = res.linear_map
     assert lmap.shape == (len(res.identified), 6 * data.frames)
-    np.testing.assert_allclose(w[:3], 1 / 0.0096e-3)
-    np.testing.assert_allclose(w[3:], 1 / np.deg2rad(0.0261))
+    # The whitening of Table 4.1's per-axis weights: diag(1/σ).
+    assert w.shape == (6, 6) and np.count_nonzero(w - np.diag(np.diag(w))) == 0
+    np.testing.assert_allclose(np.diag(w)[:3], 1 / 0.0096e-3)
+    np.testing.assert_allclose(np.diag(w)[3:], 1 / np.deg2rad(0.0261))
     r0 = weighted_residual(res, data, model_output(res, data))
     dof = len(r0) - len(res.identified)
     assert float(r0 @ r0) / dof == pytest.approx(res.reduced_chi2, rel=1e-9)

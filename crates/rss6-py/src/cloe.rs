@@ -366,10 +366,12 @@ pub(crate) fn simulate_identification<'py>(
 /// every accepted step (iteration 0: the guess); if it raises, CLOE stops and the exception
 /// propagates. `gravity`, `load`, `offset_drift`: effects of the model, as for
 /// `simulate_identification` (re-identification with named effects); `pot_dither` as there;
-/// `initial` (dynamics, gains): where LM starts instead of the guess (`CloeOptions::initial`). Returns a dict (see
+/// `initial` (dynamics, gains): where LM starts instead of the guess (`CloeOptions::initial`);
+/// `noise_covariance` (6, 6): one frame's pose-noise covariance, the residual whitened by it instead
+/// of `noise`'s per-axis weights (`CloeOptions::noise_covariance`). Returns a dict (see
 /// `rss6.identify.IdentificationResult`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=rss6_ident::SETTLE_STEPS, initial=None))]
+#[pyo3(signature = (t, measured, f0, coefficients, kp, dp_guess, pid_guess, *, start, duration, parameters=None, hold=None, max_iterations=20, torque_limit=30.0, camera_latency=0.0, dt=1e-3, derivative_filter=0.0, friction_smoothing=0.0, implicit_friction=false, commands=None, noise=None, per_tick_jacobians=false, tol_cost=1e-6, tol_step=1e-5, identifiability_threshold=1e-3, poor_std=0.1, prior_log_std=1.0, progress=None, gravity=None, load=None, offset_drift=None, outer_gains=None, pot_dither=None, settle_steps=rss6_ident::SETTLE_STEPS, initial=None, noise_covariance=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn cloe_identify<'py>(
     py: Python<'py>,
@@ -407,6 +409,7 @@ pub(crate) fn cloe_identify<'py>(
     pot_dither: Option<&Bound<'py, PyAny>>,
     settle_steps: usize,
     initial: Option<(PyRef<'py, PyDynamicParams>, (f64, f64, f64))>,
+    noise_covariance: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let measured = rows6(measured, "measured")?;
     if measured.len() != t.len() {
@@ -456,6 +459,16 @@ pub(crate) fn cloe_identify<'py>(
         }),
         ..CloeOptions::default()
     };
+    if let Some(c) = noise_covariance {
+        let r = crate::convert::rows::<6>(c, "noise_covariance")?;
+        if r.len() != 6 {
+            return Err(shape(format!(
+                "noise_covariance must have shape (6, 6), got {} rows",
+                r.len()
+            )));
+        }
+        options.noise_covariance = Some([r[0], r[1], r[2], r[3], r[4], r[5]]);
+    }
     if let Some((p, a)) = noise {
         options.noise = [p, a];
     }
@@ -520,6 +533,11 @@ pub(crate) fn cloe_identify<'py>(
     d.set_item("relative_std_wald", out1(py, &r.relative_std_wald))?;
     d.set_item("estimator_map", out_dmatrix(py, &r.estimator_map))?;
     d.set_item("residual_weight", out1(py, &r.residual_weight))?;
+    d.set_item(
+        "residual_whitening",
+        crate::convert::out_rows::<6>(py, &r.residual_whitening),
+    )?;
+    d.set_item("residual", out_rows6(py, &r.residual))?;
     d.set_item("poorly_identified", r.poorly_identified)?;
     d.set_item("rms_before", out1(py, r.rms_before.as_slice()))?;
     d.set_item("rms_after", out1(py, r.rms_after.as_slice()))?;

@@ -10,6 +10,7 @@ How to run on a cluster: docs/studies.md.
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -134,6 +135,8 @@ def identification_variation(
     solver_iterations: int | None = None,
     replicates: int = 16,
     bootstrap: bool = False,
+    profile: Sequence[str] = (),
+    noise: str | None = None,
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
@@ -147,8 +150,18 @@ def identification_variation(
     ``replicates``: each σ also from that many noisy replicates on the model twin at the estimate
     (:func:`rss6.identify.with_replicates`; 0: CLOE's σ alone, as before 2026-11-29; spec ids
     then end in ":repN"), each
-    identified again with ``bootstrap`` (the parametric bootstrap; ":bootN")."""
+    identified again with ``bootstrap`` (the parametric bootstrap; ":bootN"); ``profile``: names
+    (:func:`rss6.identify.parameter_names`) whose 95 % profile-likelihood interval each run also
+    computes (:func:`rss6.identify_profile.profile`, ≈ 5–7 CLOE runs per name; ":prof-NAME+…");
+    ``noise``: :func:`rss6.identify.cloe`'s — ``"frames"`` whitens the residual by the frames'
+    covariance (a second pass; ":frames")."""
     from rss6 import identify
+
+    unknown = sorted(set(profile) - set(identify.parameter_names()))
+    if unknown:
+        raise InvalidInputError(
+            f"cannot profile {', '.join(unknown)}: not among rss6.identify.parameter_names()"
+        )
 
     if pot_noise not in ("recorded", "model", "none"):
         raise InvalidInputError(
@@ -158,15 +171,25 @@ def identification_variation(
         raise InvalidInputError(f"solver_iterations must be >= 1, got {solver_iterations}")
     if replicates == 1 or replicates < 0:
         raise InvalidInputError(f"replicates must be 0 or >= 2, got {replicates}")
-    it = {} if solver_iterations is None else {"solver_iterations": int(solver_iterations)}
+    it: dict[str, Any] = (
+        {} if solver_iterations is None else {"solver_iterations": int(solver_iterations)}
+    )
     if replicates:
         it.update(replicates=int(replicates), bootstrap=bool(bootstrap))
+    if profile:
+        it["profile"] = list(profile)
+    if noise not in (None, "frames"):
+        raise InvalidInputError(f"noise must be None or 'frames', got {noise!r}")
+    if noise:
+        it["noise"] = noise
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
             f"pot-{pot_noise}:{seed + k}"
             + (f":it{solver_iterations}" if solver_iterations is not None else "")
-            + (f":{'boot' if bootstrap else 'rep'}{replicates}" if replicates else ""),
+            + (f":{'boot' if bootstrap else 'rep'}{replicates}" if replicates else "")
+            + (f":prof-{'+'.join(profile)}" if profile else "")
+            + (f":{noise}" if noise else ""),
             "friction_law": friction_law,
             "pot_noise": pot_noise,
             "seed": seed + k,
@@ -184,6 +207,8 @@ def identification_variation(
     fields += [f"rep_{n}" for n in identify.parameter_names()] if replicates else []
     fields += [f"rms_{w}_{a}" for w in ("before", "after") for a in _AXES]
     fields += ["converged_by"]
+    fields += [f"prof_{b}_{n}" for n in profile for b in ("lo", "hi")]
+    fields += ["prof_error"] if profile else []
     return _study(identification_task, specs, fields, out, client, workers, progress)
 
 
@@ -350,6 +375,7 @@ def summary_identification(df: Any) -> str:
             f" (were their σ right, {expected:.1f} would miss on average)"
             + (f"; the others: {', '.join(misses)}" if misses else "")
         )
+    lines += _profile_lines(ok, truth)
     lines.append("Table 5.4 (RMS after, mm / mrad):")
     for _, r in ok.iterrows():
         lines.append(
@@ -357,6 +383,31 @@ def summary_identification(df: Any) -> str:
             + " ".join(f"{1e3 * float(r[f'rms_after_{a}']):.4f}" for a in _AXES)
         )
     return "\n".join(lines)
+
+
+def _profile_lines(ok: Any, truth: dict[str, float]) -> list[str]:
+    """For each profiled quantity: how many runs' 95 % profile-likelihood interval holds the truth,
+    beside the reported interval (estimate·e^(±1.96σ)) on the same runs."""
+    lines = []
+    for col in (c for c in ok.columns if c.startswith("prof_lo_")):
+        name = col[len("prof_lo_") :]
+        t = truth.get(name, 0.0)
+        rows = ok[[col, f"prof_hi_{name}", f"est_{name}", f"std_{name}"]]
+        rows = rows.replace("", np.nan).astype(float).dropna()
+        if t <= 0 or not len(rows):
+            continue
+        lo, hi, est, sd = (rows[c].to_numpy() for c in rows.columns)
+        prof = int(np.sum((lo <= t) & (t <= hi)))
+        wald = int(np.sum(np.abs(np.log(est / t)) <= 1.96 * sd))
+        lines.append(
+            f"  {name}: the 95 % profile-likelihood interval holds the truth in {prof} of "
+            f"{len(rows)} runs (the reported σ's interval: {wald} of {len(rows)})"
+        )
+    if "prof_error" in ok.columns:
+        failed = int(ok["prof_error"].replace("", np.nan).notna().sum())
+        if failed:
+            lines.append(f"  {failed} runs' profiles stopped on a refit that did not converge")
+    return lines
 
 
 def _rms_range(sd: Any) -> tuple[float, float]:

@@ -74,6 +74,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "times the work) instead of carrying it through CLOE's linear map",
     )
     p.add_argument(
+        "--noise",
+        choices=("table", "frames"),
+        default="table",
+        help="identification: the residual's weights — Table 4.1's σ per axis (table, the "
+        "default) or, in a second pass, the frames' covariance estimated from the first "
+        "(frames: camera axes whose noise is correlated are weighted together)",
+    )
+    p.add_argument(
+        "--profile",
+        default="",
+        metavar="NAMES",
+        help="identification: also the 95 %% profile-likelihood interval of these comma-separated "
+        "quantities (e.g. fv1,fv3; ≈ 5–7 CLOE runs each per trajectory), and how often it holds "
+        "the truth",
+    )
+    p.add_argument(
         "--solver-iterations",
         type=count(1),
         default=None,
@@ -113,6 +129,8 @@ def run(args: argparse.Namespace) -> int:
             solver_iterations=args.solver_iterations,
             replicates=args.replicates,
             bootstrap=args.bootstrap,
+            profile=[n for n in args.profile.split(",") if n],
+            noise=None if args.noise == "table" else args.noise,
             **common,
         )
         print(studies.summary_identification(df))

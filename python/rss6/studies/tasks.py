@@ -114,11 +114,14 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
             derivative_filter=t_f,
             friction_smoothing=eps,
             pot_noise=str(spec.get("pot_noise", "recorded")),
+            noise=spec.get("noise"),
         )
 
     res = fit(data)
     for name, v in quantities(res.dynamics, res.pid).items():
         rec[f"est_{name}"] = v
+    if spec.get("profile"):
+        rec.update(_profiles(spec, data, kp, res, law, pid_true[0]))
     if int(spec.get("replicates", 0)) >= 2:
         # Replicates by the model twin at the estimate: linearised, or each identified again.
         # A replicate that cannot run keeps the estimate and CLOE's σ; the record says why.
@@ -140,6 +143,36 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         rec[f"rms_before_{a}"] = float(res.rms_before[i])
         rec[f"rms_after_{a}"] = float(res.rms_after[i])
     return rec
+
+
+def _profiles(
+    spec: Mapping[str, Any], data: Any, kp: Any, res: Any, law: str, lp: float
+) -> dict[str, Any]:
+    """The 95 % profile-likelihood interval (:func:`rss6.identify_profile.profile`) of each of
+    ``spec["profile"]`` that CLOE estimated, on CLOE's own result (before any replicates): the
+    bounds ``prof_lo_`` / ``prof_hi_`` (0 / inf where Φ never rose enough within e^±3), or
+    ``prof_error`` naming the point whose refit did not converge."""
+    from rss6 import identify_profile, identify_sim
+    from rss6.errors import IdentificationError
+
+    quick = bool(spec.get("quick", False))
+    guess, kw = identify_sim.cloe_settings(
+        data, kp, friction_law=law, lp=lp,
+        max_iterations=int(spec.get("iterations", (10 if quick else 20) * (1 + (law == "implicit")))),
+        parameters=spec.get("parameters", "base"), pot_noise=str(spec.get("pot_noise", "recorded")),
+        noise=spec.get("noise"),
+    )  # fmt: skip
+    out: dict[str, Any] = {}
+    for name in spec["profile"]:
+        if name not in res.identified:
+            continue
+        try:
+            p = identify_profile.profile(data, kp, *guess, res, name, **kw)
+        except IdentificationError as e:
+            out["prof_error"] = str(e)
+            continue
+        out[f"prof_lo_{name}"], out[f"prof_hi_{name}"] = p.interval
+    return out
 
 
 def discrepancy_task(spec: Mapping[str, Any]) -> dict[str, Any]:

@@ -29,7 +29,7 @@ use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use super::lm_step::{lm_step, next_lambda, optimal, shifted, Settle};
-use super::observability::{identifiable_columns, noise_weight, weighted_sensitivity};
+use super::observability::{identifiable_columns, weighted_sensitivity, whitening};
 use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
@@ -62,6 +62,11 @@ pub struct CloeOptions {
     /// Noise std of the measured pose: [position (m), angle (rad)]; the residual weights are 1/σ.
     /// Default: Table 4.1 (0.0096 mm, 0.0261°).
     pub noise: [f64; 2],
+    /// The covariance of one camera frame's pose noise (x, y, z m; α, β, γ rad), rows = columns;
+    /// replaces `noise` when given: the residual is whitened frame by frame (W = L⁻¹, Σ = L·Lᵀ), so
+    /// axes whose noise is correlated — a camera's x with its β — are weighted by Σ⁻¹ instead of
+    /// one by one (`rss6.identify.cloe(noise="frames")` estimates it from a first fit's residual).
+    pub noise_covariance: Option<[[f64; 6]; 6]>,
     /// Relative |R_ii| threshold of the pivoted QR (see the module docs).
     pub identifiability_threshold: f64,
     /// Names (see [`Consistent::names`]) to estimate; `None`: every identifiable one. A requested
@@ -117,6 +122,7 @@ impl Default for CloeOptions {
             tol_cost: 1e-6,
             tol_step: 1e-5,
             noise: [0.0096e-3, 0.0261_f64.to_radians()],
+            noise_covariance: None,
             identifiability_threshold: 1e-3,
             parameters: None,
             hold: Vec::new(),
@@ -190,7 +196,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             "measured frames and times must be finite".into(),
         ));
     }
-    let weight = noise_weight(options.noise)?;
+    let weight = whitening(options)?;
     let cons = Consistent::new(guess)?;
     let names = Consistent::names();
     let a_cols = Consistent::a_columns();
@@ -212,8 +218,8 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             let mut sq = Vec6::zeros();
             for (k, &s) in idx.iter().enumerate() {
                 let d = data.measured[k] - run.chi[s];
+                residual.rows_mut(6 * k, 6).copy_from(&(weight * d));
                 for i in 0..6 {
-                    residual[6 * k + i] = weight[i] * d[i];
                     sq[i] += d[i] * d[i];
                 }
             }
@@ -573,7 +579,9 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         relative_std,
         relative_std_wald,
         estimator_map,
-        residual_weight: weight,
+        residual_weight: weight.diagonal().into(),
+        residual_whitening: weight.transpose().into(),
+        residual: unweighted(&cur.residual, &weight),
         poorly_identified,
         rms_before,
         rms_after: cur.rms,
@@ -584,4 +592,14 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         inexact_friction_ticks: cur.inexact,
         converged_by,
     })
+}
+
+/// The frames' χ_m − χ_s from their whitened residual (6 rows each): W⁻¹ per frame.
+fn unweighted(residual: &DVector<f64>, whiten: &nalgebra::Matrix6<f64>) -> Vec<Vec6> {
+    let Some(l) = whiten.try_inverse() else {
+        return Vec::new();
+    };
+    (0..residual.len() / 6)
+        .map(|k| l * Vec6::from_column_slice(residual.rows(6 * k, 6).as_slice()))
+        .collect()
 }

@@ -2,7 +2,7 @@
 //! the output sensitivity CLOE works with — what the camera sees through the loop — beside the
 //! torque regressor's that the excitation design maximises (issue 13: "compare both").
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, Matrix6, Vector6};
 
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
@@ -32,20 +32,20 @@ pub struct OutputObservability {
 }
 
 /// The noise-weighted sensitivity G (6 × frames rows, [`N_PSI`] columns) of the loop's camera
-/// poses to CLOE's log-parameters ψ at `psi`, with the `weight` (1/σ) of each pose axis: the matrix
-/// whose columns CLOE's identifiability analysis and Gauss–Newton steps use.
+/// poses to CLOE's log-parameters ψ at `psi`, each frame's 6 rows whitened by `whiten`
+/// ([`whitening`]: diag(1/σ) by default): the matrix whose columns CLOE's identifiability analysis
+/// and Gauss–Newton steps use.
 pub(super) fn weighted_sensitivity(
     jacobian: &DMatrix<f64>,
     frames: &[usize],
     dadpsi: &DMatrix<f64>,
-    weight: &[f64; 6],
+    whiten: &Matrix6<f64>,
 ) -> DMatrix<f64> {
+    let w = DMatrix::from_column_slice(6, 6, whiten.as_slice());
     let mut g = DMatrix::zeros(6 * frames.len(), N_PSI);
     for (k, &s) in frames.iter().enumerate() {
         let rows = jacobian.rows(6 * s, 6) * dadpsi;
-        for (i, w) in weight.iter().enumerate() {
-            g.row_mut(6 * k + i).copy_from(&(rows.row(i) * *w));
-        }
+        g.rows_mut(6 * k, 6).copy_from(&(&w * rows));
     }
     g
 }
@@ -59,6 +59,31 @@ pub(super) fn noise_weight(noise: [f64; 2]) -> Result<[f64; 6]> {
         ));
     }
     Ok([1.0 / sp, 1.0 / sp, 1.0 / sp, 1.0 / sa, 1.0 / sa, 1.0 / sa])
+}
+
+/// The residual's whitening W (one camera frame's 6 rows): with a frame covariance Σ
+/// ([`CloeOptions::noise_covariance`]), W = L⁻¹ for Σ = L·Lᵀ, so W·Σ·Wᵀ = I and the weighted output
+/// error is Σ_k d_kᵀ Σ⁻¹ d_k (generalised least squares over the axes); without, diag(1/σ) from
+/// [`CloeOptions::noise`].
+pub(super) fn whitening(options: &CloeOptions) -> Result<Matrix6<f64>> {
+    let Some(c) = &options.noise_covariance else {
+        let w = noise_weight(options.noise)?;
+        return Ok(Matrix6::from_diagonal(&Vector6::from_row_slice(&w)));
+    };
+    let m = Matrix6::from_fn(|i, j| c[i][j]);
+    let scale = m.amax();
+    if !m.iter().all(|v| v.is_finite()) || scale == 0.0 || (m - m.transpose()).amax() > 1e-9 * scale
+    {
+        return Err(IdentError::InvalidInput(
+            "the noise covariance must be finite, non-zero and symmetric".into(),
+        ));
+    }
+    m.cholesky()
+        .and_then(|ch| ch.l().try_inverse())
+        .filter(|w| w.iter().all(|v| v.is_finite()))
+        .ok_or_else(|| {
+            IdentError::InvalidInput("the noise covariance must be positive definite".into())
+        })
 }
 
 /// The quantities not held (indices into [`Consistent::names`]) and, among them, the identifiable
@@ -102,7 +127,7 @@ pub fn output_observability<T: Trajectory + Sync + ?Sized>(
     reference: &T,
     options: &CloeOptions,
 ) -> Result<OutputObservability> {
-    let weight = noise_weight(options.noise)?;
+    let weight = whitening(options)?;
     let cons = Consistent::new(at)?;
     let psi = cons.psi(at)?;
     let a = cons.params(&psi);

@@ -81,8 +81,14 @@ pub struct CloeResult {
     /// weighted residual moves the estimated logs by this times δr. It carries noise realisations
     /// to the estimate (the Python `rss6.identify_replicates`). 0 × 0 if GᵀG is singular.
     pub estimator_map: DMatrix<f64>,
-    /// The residual's weights 1/σ per axis (x, y, z, α, β, γ; from `CloeOptions::noise`).
+    /// The residual's weights 1/σ per axis (x, y, z, α, β, γ; from `CloeOptions::noise`): the
+    /// diagonal of [`residual_whitening`](Self::residual_whitening).
     pub residual_weight: [f64; 6],
+    /// The whitening W of each frame's residual (rows of W; diag(1/σ) unless
+    /// `CloeOptions::noise_covariance` was given): the weighted residual is W·(χ_m − χ_s).
+    pub residual_whitening: [[f64; 6]; 6],
+    /// χ_m − χ_s at the estimate, one row per camera frame (m, rad).
+    pub residual: Vec<Vec6>,
     /// Estimated quantities whose relative standard deviation exceeds `poor_std`.
     pub poorly_identified: Vec<String>,
     /// RMS of χ_m − χ_s per axis at the guess (m, rad).
