@@ -460,14 +460,7 @@ pub(crate) fn cloe_identify<'py>(
         ..CloeOptions::default()
     };
     if let Some(c) = noise_covariance {
-        let r = crate::convert::rows::<6>(c, "noise_covariance")?;
-        if r.len() != 6 {
-            return Err(shape(format!(
-                "noise_covariance must have shape (6, 6), got {} rows",
-                r.len()
-            )));
-        }
-        options.noise_covariance = Some([r[0], r[1], r[2], r[3], r[4], r[5]]);
+        options.noise_covariance = Some(crate::convert::mat6_rows(c, "noise_covariance")?);
     }
     if let Some((p, a)) = noise {
         options.noise = [p, a];

@@ -105,6 +105,14 @@ pub(crate) fn rows<const C: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResu
         .collect())
 }
 
+/// A (6, 6) array as its rows.
+pub(crate) fn mat6_rows(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[[f64; 6]; 6]> {
+    let r = exact(obj, name, &[6, 6])?;
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| r[6 * i + j])
+    }))
+}
+
 /// An (N, 6) array as poses/joint vectors.
 pub(crate) fn rows6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec6>> {
     Ok(rows::<6>(obj, name)?.into_iter().map(Vec6::from).collect())

@@ -29,7 +29,7 @@ use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use super::lm_step::{lm_step, next_lambda, optimal, shifted, Settle};
-use super::observability::{identifiable_columns, weighted_sensitivity, whitening};
+use super::observability::{identifiable_columns, unweighted, weighted_sensitivity, whitening};
 use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
@@ -592,14 +592,4 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         inexact_friction_ticks: cur.inexact,
         converged_by,
     })
-}
-
-/// The frames' χ_m − χ_s from their whitened residual (6 rows each): W⁻¹ per frame.
-fn unweighted(residual: &DVector<f64>, whiten: &nalgebra::Matrix6<f64>) -> Vec<Vec6> {
-    let Some(l) = whiten.try_inverse() else {
-        return Vec::new();
-    };
-    (0..residual.len() / 6)
-        .map(|k| l * Vec6::from_column_slice(residual.rows(6 * k, 6).as_slice()))
-        .collect()
 }

@@ -2,7 +2,8 @@
 //! the output sensitivity CLOE works with — what the camera sees through the loop — beside the
 //! torque regressor's that the excitation design maximises (issue 13: "compare both").
 
-use nalgebra::{DMatrix, Matrix6, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
+use rss6_core::Vec6;
 
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
@@ -84,6 +85,16 @@ pub(super) fn whitening(options: &CloeOptions) -> Result<Matrix6<f64>> {
         .ok_or_else(|| {
             IdentError::InvalidInput("the noise covariance must be positive definite".into())
         })
+}
+
+/// The frames' χ_m − χ_s from their whitened residual (6 rows each): W⁻¹ per frame.
+pub(super) fn unweighted(residual: &DVector<f64>, whiten: &Matrix6<f64>) -> Vec<Vec6> {
+    let Some(l) = whiten.try_inverse() else {
+        return Vec::new();
+    };
+    (0..residual.len() / 6)
+        .map(|k| l * Vec6::from_column_slice(residual.rows(6 * k, 6).as_slice()))
+        .collect()
 }
 
 /// The quantities not held (indices into [`Consistent::names`]) and, among them, the identifiable
