@@ -74,6 +74,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="each σ is also the spread over N noisy replicate runs of the model twin at the "
         "estimate (default 16; 0: CLOE's σ alone)",
     )
+    p.add_argument(
+        "--noise",
+        choices=("table", "frames"),
+        default="table",
+        help="the residual's weights: Table 4.1's σ per axis (default) or, in a second pass, the "
+        "covariance of the first fit's residual per camera frame (frames; docs/identification.md)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bars or report on stdout")
 
 
@@ -98,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
         friction_law=args.friction_law or ("tanh" if args.as_printed else "implicit"),
         periods=args.periods,
         replicates=args.replicates,
+        noise=None if args.noise == "table" else args.noise,
     )
     text = report.text()
     (report.files[0].parent / "tables.txt").write_text(text + "\n", encoding="utf-8")

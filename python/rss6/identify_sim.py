@@ -178,6 +178,7 @@ def run(
     friction_law: str = "implicit",
     periods: int | None = None,
     replicates: int = 16,
+    noise: str | None = None,
 ) -> IdentifyReport:
     """Runs the study (see the module docs) and writes its files into ``out``. ``quick``: a 2 s
     trajectory (3 harmonics of 0.5 Hz, 5 generations), 10 CLOE iterations, 2 validation trajectories;
@@ -196,7 +197,8 @@ def run(
     ``variation``: re-identify on every validation run for Table 5.5 (the slowest step of a full
     run: ≈ 8.5 min of 10 measured). ``replicates``: each σ is also the spread over that many noisy
     replicate runs of the model twin at the estimate (:func:`rss6.identify.with_replicates`; 0:
-    CLOE's σ alone)."""
+    CLOE's σ alone). ``noise``: :func:`rss6.identify.cloe`'s (``"frames"``: each frame whitened by
+    the residual's covariance, a second pass)."""
     if as_printed and friction_law == "implicit":
         raise rss6.InvalidInputError(
             "as_printed is the thesis's loop with sign friction in the model: use friction_law='tanh'"
@@ -294,7 +296,7 @@ def run(
     ) -> identify.IdentificationResult:
         return estimate_from_initial(
             d, kp, friction_law=friction_law, lp=pid_true[0], max_iterations=iters,
-            derivative_filter=t_f, friction_smoothing=eps, progress=progress,
+            derivative_filter=t_f, friction_smoothing=eps, progress=progress, noise=noise,
         )  # fmt: skip
 
     robot = make_robot()
@@ -379,6 +381,8 @@ def run(
             except IdentificationError as e:
                 # CLOE converged; a replicate that cannot run leaves its σ, and the report says so.
                 sigma_note = f"σ from CLOE alone: the noisy replicates failed ({e})"
+        if noise == "frames":
+            sigma_note += "; each frame's residual whitened by its covariance (--noise frames)"
         converged = True
         est_dp, est_pid = res.dynamics, res.pid
         identified, rel, unid = res.identified, res.relative_std, res.unidentifiable
