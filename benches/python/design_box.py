@@ -13,12 +13,13 @@ a right σ gives a ratio anywhere in about [0.68, 1.83]. Camera and potentiomete
 seed, the plant and truth do not.
 
     python benches/python/design_box.py [--seeds 10] [--start 0] [--boxes 0.001,0.005 0.002,0.01]
-        [--periods 1]
+        [--periods 1] [--noise table|frames]
 
 ``--periods N``: collect N periods of each design (the CLI collects three since the tenth session)
 and identify on all. ``--hops DELTA ...``: CLOE's hops (`identify.cloe(hops=...)`).
 ``--pot-noise recorded|model``: the replayed potentiometer noise (`identify.cloe(pot_noise=...)`;
-the CLI's is ``recorded``).
+the CLI's is ``recorded``). ``--noise frames``: CLOE whitened by the frames' covariance
+(`identify.cloe(noise="frames")`; default ``table``, Table 4.1's per-axis weights).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ def main() -> None:
     ap.add_argument("--periods", type=int, default=1)
     ap.add_argument("--hops", type=float, nargs="*", default=[], metavar="DELTA")
     ap.add_argument("--pot-noise", choices=("recorded", "model"), default="recorded")
+    ap.add_argument("--noise", choices=("table", "frames"), default="table")
     args = ap.parse_args()
     kp = rss6.KinematicParams.nominal()
     dp_true, pid_true = identify.table_5_2_truth()
@@ -74,7 +76,12 @@ def main() -> None:
             t0 = time.perf_counter()
             try:
                 res = identify_sim.estimate_from_initial(
-                    data, kp, lp=pid_true[0], hops=tuple(args.hops), pot_noise=args.pot_noise
+                    data,
+                    kp,
+                    lp=pid_true[0],
+                    hops=tuple(args.hops),
+                    pot_noise=args.pot_noise,
+                    noise=None if args.noise == "table" else args.noise,
                 )
             except rss6.IdentificationError as err:
                 failed[box] = failed.get(box, 0) + 1
