@@ -464,12 +464,20 @@ def model_noise_passes(
     first = rerun({"pot_noise": "recorded"})
     est = model_potentiometer_noise(data, first)
     second = rerun({"pot_noise": est, "initial": (first.dynamics, first.pid)})
+    return _both_passes(first, second, model=dataclasses.replace(second.model, pot_noise="model"))
+
+
+def _both_passes(
+    first: IdentificationResult, second: IdentificationResult, **changes: Any
+) -> IdentificationResult:
+    """The second pass's result counting both passes' iterations and simulations, with the first's
+    ``rms_before`` (the guess's) and ``changes``."""
     return dataclasses.replace(
         second,
         iterations=first.iterations + second.iterations,
         simulations=first.simulations + second.simulations,
         rms_before=first.rms_before,
-        model=dataclasses.replace(second.model, pot_noise="model"),
+        **changes,
     )
 
 
@@ -506,12 +514,7 @@ def frame_noise_passes(
     d = first.residual
     cov = d.T @ d / max(len(d), 1)
     second = rerun({"noise": cov, "initial": (first.dynamics, first.pid)})
-    return dataclasses.replace(
-        second,
-        iterations=first.iterations + second.iterations,
-        simulations=first.simulations + second.simulations,
-        rms_before=first.rms_before,
-    )
+    return _both_passes(first, second)
 
 
 def table_5_2_truth() -> tuple[_rss6.DynamicParams, tuple[float, float, float]]:

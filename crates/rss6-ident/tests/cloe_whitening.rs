@@ -64,24 +64,28 @@ fn as_rows(c: &Matrix6<f64>) -> [[f64; 6]; 6] {
     std::array::from_fn(|i| std::array::from_fn(|j| c[(i, j)]))
 }
 
-fn names() -> Vec<String> {
-    ["fv1", "fv2", "fv3", "fc3", "li", "ld"]
-        .map(String::from)
-        .to_vec()
+/// CLOE's options with Table 4.1's per-axis weights, and the same whitened by `c`.
+fn per_axis_and_whitened(c: &Matrix6<f64>) -> (CloeOptions, CloeOptions) {
+    let per_axis = CloeOptions {
+        parameters: Some(
+            ["fv1", "fv2", "fv3", "fc3", "li", "ld"]
+                .map(String::from)
+                .to_vec(),
+        ),
+        ..CloeOptions::default()
+    };
+    let whitened = CloeOptions {
+        noise_covariance: Some(as_rows(c)),
+        ..per_axis.clone()
+    };
+    (per_axis, whitened)
 }
 
 #[test]
 fn a_diagonal_covariance_is_the_per_axis_weights() {
     let c = camera_covariance(0.0);
     let (truth, exc, cfg, data) = run_with_noise(&c, 3);
-    let per_axis = CloeOptions {
-        parameters: Some(names()),
-        ..CloeOptions::default()
-    };
-    let whitened = CloeOptions {
-        noise_covariance: Some(as_rows(&c)),
-        ..per_axis.clone()
-    };
+    let (per_axis, whitened) = per_axis_and_whitened(&c);
     let a = cloe(&data, &cfg, &exc, &truth, &per_axis).unwrap();
     let b = cloe(&data, &cfg, &exc, &truth, &whitened).unwrap();
     let worst = a
@@ -119,14 +123,7 @@ fn correlated_camera_noise_weighted_by_its_covariance_gives_smaller_sigmas() {
     let mut n = 0.0;
     for seed in 0..5 {
         let (truth, exc, cfg, data) = run_with_noise(&c, 10 + seed);
-        let per_axis = CloeOptions {
-            parameters: Some(names()),
-            ..CloeOptions::default()
-        };
-        let whitened = CloeOptions {
-            noise_covariance: Some(as_rows(&c)),
-            ..per_axis.clone()
-        };
+        let (per_axis, whitened) = per_axis_and_whitened(&c);
         let a = cloe(&data, &cfg, &exc, &truth, &per_axis).unwrap();
         let b = cloe(&data, &cfg, &exc, &truth, &whitened).unwrap();
         let cons = rss6_ident::Consistent::new(&truth).unwrap();
@@ -179,11 +176,7 @@ fn a_covariance_that_cannot_whiten_is_a_typed_error() {
         (nan, "finite"),
         (Matrix6::zeros(), "non-zero"),
     ] {
-        let opts = CloeOptions {
-            parameters: Some(names()),
-            noise_covariance: Some(as_rows(&c)),
-            ..CloeOptions::default()
-        };
+        let (_, opts) = per_axis_and_whitened(&c);
         match cloe(&data, &cfg, &exc, &truth, &opts) {
             Err(IdentError::InvalidInput(m)) => assert!(m.contains(why), "{m}"),
             other => panic!("expected InvalidInput ({why}), got {other:?}"),
