@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from rss6 import _checks, _rss6, identify_hops, identify_log
+from rss6 import _checks, _rss6, identify_hops, identify_linear, identify_log
 from rss6.errors import IdentificationError, InvalidInputError, NonFiniteError, ShapeError
 from rss6.excitation import Excitation, excitation, random_excitation
 from rss6.identify_linear import (
@@ -21,11 +21,9 @@ from rss6.identify_linear import (
     LinearGuess,
     check_options,
     effect_kwargs,
-    frame_noise_passes,
     linear_guess,
     lowpass_measured,
     model_noise_passes,
-    noise_kwargs,
     potentiometer_noise,
     replayed_noise,
     requested_names,
@@ -372,8 +370,9 @@ class IdentificationResult:
     misfit of that combination (≈ 0: it combines into them; near 1: the output hardly sees it);
     :meth:`alias_text` says it in words. ``guess`` and ``model`` keep what :func:`validate` needs.
     ``linear_map`` (map (p, 6F), whitening W (6, 6)): δψ = map · δr for a change δr of the
-    residual whitened frame by frame (W·(χ_m − χ_s)); ``residual`` (F, 6): χ_m − χ_s at the estimate; :func:`with_replicates` carries noisy replicate runs through it to
-    ``relative_std_replicates`` (docs/identification.md, "σ from noisy replicates")."""
+    residual whitened frame by frame (W·(χ_m − χ_s)); ``residual`` (F, 6): χ_m − χ_s at the estimate
+    ; :func:`with_replicates` carries noisy replicate runs through it to ``relative_std_replicates``
+    (and ``replicate_bias``, the shift ``correct_bias=True`` applied; docs/identification.md)."""
 
     dynamics: _rss6.DynamicParams
     pid: tuple[float, float, float]
@@ -399,6 +398,7 @@ class IdentificationResult:
     linear_map: tuple[F64, F64] | None = None
     relative_std_replicates: F64 = field(default_factory=lambda: np.zeros(0))
     residual: F64 = field(default_factory=lambda: np.zeros((0, 6)))
+    replicate_bias: F64 = field(default_factory=lambda: np.zeros(0))
 
     def alias_text(self) -> list[str]:
         """One line per unidentifiable quantity: what it combines into (relative coefficients)."""
@@ -503,7 +503,7 @@ def cloe(
     if isinstance(pot_noise, str) and pot_noise == "model":
         return model_noise_passes(data, lambda g: cloe(**{**call, **g}))
     if isinstance(noise, str):
-        return frame_noise_passes(noise, lambda g: cloe(**{**call, **g}))
+        return identify_linear.frame_noise_passes(noise, lambda g: cloe(**{**call, **g}))
     if data.fault is not None:
         raise IdentificationError(
             f"the identification run faulted at t = {data.fault[0]:.3f} s ({data.fault[1]}); "
@@ -545,7 +545,7 @@ def cloe(
         settle_steps=settle_steps,
         initial=initial,
         **effect_kwargs(gravity, load, offset_drift),
-        **noise_kwargs(noise),
+        **identify_linear.noise_kwargs(noise),
     )
     lp, li, ld = r["pid"]
     result = IdentificationResult(

@@ -190,12 +190,19 @@ def with_replicates(
     refit: Callable[[IdentificationData], IdentificationResult] | None = None,
     poor_std: float = 0.10,
     progress: Callable[[int, int], Any] | None = None,
+    correct_bias: bool = False,
 ) -> IdentificationResult:
     """``result`` with ``relative_std`` the larger of CLOE's and the spread (sample standard
     deviation) over ``n`` noisy replicates — linearised (:func:`replicate_deviations`), or with
     ``refit`` each replicate identified again (:func:`bootstrap_deviations`; at least half of them
     must have estimated a quantity, else its spread is infinite) — kept in
-    ``relative_std_replicates``, and ``poorly_identified`` (above ``poor_std``) updated."""
+    ``relative_std_replicates``, and ``poorly_identified`` (above ``poor_std``) updated.
+
+    ``correct_bias``: the replicates' mean deviation is the procedure's bias at the estimate (their
+    truth is the estimate); each identified log-quantity is moved by minus it (kept in
+    ``replicate_bias``), its σ widened by that mean's own error (spread / √n), and ``rms_after``
+    recomputed at the moved estimate (docs/identification.md, "Weighting by the frames'
+    covariance")."""
     if refit is None:
         d = replicate_deviations(result, data, n=n, seed=seed, progress=progress)
     else:
@@ -206,7 +213,38 @@ def with_replicates(
         if 2 * ok[:, j].sum() >= n and ok[:, j].sum() >= 2:
             rep[j] = float(np.std(d[ok[:, j], j], ddof=1))
     std = np.maximum(np.asarray(result.relative_std, dtype=np.float64), rep)
+    if correct_bias:
+        result, std = _bias_corrected(result, data, d, ok, std)
     poor = tuple(name for name, s in zip(result.identified, std, strict=True) if s > poor_std)
     return dataclasses.replace(
         result, relative_std=std, relative_std_replicates=rep, poorly_identified=poor
     )
+
+
+def _bias_corrected(
+    result: IdentificationResult, data: IdentificationData, d: F64, ok: Any, std: F64
+) -> tuple[IdentificationResult, F64]:
+    """``result`` moved by minus the replicates' mean deviation ``d`` (where ``ok``; none where
+    fewer than two are), and ``std`` widened by that mean's standard error."""
+    from rss6.identify import parameter_names
+
+    count = ok.sum(axis=0)
+    bias = np.array(
+        [float(d[ok[:, j], j].mean()) if count[j] >= 2 else 0.0 for j in range(d.shape[1])]
+    )
+    se = np.array(
+        [
+            float(d[ok[:, j], j].std(ddof=1) / np.sqrt(count[j])) if count[j] >= 2 else 0.0
+            for j in range(d.shape[1])
+        ]
+    )
+    psi = np.array(_rss6.cloe_psi(result.dynamics, result.pid)[0], dtype=np.float64)
+    cols = [parameter_names().index(q) for q in result.identified]
+    psi[cols] -= bias
+    _, dp, pid = _rss6.cloe_psi(result.dynamics, result.pid, list(psi))
+    moved = dataclasses.replace(
+        result, dynamics=dp, pid=(float(pid[0]), float(pid[1]), float(pid[2])), replicate_bias=bias
+    )
+    chi = model_output(moved, data)
+    rms = np.sqrt(np.mean((np.asarray(data.measured) - chi) ** 2, axis=0))
+    return dataclasses.replace(moved, rms_after=rms), np.hypot(std, se)

@@ -150,3 +150,29 @@ def test_a_failed_replicate_leaves_cloes_sigma_and_the_report_says_so(
     report = identify_sim.run(tmp_path, quick=True, plant="model", variation=False)
     assert report.converged and report.relative_std
     assert "σ from CLOE alone: the noisy replicates failed (replicate 3" in report.text()
+
+
+def test_correct_bias_moves_each_estimate_by_minus_its_replicates_mean(
+    fitted: tuple[identify.IdentificationResult, identify.IdentificationData],
+) -> None:
+    """``with_replicates(correct_bias=True)``: the replicates' truth is the estimate, so their mean
+    deviation is the procedure's bias there; each identified log-quantity moves by minus it, its σ
+    widens by that mean's standard error, and the RMS after is the moved model's."""
+    res, data = fitted
+    d = identify.replicate_deviations(res, data, n=4)
+    plain = identify.with_replicates(res, data, n=4)
+    moved = identify.with_replicates(res, data, n=4, correct_bias=True)
+    np.testing.assert_allclose(moved.replicate_bias, d.mean(axis=0), rtol=1e-12)
+    names = identify.parameter_names()
+    before = np.exp(np.asarray(_rss6.cloe_psi(res.dynamics, res.pid)[0]))
+    after = np.exp(np.asarray(_rss6.cloe_psi(moved.dynamics, moved.pid)[0]))
+    cols = [names.index(q) for q in res.identified]
+    np.testing.assert_allclose(after[cols], before[cols] * np.exp(-d.mean(axis=0)), rtol=1e-9)
+    others = [j for j in range(len(names)) if j not in cols]
+    np.testing.assert_allclose(after[others], before[others], rtol=1e-12)
+    se = d.std(axis=0, ddof=1) / 2.0
+    np.testing.assert_allclose(moved.relative_std, np.hypot(plain.relative_std, se), rtol=1e-12)
+    rms = np.sqrt(np.mean((data.measured - model_output(moved, data)) ** 2, axis=0))
+    np.testing.assert_allclose(moved.rms_after, rms, rtol=1e-12)
+    assert not np.allclose(moved.rms_after, res.rms_after, rtol=1e-9, atol=0.0)
+    assert len(plain.replicate_bias) == 0  # only when asked

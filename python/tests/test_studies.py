@@ -364,3 +364,7 @@ def test_the_identification_study_can_profile_a_quantity() -> None:
     assert "of 2 runs (the reported σ's interval:" in text, text
     with pytest.raises(InvalidInputError, match="cannot profile f_v1"):
         studies.identification_variation(1, out="unused.csv", profile=["f_v1"])
+    with pytest.raises(InvalidInputError, match="replicate_bias needs replicates"):
+        studies.identification_variation(1, out="unused.csv", replicates=0, replicate_bias=True)
+    with pytest.raises(InvalidInputError, match="noise must be None or 'frames'"):
+        studies.identification_variation(1, out="unused.csv", noise="table")

@@ -137,6 +137,7 @@ def identification_variation(
     bootstrap: bool = False,
     profile: Sequence[str] = (),
     noise: str | None = None,
+    replicate_bias: bool = False,
 ) -> Any:
     """Table 5.5 (variation of each identified quantity over trajectories) and Table 5.4 (RMS per
     trajectory): one CLOE per random trajectory (seeds ``seed`` …) on the robot whose truth is
@@ -154,7 +155,9 @@ def identification_variation(
     (:func:`rss6.identify.parameter_names`) whose 95 % profile-likelihood interval each run also
     computes (:func:`rss6.identify_profile.profile`, ≈ 5–7 CLOE runs per name; ":prof-NAME+…");
     ``noise``: :func:`rss6.identify.cloe`'s — ``"frames"`` whitens the residual by the frames'
-    covariance (a second pass; ":frames")."""
+    covariance (a second pass; ":frames"); ``replicate_bias``: each estimate moved by minus its
+    replicates' mean deviation (:func:`rss6.identify.with_replicates`'s ``correct_bias``; needs
+    replicates; ":rbias")."""
     from rss6 import identify
 
     unknown = sorted(set(profile) - set(identify.parameter_names()))
@@ -182,6 +185,10 @@ def identification_variation(
         raise InvalidInputError(f"noise must be None or 'frames', got {noise!r}")
     if noise:
         it["noise"] = noise
+    if replicate_bias and not replicates:
+        raise InvalidInputError("replicate_bias needs replicates >= 2")
+    if replicate_bias:
+        it["replicate_bias"] = True
     specs = [
         {
             "spec_id": f"identification:{robot}:{friction_law}:{'quick' if quick else 'full'}:"
@@ -189,7 +196,8 @@ def identification_variation(
             + (f":it{solver_iterations}" if solver_iterations is not None else "")
             + (f":{'boot' if bootstrap else 'rep'}{replicates}" if replicates else "")
             + (f":prof-{'+'.join(profile)}" if profile else "")
-            + (f":{noise}" if noise else ""),
+            + (f":{noise}" if noise else "")
+            + (":rbias" if replicate_bias else ""),
             "friction_law": friction_law,
             "pot_noise": pot_noise,
             "seed": seed + k,

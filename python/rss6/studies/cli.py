@@ -82,6 +82,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "(frames: camera axes whose noise is correlated are weighted together)",
     )
     p.add_argument(
+        "--replicate-bias",
+        action="store_true",
+        help="identification: move each estimate by minus its replicates' mean deviation (the "
+        "procedure's bias at the estimate) and widen its σ by that mean's error",
+    )
+    p.add_argument(
         "--profile",
         default="",
         metavar="NAMES",
@@ -131,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
             bootstrap=args.bootstrap,
             profile=[n for n in args.profile.split(",") if n],
             noise=None if args.noise == "table" else args.noise,
+            replicate_bias=args.replicate_bias,
             **common,
         )
         print(studies.summary_identification(df))

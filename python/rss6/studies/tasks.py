@@ -127,7 +127,10 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         # A replicate that cannot run keeps the estimate and CLOE's σ; the record says why.
         refit = fit if spec.get("bootstrap", False) else None
         try:
-            res = identify.with_replicates(res, data, n=int(spec["replicates"]), refit=refit)
+            res = identify.with_replicates(
+                res, data, n=int(spec["replicates"]), refit=refit,
+                correct_bias=bool(spec.get("replicate_bias", False)),
+            )  # fmt: skip
         except IdentificationError as e:
             rec["error"] = f"σ from CLOE alone: the noisy replicates failed ({e})"
         else:
