@@ -136,6 +136,9 @@ def identification_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         else:
             for name, sd in zip(res.identified, res.relative_std_replicates, strict=True):
                 rec[f"rep_{name}"] = float(sd)
+            if len(res.replicate_bias):  # the estimates moved by minus the replicates' mean
+                for name, v in quantities(res.dynamics, res.pid).items():
+                    rec[f"est_{name}"] = v
     for name, sd in zip(res.identified, res.relative_std, strict=True):
         rec[f"std_{name}"] = float(sd)
     for name, sd in zip(res.identified, res.relative_std_wald, strict=True):
