@@ -428,6 +428,7 @@ class CalibrationData:
         *,
         kappa_samples: list[int] | ArrayLike | None = None,
         camera_frames: list[int] | ArrayLike | None = None,
+        sensor_pose_cov: ArrayLike | None = None,
     ) -> CalibrationData: ...
     def __len__(self) -> int: ...
     @property
@@ -436,6 +437,8 @@ class CalibrationData:
     def sensor_pose(self) -> _F64: ...
     @property
     def theta_cmd(self) -> _F64: ...
+    @property
+    def sensor_pose_cov(self) -> _F64: ...
     @property
     def camera_frames(self) -> _F64: ...
 
@@ -508,6 +511,7 @@ def rpba(
     max_iterations: int = 60,
     target_guess: ArrayLike | None = None,
     progress: Callable[[int, float], Any] | None = None,
+    noise: str | ArrayLike | None = None,
 ) -> CalibrationResult: ...
 def implicit(
     data: CalibrationData,
@@ -516,6 +520,7 @@ def implicit(
     *,
     max_iterations: int = 60,
     target_guess: ArrayLike | None = None,
+    noise: str | ArrayLike | None = None,
 ) -> CalibrationResult: ...
 def relative_pose_errors_raw(
     params: KinematicParams,
@@ -538,6 +543,7 @@ def calibration_study(
     test_configurations: int = 100,
     stroke: tuple[float, float] | None = None,
     plant: bool = False,
+    noise: str | ArrayLike | None = None,
 ) -> list[dict[str, Any]]: ...
 
 @final

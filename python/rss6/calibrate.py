@@ -215,6 +215,14 @@ def read_mcap(path: Path) -> McapCalibration:
         np.array([d["theta_cmd"] for d in rows]),
         kappa_samples=kappa_samples.tolist(),
         camera_frames=camera_frames.tolist(),
+        sensor_pose_cov=np.array(
+            [
+                np.full((6, 6), np.nan)
+                if d.get("sensor_pose_cov") is None
+                else d["sensor_pose_cov"]
+                for d in rows
+            ]
+        ),
     )
     return McapCalibration(
         data=data,
@@ -300,13 +308,25 @@ def rpba(
     target_guess: Any = None,
     max_iterations: int = 60,
     progress: Callable[[int, float], Any] | None = None,
+    noise: Any = "table",
 ) -> CalibrationResult:
     """RPBA (eq. 4.16–4.21): 60 kinematic + 6 external (ᴱχ_t) parameters from ``data``, starting at
     ``kp`` and ``target_guess`` (default: the design target of :func:`default_placement`).
-    Levenberg–Marquardt with analytic Jacobians; ``progress(iteration, cost)`` per iteration."""
+    Levenberg–Marquardt with analytic Jacobians; ``progress(iteration, cost)`` per iteration.
+
+    ``noise``: the camera's noise the residuals are whitened by — ``"table"`` (Table 4.1,
+    independent components), ``"dwells"`` (the covariance of one frame pooled from the dwells' own
+    scatter, ``data.sensor_pose_cov``: the stereo head's correlated components as measured; raises
+    :class:`rss6.InvalidInputError` if no dwell recorded it) or a (6, 6) covariance of one frame's
+    ᶜχ_t (m², m·rad, rad²)."""
     guess = default_placement()[1] if target_guess is None else target_guess
     return _rss6.rpba(
-        data, kp, max_iterations=max_iterations, target_guess=guess, progress=progress
+        data,
+        kp,
+        max_iterations=max_iterations,
+        target_guess=guess,
+        progress=progress,
+        noise=noise,
     )
 
 
@@ -317,11 +337,17 @@ def implicit(
     *,
     target_guess: Any = None,
     max_iterations: int = 60,
+    noise: Any = "table",
 ) -> CalibrationResult:
     """Implicit calibration (eq. 4.10–4.15): 60 kinematic + 12 external parameters (ᴼχ_C, ᴱχ_t) from
     ``data``, starting at ``kp``, the rough sensor pose ``sensor_pose_guess`` and ``target_guess``
-    (default: the design target of :func:`default_placement`)."""
+    (default: the design target of :func:`default_placement`). ``noise`` as in :func:`rpba`."""
     guess = default_placement()[1] if target_guess is None else target_guess
     return _rss6.implicit(
-        data, kp, sensor_pose_guess, max_iterations=max_iterations, target_guess=guess
+        data,
+        kp,
+        sensor_pose_guess,
+        max_iterations=max_iterations,
+        target_guess=guess,
+        noise=noise,
     )

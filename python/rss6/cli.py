@@ -123,9 +123,11 @@ def _calibrate_log(args: argparse.Namespace, path: str, plant: Robot | None = No
     for index, why in log.dropped:
         print(f"  configuration {index} left out: {why}")
     if args.method == "implicit":
-        result = calibrate.implicit(log.data, nominal, calibrate.default_placement()[0])
+        result = calibrate.implicit(
+            log.data, nominal, calibrate.default_placement()[0], noise=args.noise
+        )
     else:
-        result = calibrate.rpba(log.data, nominal)
+        result = calibrate.rpba(log.data, nominal, noise=args.noise)
     cost = result.cost_history
     print(
         f"{result.method}: {result.iterations} LM steps, cost {cost[0]:.4g} -> {cost[-1]:.4g}, "
@@ -244,7 +246,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         if args.plant
         else "analytic generator, Table 4.1 noise"
     )
-    print(f"§4.4.3 study over {robots} random robots ({source}, dwell {args.dwell} s)")
+    weights = "; weighted by the dwells' camera covariance" if args.noise == "dwells" else ""
+    print(f"§4.4.3 study over {robots} random robots ({source}, dwell {args.dwell} s{weights})")
     rows = _rss6.calibration_study(
         th_r,
         th_i,
@@ -253,6 +256,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         dwell=args.dwell,
         stroke=(lo, hi),
         plant=args.plant,
+        noise=args.noise,
     )
 
     def mp(vals: Sequence[float]) -> str:
@@ -397,6 +401,14 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("rpba", "implicit"),
         default="rpba",
         help="with --mcap/--from-mcap: the calibration method (default rpba)",
+    )
+    c.add_argument(
+        "--noise",
+        choices=("table", "dwells"),
+        default="table",
+        help="the camera noise the residuals are weighted by: Table 4.1's independent components "
+        "(default), or the covariance of one frame pooled from the dwells' own scatter (the stereo "
+        "head's correlated components as measured; docs/calibration.md)",
     )
     c.add_argument(
         "--out", metavar="TOML", help="with --mcap/--from-mcap: write the calibrated kinematics"

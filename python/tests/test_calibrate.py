@@ -144,3 +144,48 @@ def test_calibration_data_bad_input():
         calibrate.draw_external([np.nan] * 6)
     with pytest.raises(rss6.ShapeError, match=r"pose must have shape \(6,\)"):
         calibrate.draw_external(np.zeros(5))
+
+
+def test_the_dwells_record_the_cameras_covariance_and_calibration_can_weigh_by_it(setup):
+    plant, _, data, _ = setup
+    cov = data.sensor_pose_cov
+    assert cov.shape == (len(data), 6, 6)
+    np.testing.assert_array_equal(cov, np.swapaxes(cov, 1, 2))
+    assert np.all(np.linalg.eigvalsh(cov) > 0)
+    # the stereo head's pose noise in its own frame: β and γ move together (measured +0.82 pooled
+    # over 20 robots' dwells; this robot's 0.4 s dwells +0.84)
+    w = data.camera_frames - 1
+    pooled = np.tensordot(w, cov, axes=1) / w.sum()
+    sd = np.sqrt(np.diag(pooled))
+    assert pooled[4, 5] / (sd[4] * sd[5]) > 0.5
+    table = calibrate.rpba(data, NOMINAL)
+    dwells = calibrate.rpba(data, NOMINAL, noise="dwells")
+    given = calibrate.rpba(data, NOMINAL, noise=pooled)
+    # "dwells" is the pooled covariance passed by hand
+    np.testing.assert_allclose(given.errors, dwells.errors, rtol=0, atol=1e-12)
+    assert dwells.fit_statistic != table.fit_statistic
+    guess = calibrate.draw_external(plant.truth()["sensor_in_base"], seed=1)
+    assert calibrate.implicit(data, NOMINAL, guess, noise="dwells").fit_statistic > 0
+
+
+def test_weighing_by_the_dwells_needs_their_covariance_and_a_valid_one(setup):
+    _, _, data, _ = setup
+    bare = rss6.CalibrationData.from_arrays(data.kappa, data.sensor_pose)
+    assert np.all(np.isnan(bare.sensor_pose_cov))
+    with pytest.raises(rss6.InvalidInputError, match=r"Table 4\.1"):
+        calibrate.rpba(bare, NOMINAL, noise="dwells")
+    with pytest.raises(rss6.InvalidInputError, match="noise must be"):
+        calibrate.rpba(data, NOMINAL, noise="frames")
+    with pytest.raises(rss6.InvalidInputError, match="positive definite"):
+        calibrate.rpba(data, NOMINAL, noise=-np.eye(6))
+    with pytest.raises(rss6.ShapeError):
+        calibrate.rpba(data, NOMINAL, noise=np.eye(5))
+    # from arrays: a (m, 6, 6) covariance round-trips; an asymmetric block is refused
+    again = rss6.CalibrationData.from_arrays(
+        data.kappa, data.sensor_pose, sensor_pose_cov=data.sensor_pose_cov
+    )
+    np.testing.assert_array_equal(again.sensor_pose_cov, data.sensor_pose_cov)
+    bad = data.sensor_pose_cov.copy()
+    bad[0, 0, 1] += 1e-12
+    with pytest.raises(rss6.InvalidInputError, match="symmetric"):
+        rss6.CalibrationData.from_arrays(data.kappa, data.sensor_pose, sensor_pose_cov=bad)

@@ -85,7 +85,7 @@ def test_round_trip_equals_direct_collection(logged):
     np.testing.assert_array_equal(r.camera_frames, direct.camera_frames)
     loaded = calibrate.load_mcap(path)
     assert len(loaded) == len(thetas)
-    for name in ("theta_cmd", "kappa", "sensor_pose", "camera_frames"):
+    for name in ("theta_cmd", "kappa", "sensor_pose", "camera_frames", "sensor_pose_cov"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(returned, name), err_msg=name)
     np.testing.assert_array_equal(loaded.theta_cmd, thetas)
 
@@ -100,6 +100,11 @@ def test_rpba_on_loaded_data_matches_direct(logged):
     # the same data: the same calibration
     np.testing.assert_array_equal(res_loaded.errors, res_direct.errors)
     np.testing.assert_array_equal(res_loaded.target_in_effector, res_direct.target_in_effector)
+    # and weighted by the dwells' own camera covariance, which the log keeps too
+    np.testing.assert_array_equal(
+        calibrate.rpba(calibrate.load_mcap(path), NOMINAL, noise="dwells").errors,
+        calibrate.rpba(direct, NOMINAL, noise="dwells").errors,
+    )
     e_loaded = calibrate.relative_pose_errors(res_loaded, plant, n=40)["rms"]
     uncal = calibrate.relative_pose_errors(None, plant, n=40)["rms"]
     assert np.all(e_loaded < uncal / 10)

@@ -165,6 +165,11 @@ def test_calibrate_mcap_logs_a_collection_and_from_mcap_calibrates_from_it(tmp_p
     line = next(ln for ln in r.stdout.splitlines() if ln.startswith("rpba:"))
     assert line in f.stdout.splitlines() and "truncated" not in f.stdout
     assert again.read_text() == toml.read_text()
+    # weighted by the camera covariance the log's dwells recorded: another fit of the same log
+    d = run("calibrate", "--from-mcap", str(log), "--noise", "dwells")
+    assert d.returncode == 0, d.stderr[-2000:]
+    dline = next(ln for ln in d.stdout.splitlines() if ln.startswith("rpba:"))
+    assert "fit statistic" in dline and dline != line
     # A log cut short (collection killed mid-way) still calibrates from its finished dwells.
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(log.read_bytes()[: log.stat().st_size * 3 // 4])
@@ -200,6 +205,16 @@ def test_calibrate_modes_are_exclusive(capsys):
     # not silently ignored.
     assert cli.main(["calibrate", "--simulate", "--out", "k.toml"]) == 1
     assert "--out writes the kinematics calibrated by --mcap" in capsys.readouterr().err
+    # a study's --noise that belongs to the other study: refused before any task runs
+    assert (
+        cli.main(["study", "calibration", "--n", "1", "--out", "x.csv", "--noise", "frames"]) == 1
+    )
+    assert "--noise frames is for the identification study" in capsys.readouterr().err
+    assert (
+        cli.main(["study", "identification", "--n", "1", "--out", "x.csv", "--noise", "dwells"])
+        == 1
+    )
+    assert "--noise dwells is for the calibration study" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

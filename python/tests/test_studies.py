@@ -163,6 +163,17 @@ def test_a_small_study_of_each_kind(client: Any, tmp_path: Path) -> None:
     )
     assert list(cal["status"]) == ["ok", "ok"]
     assert "met Table 4.5" in studies.summary_calibration(cal)
+    # both methods weighted by the dwells' camera covariance: other spec ids; the analytic
+    # generator's dwells record Table 4.1's independent noise, so the same fits to rounding
+    cald = studies.calibration_study(
+        2, out=tmp_path / "cald.csv", client=client, candidates=400, progress=False, noise="dwells"
+    )
+    assert list(cald["status"]) == ["ok", "ok"]
+    assert all(str(i).endswith(":dwells") for i in cald["spec_id"])
+    for col in ("rpba_x", "implicit_b"):
+        assert cald[col].to_numpy() == pytest.approx(cal[col].to_numpy(), rel=1e-6)
+    with pytest.raises(InvalidInputError, match="noise must be"):
+        studies.calibration_study(1, out=tmp_path / "x.csv", noise="frames", progress=False)
     ident = studies.identification_variation(
         2,
         out=tmp_path / "id.csv",

@@ -64,6 +64,9 @@ fn a_run_reads_back_as_written() {
         camera_frames: 60,
         kappa_std: Some([0.22, 0.21, 0.23, 0.2, 0.24, 0.25]),
         sensor_pose_std: Some([9e-6, 1e-5, 1.1e-5, 4e-4, 5e-4, 4.5e-4]),
+        sensor_pose_cov: Some(core::array::from_fn(|r| {
+            core::array::from_fn(|c| 1e-9 * (1.0 + r as f64) * (1.0 + c as f64) + 0.5)
+        })),
         fault: Some(rss6_exp::dwell::DwellFault::Unreached {
             joint: 2,
             error_bits: -453.25,

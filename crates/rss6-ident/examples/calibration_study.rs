@@ -9,6 +9,11 @@
 //! ```text
 //! cargo run --release -p rss6-ident --example calibration_study [-- --robots 24 --seed 0 --dwell-ms 2000]
 //! cargo run --release -p rss6-ident --example calibration_study -- --plant 4   # on the rapier plant
+//! cargo run --release -p rss6-ident --example calibration_study -- --plant 4 --dwell-noise 1
+//! ```
+//! `--dwell-noise 1`: both methods weigh the residuals by the camera covariance pooled from the
+//! dwells' own frames (`CalibrationOptions::noise_from_dwells`) instead of Table 4.1's.
+//! ```text
 //! cargo run --release -p rss6-ident --example calibration_study -- --robustness 50   # issue 12
 //! ```
 //! `--robustness N` runs N rapier-plant robots, a third of them rejection-sampled with max |Δθ| ≥ 5°
@@ -47,6 +52,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // dwell per configuration in ms; 0 = a single sample per configuration (the thesis's simulation)
     let dwell = arg("--dwell-ms", 2000) as f64 * 1e-3;
     let nominal = KinematicParams::nominal();
+    let solver = CalibrationOptions {
+        noise_from_dwells: arg("--dwell-noise", 0) != 0,
+        ..CalibrationOptions::default()
+    };
 
     let t = Instant::now();
     let s = stroke(&nominal)?;
@@ -115,7 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             noise: NoiseModel::default(),
             test_configurations: 100,
             stroke: s,
-            solver: CalibrationOptions::default(),
+            solver,
             target_nominal: plant_nominal_target().into(),
         };
         robustness_study(&nominal, &opts);
@@ -155,7 +164,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         noise: NoiseModel::default(),
         test_configurations: 100,
         stroke: s,
-        solver: CalibrationOptions::default(),
+        solver,
         target_nominal: NOMINAL_TARGET_IN_EFFECTOR,
     };
     let t = Instant::now();

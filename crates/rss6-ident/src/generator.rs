@@ -183,6 +183,21 @@ impl RobotSource for AnalyticRobot {
                     self.noise.angle
                 }
             })),
+            // independent components (the analytic generator's noise is per axis)
+            sensor_pose_cov: Some(core::array::from_fn(|r| {
+                core::array::from_fn(|c| {
+                    let s = if r < 3 {
+                        self.noise.position
+                    } else {
+                        self.noise.angle
+                    };
+                    if r == c {
+                        s * s
+                    } else {
+                        0.0
+                    }
+                })
+            })),
             fault: None,
         })
     }

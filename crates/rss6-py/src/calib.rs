@@ -5,14 +5,15 @@
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use rss6_core::{KinematicParams, Vec6};
+use rss6_core::KinematicParams;
 use rss6_ident::{
-    CalibrationData, CalibrationOptions, CalibrationResult, ConfigurationData, IdentError, Method,
-    SelectionOptions, StudyOptions, TrueRobot,
+    CalibrationOptions, CalibrationResult, IdentError, Method, SelectionOptions, StudyOptions,
+    TrueRobot,
 };
 
-use crate::convert::{array, out1, out6, out_rows, out_rows6, rows6, vec6};
-use crate::errors::{core, invalid, make, shape, Attr};
+pub(crate) use crate::calib_data::PyCalibrationData;
+use crate::convert::{out1, out6, out_rows6, rows6, vec6};
+use crate::errors::{core, invalid, make, Attr};
 use crate::params::PyKinematicParams;
 
 /// Maps an [`IdentError`] onto its exception class.
@@ -77,130 +78,6 @@ fn method(name: &str) -> PyResult<Method> {
         other => Err(invalid(format!(
             "method must be 'rpba' or 'implicit', got '{other}'"
         ))),
-    }
-}
-
-/// Means over one dwell per configuration (configuration 0 = the initial configuration).
-#[pyclass(name = "CalibrationData", module = "rss6._rss6")]
-#[derive(Debug, Clone)]
-pub(crate) struct PyCalibrationData {
-    pub(crate) inner: CalibrationData,
-}
-
-#[pymethods]
-impl PyCalibrationData {
-    /// Data from arrays: kappa (m, 6) mean readings (bits), sensor_pose (m, 6) mean ᶜχ_t (a NaN row
-    /// marks a configuration without camera frames), theta_cmd (m, 6) commands (optional; NaN if
-    /// absent), and the sample counts per row kappa_samples, camera_frames (m,) (optional; default
-    /// 1, and 1 or 0 frames by the NaN rows).
-    #[staticmethod]
-    #[pyo3(signature = (kappa, sensor_pose, theta_cmd=None, *, kappa_samples=None, camera_frames=None))]
-    fn from_arrays(
-        kappa: &Bound<'_, PyAny>,
-        sensor_pose: &Bound<'_, PyAny>,
-        theta_cmd: Option<&Bound<'_, PyAny>>,
-        kappa_samples: Option<Vec<u32>>,
-        camera_frames: Option<Vec<u32>>,
-    ) -> PyResult<Self> {
-        let kappa = rows6(kappa, "kappa")?;
-        let (dims, data) = array(sensor_pose, "sensor_pose")?;
-        if dims.len() != 2 || dims[1] != 6 || dims[0] != kappa.len() {
-            return Err(shape(format!(
-                "sensor_pose must have shape ({}, 6), got {dims:?}",
-                kappa.len()
-            )));
-        }
-        let theta = match theta_cmd {
-            Some(t) => rows6(t, "theta_cmd")?,
-            None => vec![Vec6::repeat(f64::NAN); kappa.len()],
-        };
-        if theta.len() != kappa.len() {
-            return Err(shape("theta_cmd must have as many rows as kappa"));
-        }
-        for (name, c) in [
-            ("kappa_samples", &kappa_samples),
-            ("camera_frames", &camera_frames),
-        ] {
-            if c.as_ref().is_some_and(|c| c.len() != kappa.len()) {
-                return Err(shape(format!("{name} must have as many entries as kappa")));
-            }
-        }
-        let configurations = kappa
-            .iter()
-            .zip(data.chunks_exact(6))
-            .zip(theta.iter())
-            .enumerate()
-            .map(|(i, ((k, s), th))| ConfigurationData {
-                theta_cmd: (*th).into(),
-                kappa: (*k).into(),
-                sensor_pose: if s.iter().any(|x| x.is_nan()) {
-                    None
-                } else {
-                    let mut p = [0.0; 6];
-                    p.copy_from_slice(s);
-                    Some(p)
-                },
-                kappa_samples: kappa_samples.as_ref().map_or(1, |c| c[i]),
-                camera_frames: camera_frames
-                    .as_ref()
-                    .map_or(u32::from(!s.iter().any(|x| x.is_nan())), |c| c[i]),
-                ..ConfigurationData::default()
-            })
-            .collect();
-        Ok(PyCalibrationData {
-            inner: CalibrationData { configurations },
-        })
-    }
-
-    fn __len__(&self) -> usize {
-        self.inner.len()
-    }
-
-    /// Mean potentiometer readings κ (m, 6) bits.
-    #[getter]
-    fn kappa<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let r: Vec<[f64; 6]> = self.inner.configurations.iter().map(|c| c.kappa).collect();
-        out_rows::<6>(py, &r)
-    }
-
-    /// Mean sensor poses ᶜχ_t (m, 6); NaN rows where no frame arrived.
-    #[getter]
-    fn sensor_pose<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let r: Vec<[f64; 6]> = self
-            .inner
-            .configurations
-            .iter()
-            .map(|c| c.sensor_pose.unwrap_or([f64::NAN; 6]))
-            .collect();
-        out_rows::<6>(py, &r)
-    }
-
-    /// Commanded joint angles (m, 6) rad (nominal convention).
-    #[getter]
-    fn theta_cmd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let r: Vec<[f64; 6]> = self
-            .inner
-            .configurations
-            .iter()
-            .map(|c| c.theta_cmd)
-            .collect();
-        out_rows::<6>(py, &r)
-    }
-
-    /// Camera frames averaged per configuration (m,).
-    #[getter]
-    fn camera_frames<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let r: Vec<f64> = self
-            .inner
-            .configurations
-            .iter()
-            .map(|c| f64::from(c.camera_frames))
-            .collect();
-        out1(py, &r)
-    }
-
-    fn __repr__(&self) -> String {
-        format!("CalibrationData({} configurations)", self.inner.len())
     }
 }
 
@@ -396,15 +273,46 @@ pub(crate) fn select_configurations<'py>(
     Ok(out_rows6(py, &rep.thetas))
 }
 
+/// The camera part of the noise model: "table" (Table 4.1, independent components), "dwells" (the
+/// covariance pooled from the dwells' own frames) or a (6, 6) covariance of one frame's ᶜχ_t.
+fn noise_option(o: &mut CalibrationOptions, noise: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    let Some(n) = noise else { return Ok(()) };
+    if let Ok(s) = n.extract::<String>() {
+        match s.as_str() {
+            "table" => {}
+            "dwells" => o.noise_from_dwells = true,
+            other => {
+                return Err(invalid(format!(
+                    "noise must be \"table\", \"dwells\" or a (6, 6) covariance, got {other:?}"
+                )))
+            }
+        }
+        return Ok(());
+    }
+    let m = crate::convert::mat6_rows(n, "noise")?;
+    let c = nalgebra::Matrix6::from_fn(|r, k| m[r][k]);
+    if (0..6).any(|r| (0..6).any(|k| c[(r, k)] != c[(k, r)])) || c.cholesky().is_none() {
+        return Err(invalid(
+            "the noise covariance must be symmetric and positive definite",
+        ));
+    }
+    if let Some(base) = &mut o.noise {
+        base.pose_covariance = Some(c);
+    }
+    Ok(())
+}
+
 fn options(
     max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
+    noise: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<CalibrationOptions> {
     let max_iterations: usize = crate::convert::count(max_iterations, "max_iterations")?;
     let mut o = CalibrationOptions {
         max_iterations,
         ..CalibrationOptions::default()
     };
+    noise_option(&mut o, noise)?;
     if let Some(t) = target_guess {
         o.target_guess = vec6(t, "target_guess")?.into();
     }
@@ -416,7 +324,7 @@ fn options(
 /// exception it raises (or Ctrl-C) is raised once the solve (milliseconds) has returned, and no further
 /// callback is made.
 #[pyfunction]
-#[pyo3(signature = (data, kp, *, max_iterations=60, target_guess=None, progress=None))]
+#[pyo3(signature = (data, kp, *, max_iterations=60, target_guess=None, progress=None, noise=None))]
 pub(crate) fn rpba(
     py: Python<'_>,
     data: &PyCalibrationData,
@@ -424,8 +332,9 @@ pub(crate) fn rpba(
     max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    noise: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyCalibrationResult> {
-    let opts = options(max_iterations, target_guess)?;
+    let opts = options(max_iterations, target_guess, noise)?;
     let (d, k) = (&data.inner, kp.inner);
     let mut interrupt = crate::exp::Interrupt::default();
     let r = py.detach(|| {
@@ -446,7 +355,7 @@ pub(crate) fn rpba(
 /// Implicit calibration (eq. 4.10–4.15) from `data` starting at `kp` and the rough sensor pose
 /// `sensor_pose_guess` (ᴼχ_C): 60 kinematic + 12 external parameters.
 #[pyfunction]
-#[pyo3(signature = (data, kp, sensor_pose_guess, *, max_iterations=60, target_guess=None))]
+#[pyo3(signature = (data, kp, sensor_pose_guess, *, max_iterations=60, target_guess=None, noise=None))]
 pub(crate) fn implicit(
     py: Python<'_>,
     data: &PyCalibrationData,
@@ -454,8 +363,9 @@ pub(crate) fn implicit(
     sensor_pose_guess: &Bound<'_, PyAny>,
     max_iterations: i64,
     target_guess: Option<&Bound<'_, PyAny>>,
+    noise: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyCalibrationResult> {
-    let opts = options(max_iterations, target_guess)?;
+    let opts = options(max_iterations, target_guess, noise)?;
     let s = vec6(sensor_pose_guess, "sensor_pose_guess")?;
     let (d, k) = (&data.inner, kp.inner);
     let r = py
@@ -510,7 +420,7 @@ pub(crate) fn relative_pose_errors_raw<'py>(
 /// (parallel), or with `plant=True` from the rapier plant, its PID and its stereo CMM (parallel).
 /// `rpba_thetas` and `implicit_thetas` are the configuration sets (row 0 = initial). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (rpba_thetas, implicit_thetas, *, robots=20, seed=0, dwell=2.0, test_configurations=100, stroke=None, plant=false))]
+#[pyo3(signature = (rpba_thetas, implicit_thetas, *, robots=20, seed=0, dwell=2.0, test_configurations=100, stroke=None, plant=false, noise=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibration_study<'py>(
     py: Python<'py>,
@@ -522,7 +432,10 @@ pub(crate) fn calibration_study<'py>(
     test_configurations: i64,
     stroke: Option<(f64, f64)>,
     plant: bool,
+    noise: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let mut solver = CalibrationOptions::default();
+    noise_option(&mut solver, noise)?;
     let robots: usize = crate::convert::count(robots, "robots")?;
     let test_configurations: usize =
         crate::convert::count(test_configurations, "test_configurations")?;
@@ -535,7 +448,7 @@ pub(crate) fn calibration_study<'py>(
         noise: rss6_ident::NoiseModel::default(),
         test_configurations,
         stroke: stroke.unwrap_or((-57.1f64.to_radians(), 57.1f64.to_radians())),
-        solver: CalibrationOptions::default(),
+        solver,
         target_nominal: if plant {
             rss6_ident::plant_nominal_target().into()
         } else {

@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod macros;
 
 mod calib;
+mod calib_data;
 mod cloe;
 mod convert;
 mod ctrl;

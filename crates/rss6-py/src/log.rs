@@ -263,6 +263,11 @@ pub(crate) fn read_log<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'p
         d.set_item("sensor_pose", c.sensor_pose_vec().map(|p| out6(py, &p)))?;
         d.set_item("kappa_samples", c.kappa_samples)?;
         d.set_item("camera_frames", c.camera_frames)?;
+        d.set_item(
+            "sensor_pose_cov",
+            c.sensor_pose_cov
+                .map(|m| crate::convert::out_rows::<6>(py, m.as_ref())),
+        )?;
         d.set_item("defect", c.defect())?;
         dwells.append(d)?;
     }

@@ -78,10 +78,15 @@ def calibration_study(
     dwell: float = 2.0,
     candidates: int = 5000,
     progress: Any = True,
+    noise: str = "table",
 ) -> Any:
     """The §4.4.3 calibration study over ``n_robots`` random robots (seeds ``seed`` …), one task
     per robot: the configuration sets are selected once here (``candidates`` per set) and travel
-    in the specs; ``plant``: the rapier plant and its stereo CMM instead of the analytic generator."""
+    in the specs; ``plant``: the rapier plant and its stereo CMM instead of the analytic generator;
+    ``noise``: ``"table"`` or ``"dwells"`` (both methods weighted by the camera covariance pooled
+    from the dwells, :func:`rss6.calibrate.rpba`; the spec ids carry it)."""
+    if noise not in ("table", "dwells"):
+        raise InvalidInputError(f'noise must be "table" or "dwells", got {noise!r}')
     import rss6
     from rss6 import calibrate
 
@@ -95,9 +100,11 @@ def calibration_study(
     )
     specs = [
         {
-            "spec_id": f"calibration:{'plant' if plant else 'generator'}:{seed + r}",
+            "spec_id": f"calibration:{'plant' if plant else 'generator'}:{seed + r}"
+            + ("" if noise == "table" else f":{noise}"),
             "seed": seed + r,
             "plant": plant,
+            "noise": noise,
             "dwell": dwell,
             "stroke": (float(lo), float(hi)),
             "rpba_thetas": np.asarray(th_r).tolist(),

@@ -75,11 +75,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--noise",
-        choices=("table", "frames"),
+        choices=("table", "frames", "dwells"),
         default="table",
-        help="identification: the residual's weights — Table 4.1's σ per axis (table, the "
-        "default) or, in a second pass, the frames' covariance estimated from the first "
-        "(frames: camera axes whose noise is correlated are weighted together)",
+        help="the residual's weights — Table 4.1's σ per axis (table, the default); "
+        "identification: in a second pass, the frames' covariance estimated from the first "
+        "(frames: camera axes whose noise is correlated are weighted together); calibration: "
+        "the camera covariance pooled from the dwells' own frames (dwells)",
     )
     p.add_argument(
         "--replicate-bias",
@@ -115,6 +116,9 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidInputError(
             "--solver-iterations needs the rapier plant (identification, or --plant)"
         )
+    wrong = {"frames": "identification", "dwells": "calibration"}.get(args.noise)
+    if wrong is not None and args.kind != wrong:
+        raise InvalidInputError(f"--noise {args.noise} is for the {wrong} study")
     common: dict[str, Any] = {
         "out": args.out,
         "client": args.scheduler,
@@ -122,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         "seed": args.seed,
     }
     if args.kind == "calibration":
-        df = studies.calibration_study(args.n, plant=args.plant, **common)
+        df = studies.calibration_study(args.n, plant=args.plant, noise=args.noise, **common)
         print(studies.summary_calibration(df))
     elif args.kind == "identification":
         df = studies.identification_variation(

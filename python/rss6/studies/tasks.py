@@ -26,6 +26,7 @@ def calibration_task(spec: Mapping[str, Any]) -> dict[str, Any]:
         dwell=float(spec.get("dwell", 2.0)),
         stroke=tuple(spec["stroke"]),
         plant=bool(spec.get("plant", False)),
+        noise=str(spec.get("noise", "table")),
     )
     r = rows[0]
     rec: dict[str, Any] = {"seed": int(spec["seed"]), "plant": bool(spec.get("plant", False))}

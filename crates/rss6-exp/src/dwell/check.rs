@@ -223,6 +223,8 @@ impl core::fmt::Display for DwellFault {
 pub struct Scatter {
     kappa: Moments,
     pose: Moments,
+    /// Co-moments Σ (x − x̄)(x − x̄)ᵀ of the camera components (Welford's update).
+    pose_cross: [[f64; 6]; 6],
     first_pose: Option<Vec6>,
 }
 
@@ -263,7 +265,13 @@ impl Scatter {
             *a = (*a + core::f64::consts::PI).rem_euclid(core::f64::consts::TAU)
                 - core::f64::consts::PI;
         }
+        let before: [f64; 6] = core::array::from_fn(|k| d[k] - self.pose.mean[k]);
         self.pose.add(&d);
+        for (r, row) in self.pose_cross.iter_mut().enumerate() {
+            for (c, v) in row.iter_mut().enumerate() {
+                *v += before[r] * (d[c] - self.pose.mean[c]);
+            }
+        }
     }
 
     /// Sample standard deviation of each joint's reading (bit); zeros with fewer than 2 samples.
@@ -274,5 +282,73 @@ impl Scatter {
     /// Sample standard deviation of each camera component (m, rad); `None` with fewer than 2 frames.
     pub fn pose_std(&self) -> Option<[f64; 6]> {
         self.pose.std()
+    }
+
+    /// Sample covariance of the camera components [x, y, z, α, β, γ] (m², m·rad, rad²), symmetric;
+    /// `None` with fewer than 2 frames. Its diagonal is the square of [`Self::pose_std`].
+    pub fn pose_cov(&self) -> Option<[[f64; 6]; 6]> {
+        let n = self.pose.n;
+        (n >= 2).then(|| {
+            let d = f64::from(n - 1);
+            core::array::from_fn(|r| {
+                core::array::from_fn(|c| 0.5 * (self.pose_cross[r][c] + self.pose_cross[c][r]) / d)
+            })
+        })
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pose_covariance_is_the_two_pass_sample_covariance_across_pi() {
+        // frames around γ = π (wrapping between +π and −π), with correlated x and β
+        let frames: Vec<Vec6> = (0..7)
+            .map(|k| {
+                let u = f64::from(k) - 3.0 + 0.1 * f64::from(k * k % 5);
+                let g = core::f64::consts::PI + 1e-4 * (f64::from(k % 3) - 1.0);
+                Vec6::new(0.1 + 1e-5 * u, 0.2, 1.0 - 2e-6 * u * u, 0.0, -3e-4 * u, g)
+            })
+            .collect();
+        let mut s = Scatter::default();
+        for f in &frames {
+            s.add_pose(f);
+        }
+        let cov = s.pose_cov().unwrap();
+        // two passes on the unwrapped values
+        let unwrapped: Vec<Vec6> = frames
+            .iter()
+            .map(|f| {
+                let mut g = *f;
+                g[5] = (g[5] - frames[0][5] + core::f64::consts::PI)
+                    .rem_euclid(core::f64::consts::TAU)
+                    - core::f64::consts::PI;
+                g
+            })
+            .collect();
+        let mean = unwrapped.iter().sum::<Vec6>() / 7.0;
+        let std = s.pose_std().unwrap();
+        for r in 0..6 {
+            for c in 0..6 {
+                let want = unwrapped
+                    .iter()
+                    .map(|f| (f[r] - mean[r]) * (f[c] - mean[c]))
+                    .sum::<f64>()
+                    / 6.0;
+                let scale = (cov[r][r] * cov[c][c]).sqrt().max(1e-300);
+                assert!(
+                    (cov[r][c] - want).abs() <= 1e-9 * scale + 1e-30,
+                    "{r} {c}: {} vs {want}",
+                    cov[r][c]
+                );
+                assert_eq!(cov[r][c], cov[c][r]);
+            }
+            assert!((cov[r][r].sqrt() - std[r]).abs() <= 1e-12 * std[r].max(1e-300));
+        }
+        // x and β move together exactly: correlation −1
+        assert!((cov[0][4] / (cov[0][0] * cov[4][4]).sqrt() + 1.0).abs() < 1e-9);
+        assert!(Scatter::default().pose_cov().is_none());
     }
 }

@@ -37,6 +37,12 @@ pub struct ConfigurationData {
     /// recorded or fewer than 2 frames.
     #[serde(default)]
     pub sensor_pose_std: Option<[f64; 6]>,
+    /// Sample covariance of ᶜχ_t's components over the dwell, one frame's (m², m·rad, rad²; not
+    /// divided by the frame count); `None` if not recorded or fewer than 2 frames. Pooled over a
+    /// collection it is the camera's pose noise with its correlations (calibration's
+    /// `noise_from_dwells`).
+    #[serde(default)]
+    pub sensor_pose_cov: Option<[[f64; 6]; 6]>,
     /// The collection check this configuration failed ([`DwellChecks`]), or `None` (passed, or not
     /// checked). Such a configuration is kept in the data and left out of calibrations by default.
     #[serde(default)]
@@ -239,6 +245,7 @@ impl<R: Robot> DwellSession<R> {
             camera_frames: poses.count(),
             kappa_std: Some(scatter.kappa_std()),
             sensor_pose_std: scatter.pose_std(),
+            sensor_pose_cov: scatter.pose_cov(),
             fault: None,
         };
         if let Some(checks) = &self.spec.checks {

@@ -247,6 +247,7 @@ pub fn read_log_bytes(path: &str, data: &[u8]) -> Result<RunLog, LogError> {
                                 camera_frames: d.camera_frames,
                                 kappa_std: d.kappa_std,
                                 sensor_pose_std: d.sensor_pose_std,
+                                sensor_pose_cov: d.sensor_pose_cov,
                                 fault: d.fault,
                             },
                         });

@@ -226,6 +226,7 @@ impl LogWriter {
                 camera_frames: data.camera_frames,
                 kappa_std: data.kappa_std,
                 sensor_pose_std: data.sensor_pose_std,
+                sensor_pose_cov: data.sensor_pose_cov,
                 fault: data.fault.clone(),
             },
         )

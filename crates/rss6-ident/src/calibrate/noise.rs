@@ -9,6 +9,7 @@
 //! whitened block by block.
 
 use crate::closure::{fk_with_derivative, leg_closure, FkDerivative};
+use crate::error::IdentError;
 use crate::se3::{iso, pose_difference};
 use nalgebra::{DMatrix, DVector};
 use rss6_core::{isometry_to_pose, KinematicParams, Mat6, Vec6};
@@ -22,6 +23,11 @@ pub struct MeasurementNoise {
     pub position: f64,
     /// σ of one camera angle (rad); Table 4.1: 0.0261°.
     pub angle: f64,
+    /// Covariance of one camera frame's ᶜχ_t [x, y, z, α, β, γ] (m², m·rad, rad²). When set it
+    /// replaces `position` and `angle`, so the correlations between components count (a stereo
+    /// head's pose noise is strongly correlated between x and β, y and α); see
+    /// [`MeasurementNoise::with_dwell_covariance`]. Default `None`.
+    pub pose_covariance: Option<Mat6>,
 }
 
 impl Default for MeasurementNoise {
@@ -31,6 +37,7 @@ impl Default for MeasurementNoise {
             kappa: rss6_sim::POT_NOISE_BITS,
             position: rss6_sim::CMM_POSITION_NOISE,
             angle: rss6_sim::CMM_ANGLE_NOISE,
+            pose_covariance: None,
         }
     }
 }
@@ -41,13 +48,66 @@ impl MeasurementNoise {
         Vec6::repeat(self.kappa * self.kappa / n)
     }
 
-    /// Diagonal covariance of a dwell's mean ᶜχ_t (m², rad²) from `n` frames.
-    fn pose_var(&self, n: f64) -> Vec6 {
-        let (p, a) = (
-            self.position * self.position / n,
-            self.angle * self.angle / n,
-        );
-        Vec6::new(p, p, p, a, a, a)
+    /// Covariance of a dwell's mean ᶜχ_t (m², m·rad, rad²) from `n` frames.
+    fn pose_var(&self, n: f64) -> Mat6 {
+        match &self.pose_covariance {
+            Some(c) => c / n,
+            None => {
+                let (p, a) = (
+                    self.position * self.position / n,
+                    self.angle * self.angle / n,
+                );
+                Mat6::from_diagonal(&Vec6::new(p, p, p, a, a, a))
+            }
+        }
+    }
+
+    /// This noise with `pose_covariance` pooled from the dwells of `data` that a calibration would
+    /// use (no defect, no failed check unless `include_faulty`): Σ = Σ_l S_l·(n_l − 1) / Σ_l (n_l − 1)
+    /// over the configurations whose sample covariance S_l of n_l ≥ 2 frames was recorded
+    /// ([`crate::ConfigurationData::sensor_pose_cov`]). Returns the pooled degrees of freedom too.
+    ///
+    /// Errors: [`IdentError::InvalidInput`] when no dwell recorded a covariance (data from arrays
+    /// or an older log), the pooled covariance is not finite and positive definite, or it has
+    /// fewer than 6 degrees of freedom.
+    pub fn with_dwell_covariance(
+        mut self,
+        data: &crate::CalibrationData,
+        include_faulty: bool,
+    ) -> Result<(Self, f64), IdentError> {
+        let mut sum = Mat6::zeros();
+        let mut dof = 0.0;
+        for c in &data.configurations {
+            let excluded = if include_faulty {
+                c.defect()
+            } else {
+                c.exclusion()
+            };
+            if let (None, Some(cov)) = (excluded, &c.sensor_pose_cov) {
+                if c.camera_frames >= 2 {
+                    let w = f64::from(c.camera_frames - 1);
+                    sum += Mat6::from_fn(|r, k| cov[r][k]) * w;
+                    dof += w;
+                }
+            }
+        }
+        if dof == 0.0 {
+            return Err(IdentError::InvalidInput(
+                "the noise from the dwells needs their camera covariance, and no usable dwell \
+                 recorded one (data from arrays or a log written before it was recorded): use \
+                 Table 4.1's noise"
+                    .into(),
+            ));
+        }
+        let pooled = sum / dof;
+        if dof < 6.0 || !pooled.iter().all(|v| v.is_finite()) || pooled.cholesky().is_none() {
+            return Err(IdentError::InvalidInput(format!(
+                "the dwells' pooled camera covariance ({dof} degrees of freedom) is not positive \
+                 definite: too few frames, or a camera that repeats its frames"
+            )));
+        }
+        self.pose_covariance = Some(pooled);
+        Ok((self, dof))
     }
 }
 
@@ -131,8 +191,8 @@ fn fk_kappa_derivative(kp: &KinematicParams, d_b: &crate::closure::Mat6x60) -> M
     Mat6::from_fn(|r, c| d_b[(r, 54 + c)] * kp.eta[c])
 }
 
-fn var_sum(a: &Mat6, var: &Vec6) -> Mat6 {
-    a * Mat6::from_diagonal(var) * a.transpose()
+fn var_sum(a: &Mat6, var: &Mat6) -> Mat6 {
+    a * var * a.transpose()
 }
 
 /// Data of the problem that the covariance needs.
@@ -169,7 +229,7 @@ pub(super) fn rpba_whitening(
     };
     let (c0, f0) = (input.cam[0], fks[0].pose);
     let var_c0 = noise.pose_var(input.counts[0].1.max(1.0));
-    let var_k0 = noise.kappa_var(input.counts[0].0.max(1.0));
+    let var_k0 = Mat6::from_diagonal(&noise.kappa_var(input.counts[0].0.max(1.0)));
     let dk0 = fk_kappa_derivative(input.kp, &fks[0].d_b);
     let n = 6 * (m - 1);
     // shared part: G0 = [∂Φ/∂ᶜχ_t⁰, ∂Φ/∂κ⁰] stacked over l
@@ -193,16 +253,16 @@ pub(super) fn rpba_whitening(
         g0.view_mut((row, 0), (6, 6)).copy_from(&d_c0);
         g0.view_mut((row, 6), (6, 6)).copy_from(&d_k0);
         let var_cl = noise.pose_var(input.counts[l].1.max(1.0));
-        let var_kl = noise.kappa_var(input.counts[l].0.max(1.0));
+        let var_kl = Mat6::from_diagonal(&noise.kappa_var(input.counts[l].0.max(1.0)));
         let s_own = var_sum(&d_cl, &var_cl) + var_sum(&d_kl, &var_kl);
         let s_shared = var_sum(&d_c0, &var_c0) + var_sum(&d_k0, &var_k0);
         own.push(s_own + s_shared);
         sigma.view_mut((row, row), (6, 6)).copy_from(&s_own);
     }
-    let mut var0 = DVector::zeros(12);
-    var0.rows_mut(0, 6).copy_from(&var_c0);
-    var0.rows_mut(6, 6).copy_from(&var_k0);
-    sigma += &g0 * DMatrix::from_diagonal(&var0) * g0.transpose();
+    let mut var0 = DMatrix::zeros(12, 12);
+    var0.view_mut((0, 0), (6, 6)).copy_from(&var_c0);
+    var0.view_mut((6, 6), (6, 6)).copy_from(&var_k0);
+    sigma += &g0 * var0 * g0.transpose();
     let full = sigma.cholesky()?.l();
     let blocks = own
         .into_iter()
@@ -230,7 +290,7 @@ pub(super) fn implicit_whitening(
             let c = leg_closure(input.kp, &kappa, &(m_oc * iso(&input.cam[l]) * mt_inv));
             let d_k = Mat6::from_fn(|r, j| c.d_b[(r, 54 + j)] * input.kp.eta[j]);
             let var_c = noise.pose_var(input.counts[l].1.max(1.0));
-            let var_k = noise.kappa_var(input.counts[l].0.max(1.0));
+            let var_k = Mat6::from_diagonal(&noise.kappa_var(input.counts[l].0.max(1.0)));
             (var_sum(&d_c, &var_c) + var_sum(&d_k, &var_k))
                 .cholesky()
                 .map(|c| c.l())

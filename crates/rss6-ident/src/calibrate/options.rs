@@ -33,6 +33,11 @@ pub struct CalibrationOptions {
     /// χ² variable and its value per degree of freedom the fit statistic. `None`: the fixed weights
     /// below, no fit statistic, no outlier rejection.
     pub noise: Option<MeasurementNoise>,
+    /// Replace `noise`'s camera part by the covariance of one frame pooled from the dwells' own
+    /// scatter ([`MeasurementNoise::with_dwell_covariance`]): the stereo head's correlated pose noise
+    /// (x with β, y with α) and its depth noise as measured, instead of Table 4.1's independent
+    /// components. Needs data whose dwells recorded it (the dwell runner does). Default `false`.
+    pub noise_from_dwells: bool,
     /// Fixed RPBA residual weights [x, y, z, α, β, γ] (1/m, 1/rad) when `noise` is `None`: default
     /// 1/σ of Table 4.1, so translations and rotations count by their measurement precision.
     pub pose_weights: [f64; 6],
@@ -74,6 +79,7 @@ impl Default for CalibrationOptions {
             initial_damping: 1e-4,
             jacobian: JacobianMode::Analytic,
             noise: Some(MeasurementNoise::default()),
+            noise_from_dwells: false,
             pose_weights: [1.0 / sp, 1.0 / sp, 1.0 / sp, 1.0 / sa, 1.0 / sa, 1.0 / sa],
             leg_weight: 1.0 / sp,
             include_faulty: false,

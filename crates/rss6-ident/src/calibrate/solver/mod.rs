@@ -439,6 +439,23 @@ pub(super) fn solve(
         ));
     }
     layout.kp(&x0).validate()?;
+    let pooled;
+    let opts = match (opts.noise_from_dwells, &opts.noise) {
+        (false, _) => opts,
+        (true, None) => {
+            return Err(IdentError::InvalidInput(
+                "noise_from_dwells needs a noise model (noise is None)".into(),
+            ))
+        }
+        (true, Some(noise)) => {
+            let (noise, _) = noise.with_dwell_covariance(data, opts.include_faulty)?;
+            pooled = CalibrationOptions {
+                noise: Some(noise),
+                ..*opts
+            };
+            &pooled
+        }
+    };
     let mut sel = select(&layout, data, opts)?;
     let red = Reduction::new(
         &layout,
