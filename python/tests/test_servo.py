@@ -242,6 +242,12 @@ def test_ctrl_c_stops_a_long_run_without_callbacks(tmp_path, run):
         text=True,
     )
     assert child.stdout.readline().strip() == "start"
+    # Ctrl-C once the run is logging: on a loaded machine setting up an hour-long run can take
+    # longer than a fixed wait, and a Ctrl-C before the log exists leaves nothing to check
+    deadline = time.monotonic() + 120.0
+    while not path.exists() and time.monotonic() < deadline and child.poll() is None:
+        time.sleep(0.05)
+    assert path.exists(), "the run never opened its log"
     time.sleep(1.0)
     child.send_signal(signal.SIGINT)
     out, err = child.communicate(timeout=60)
