@@ -23,5 +23,5 @@ step "mypy python/rss6 (settings in pyproject.toml)"
 python3 -m mypy python/rss6
 step "mypy stubtest rss6._rss6 (every runtime name must be in the stub)"
 python3 -m mypy.stubtest rss6._rss6
-step "pytest"
-python3 -m pytest python/tests -q
+step "pytest (pytest-xdist: one worker per core)"
+python3 -m pytest python/tests -q -n auto

@@ -189,3 +189,19 @@ def test_weighing_by_the_dwells_needs_their_covariance_and_a_valid_one(setup):
     bad[0, 0, 1] += 1e-12
     with pytest.raises(rss6.InvalidInputError, match="symmetric"):
         rss6.CalibrationData.from_arrays(data.kappa, data.sensor_pose, sensor_pose_cov=bad)
+    # asymmetry at rounding level (what np.cov or R C Rᵀ leave) is accepted and averaged away
+    rounded = data.sensor_pose_cov.copy()
+    rounded[0, 0, 1] *= 1 + 4e-15
+    kept = rss6.CalibrationData.from_arrays(
+        data.kappa, data.sensor_pose, sensor_pose_cov=rounded
+    ).sensor_pose_cov
+    np.testing.assert_array_equal(kept, np.swapaxes(kept, 1, 2))
+    np.testing.assert_allclose(kept, data.sensor_pose_cov, rtol=4e-15, atol=0)
+    pooled = data.sensor_pose_cov[0].copy()
+    skew = pooled.copy()
+    skew[4, 5] *= 1 + 1e-13
+    exact = calibrate.rpba(data, NOMINAL, noise=(skew + skew.T) / 2)
+    np.testing.assert_array_equal(calibrate.rpba(data, NOMINAL, noise=skew).errors, exact.errors)
+    skew[4, 5] *= 1 + 1e-9
+    with pytest.raises(rss6.InvalidInputError, match="symmetric"):
+        calibrate.rpba(data, NOMINAL, noise=skew)

@@ -11,25 +11,8 @@ use rand_chacha::ChaCha8Rng;
 use rss6_core::{ik, KinematicParams, Vec6};
 use rss6_ident::*;
 
-fn nominal() -> KinematicParams {
-    KinematicParams::nominal()
-}
-
-/// Fixed, well-spread configurations inside a ±25° box (the computed stroke is ±31°).
-fn configurations(n: usize, seed: u64) -> Vec<Vec6> {
-    let mut t = vec![Vec6::zeros()];
-    t.extend(test_configurations(n, seed, (-0.45, 0.45)));
-    t
-}
-
-fn robot(seed: u64, noise: NoiseModel) -> (TrueRobot, AnalyticRobot) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let truth = TrueRobot::draw(&nominal(), &mut rng);
-    (
-        truth,
-        AnalyticRobot::new(truth, nominal(), noise, seed + 1000),
-    )
-}
+mod common;
+use common::{configurations, nominal, robot};
 
 fn truth_vector(method: Method, truth: &TrueRobot) -> nalgebra::DVector<f64> {
     parameter_vector(

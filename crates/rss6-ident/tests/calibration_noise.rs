@@ -6,27 +6,11 @@ use nalgebra::Matrix6;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
-use rss6_core::{KinematicParams, Vec6};
+use rss6_core::Vec6;
 use rss6_ident::*;
 
-fn nominal() -> KinematicParams {
-    KinematicParams::nominal()
-}
-
-fn configurations(n: usize, seed: u64) -> Vec<Vec6> {
-    let mut t = vec![Vec6::zeros()];
-    t.extend(test_configurations(n, seed, (-0.45, 0.45)));
-    t
-}
-
-fn robot(seed: u64, noise: NoiseModel) -> (TrueRobot, AnalyticRobot) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let truth = TrueRobot::draw(&nominal(), &mut rng);
-    (
-        truth,
-        AnalyticRobot::new(truth, nominal(), noise, seed + 1000),
-    )
-}
+mod common;
+use common::{configurations, nominal, robot};
 
 fn dwells() -> CalibrationOptions {
     CalibrationOptions {

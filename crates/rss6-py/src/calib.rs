@@ -290,8 +290,13 @@ fn noise_option(o: &mut CalibrationOptions, noise: Option<&Bound<'_, PyAny>>) ->
         return Ok(());
     }
     let m = crate::convert::mat6_rows(n, "noise")?;
+    let Some(m) = crate::convert::symmetrised6(&m) else {
+        return Err(invalid(
+            "the noise covariance must be symmetric (to 1e-12 relative) and positive definite",
+        ));
+    };
     let c = nalgebra::Matrix6::from_fn(|r, k| m[r][k]);
-    if (0..6).any(|r| (0..6).any(|k| c[(r, k)] != c[(k, r)])) || c.cholesky().is_none() {
+    if c.cholesky().is_none() {
         return Err(invalid(
             "the noise covariance must be symmetric and positive definite",
         ));

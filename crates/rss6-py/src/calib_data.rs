@@ -53,17 +53,17 @@ impl PyCalibrationData {
                 }
                 cv.chunks_exact(36)
                     .map(|b| {
+                        let m: [[f64; 6]; 6] =
+                            std::array::from_fn(|r| std::array::from_fn(|c| b[6 * r + c]));
                         if b.iter().all(|v| v.is_nan()) {
                             Ok(None)
-                        } else if b.iter().all(|v| v.is_finite())
-                            && (0..36).all(|k| b[k] == b[6 * (k % 6) + k / 6])
+                        } else if let Some(m) = crate::convert::symmetrised6(&m)
+                            .filter(|_| b.iter().all(|v| v.is_finite()))
                         {
-                            Ok(Some(std::array::from_fn(|r| {
-                                std::array::from_fn(|c| b[6 * r + c])
-                            })))
+                            Ok(Some(m))
                         } else {
                             Err(invalid(
-                                "each sensor_pose_cov block must be finite and symmetric (or all NaN: not recorded)",
+                                "each sensor_pose_cov block must be finite and symmetric to 1e-12 relative (or all NaN: not recorded)",
                             ))
                         }
                     })

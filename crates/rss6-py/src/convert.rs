@@ -113,6 +113,29 @@ pub(crate) fn mat6_rows(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[[f64; 6
     }))
 }
 
+/// A covariance block made exactly symmetric, or `None` when it is not symmetric to rounding.
+///
+/// `np.cov` and products like `R C Rᵀ` give matrices whose mirrored entries differ in the last bits;
+/// those are accepted (|c_rk − c_kr| ≤ 1e-12·max(|c_rr|, |c_kk|, |c_rk|)) and averaged, anything larger
+/// is a caller's mistake and is refused by the caller with its own message.
+pub(crate) fn symmetrised6(c: &[[f64; 6]; 6]) -> Option<[[f64; 6]; 6]> {
+    const REL: f64 = 1e-12;
+    let mut out = *c;
+    for r in 0..6 {
+        for k in (r + 1)..6 {
+            let (a, b) = (c[r][k], c[k][r]);
+            let scale = c[r][r].abs().max(c[k][k].abs()).max(a.abs()).max(b.abs());
+            if (a - b).abs() > REL * scale || !(a + b).is_finite() {
+                return None;
+            }
+            let m = 0.5 * (a + b);
+            out[r][k] = m;
+            out[k][r] = m;
+        }
+    }
+    Some(out)
+}
+
 /// An (N, 6) array as poses/joint vectors.
 pub(crate) fn rows6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec6>> {
     Ok(rows::<6>(obj, name)?.into_iter().map(Vec6::from).collect())
