@@ -197,8 +197,7 @@ def test_weighing_by_the_dwells_needs_their_covariance_and_a_valid_one(setup):
     ).sensor_pose_cov
     np.testing.assert_array_equal(kept, np.swapaxes(kept, 1, 2))
     np.testing.assert_allclose(kept, data.sensor_pose_cov, rtol=4e-15, atol=0)
-    pooled = data.sensor_pose_cov[0].copy()
-    skew = pooled.copy()
+    skew = data.sensor_pose_cov[0].copy()
     skew[4, 5] *= 1 + 1e-13
     exact = calibrate.rpba(data, NOMINAL, noise=(skew + skew.T) / 2)
     np.testing.assert_array_equal(calibrate.rpba(data, NOMINAL, noise=skew).errors, exact.errors)

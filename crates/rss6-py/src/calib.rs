@@ -297,9 +297,7 @@ fn noise_option(o: &mut CalibrationOptions, noise: Option<&Bound<'_, PyAny>>) ->
     };
     let c = nalgebra::Matrix6::from_fn(|r, k| m[r][k]);
     if c.cholesky().is_none() {
-        return Err(invalid(
-            "the noise covariance must be symmetric and positive definite",
-        ));
+        return Err(invalid("the noise covariance must be positive definite"));
     }
     if let Some(base) = &mut o.noise {
         base.pose_covariance = Some(c);
