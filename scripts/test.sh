@@ -3,7 +3,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
-step() { printf '\n==> %s\n' "$*"; }
+# Each step says when it started (minutes into the run): where CI's time goes is in every log.
+step() { printf '\n==> [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*"; }
 
 step "cargo fmt --all --check"
 cargo fmt --all --check
@@ -25,3 +26,4 @@ step "mypy stubtest rss6._rss6 (every runtime name must be in the stub)"
 python3 -m mypy.stubtest rss6._rss6
 step "pytest (pytest-xdist: one worker per core)"
 python3 -m pytest python/tests -q -n auto
+step "done"
