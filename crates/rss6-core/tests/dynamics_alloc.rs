@@ -78,6 +78,10 @@ fn dynamics_hot_paths_do_not_allocate() {
             sink += legs[3].j_b_dot[(4, 4)] + legs[2].j_a_dot[(0, 0)];
             let s = ModelState { pose: *p, pose_dot };
             sink += rk4_step(&kp, &dp, &s, &tau, 1e-3).unwrap().pose[0];
+            sink += rk4_step_implicit_friction(&kp, &dp, &s, &tau, 1e-3, &env, None)
+                .unwrap()
+                .0
+                .pose[1];
             sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();
             sink += potential_energy_with_gravity(&kp, &dp, p, &GRAVITY).unwrap();
             sink += joint_friction_smooth(&dp, &pose_dot, 1e-3)[0];

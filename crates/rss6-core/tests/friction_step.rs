@@ -96,3 +96,39 @@ fn bad_input_is_a_typed_error() {
         Err(CoreError::NonFinite)
     );
 }
+
+/// The one-call tick equals `implicit_friction` then RK4 of the friction-free model, bit for bit,
+/// with and without the angles of the last IK, while joints slip, stick and reverse.
+#[test]
+fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
+    let (kp, dp) = (KinematicParams::nominal(), with_friction());
+    let mut nf = dp;
+    nf.coulomb = [0.0; LEGS];
+    nf.viscous = [0.0; LEGS];
+    let env = Environment::with_gravity(Vec3::new(0.3, -0.2, -9.8));
+    let start = Vec6::new(0.01, -0.005, 0.12, 0.02, -0.01, 0.03);
+    let mut s = ModelState::at_rest(&start);
+    let hold = holding_torque(&kp, &dp, &start);
+    let (mut stuck, mut slipping) = (0, 0);
+    for k in 0..400 {
+        // A torque that pushes each joint past f_c and back below it.
+        let phase = k as f64 * 0.03;
+        let tau = hold + Vec6::from_fn(|i, _| 2.0 * dp.coulomb[i] * (phase + i as f64).sin());
+        let f = implicit_friction(&kp, &dp, &s.pose, &s.pose_dot, &tau, &env, DT).unwrap();
+        let two = rk4_step_with_env(&kp, &nf, &s, &(tau - f.torque), DT, &env).unwrap();
+        let theta = ik(&kp, &s.pose).unwrap();
+        for known in [None, Some(&theta)] {
+            let (one, g) = rk4_step_implicit_friction(&kp, &dp, &s, &tau, DT, &env, known).unwrap();
+            assert_eq!(one, two, "tick {k}");
+            assert_eq!(g, f, "tick {k}");
+        }
+        stuck += f.stuck.iter().filter(|&&b| b).count();
+        slipping += f.stuck.iter().filter(|&&b| !b).count();
+        s = two;
+    }
+    // Both regimes were exercised.
+    assert!(
+        stuck > 100 && slipping > 100,
+        "{stuck} stuck, {slipping} slipping"
+    );
+}

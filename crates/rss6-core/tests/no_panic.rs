@@ -234,6 +234,9 @@ proptest! {
             prop_assert!(f.sweeps <= 400);
             prop_assert!(!f.exact || f.torque.iter().all(|x| x.is_finite()));
         }
+        let s = ModelState { pose: p, pose_dot: pd };
+        let theta = ik(&kp, &p).ok();
+        let _ = rk4_step_implicit_friction(&kp, &dp, &s, &tau, dt, &env, theta.as_ref());
     }
 
     #[test]

@@ -499,6 +499,12 @@ fn stages_evaluated_ahead_in_parallel_give_the_sequential_result_bit_for_bit() {
         assert!(seq.chi == par.chi, "{name}: χ_s differs");
         assert!(seq.jacobian == par.jacobian, "{name}: the Jacobians differ");
         assert_eq!(seq.stuck_joint_ticks, par.stuck_joint_ticks, "{name}");
+        // Without sensitivities an implicit tick is rss6-core's one call (first stage shared
+        // with the friction step): still the same χ_s, bit for bit.
+        let plain = simulate_loop(&cfg, &a, &exc, None).unwrap();
+        assert!(plain.chi == seq.chi, "{name}: the primal χ_s differs");
+        assert_eq!(plain.stuck_joint_ticks, seq.stuck_joint_ticks, "{name}");
+        assert_eq!(plain.inexact_friction, seq.inexact_friction, "{name}");
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()

@@ -12,7 +12,7 @@ use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    forward_dynamics_with_env, ik, implicit_friction, jacobian_theta, rk4_step_by,
+    forward_dynamics_with_env, ik, jacobian_theta, rk4_step_by, rk4_step_implicit_friction,
     rk4_step_with_env, DynamicParams, Environment, KinematicParams, ModelState, Vec6, LEGS,
 };
 
@@ -30,6 +30,8 @@ pub struct ModelPhysics {
     dt: f64,
     state: ModelState,
     theta: Vec6,
+    /// `theta` is IK(χ) of the current pose (set by a step; `place` takes its angles on trust).
+    theta_is_ik: bool,
     /// Implicit friction solves that hit their sweep bound.
     inexact: u64,
 }
@@ -53,6 +55,7 @@ impl ModelPhysics {
                 pose_dot: Vec6::zeros(),
             },
             theta: Vec6::zeros(),
+            theta_is_ik: false,
             inexact: 0,
         }
     }
@@ -70,21 +73,21 @@ impl Physics for ModelPhysics {
             pose_dot: Vec6::zeros(),
         };
         self.theta = *theta;
+        self.theta_is_ik = false;
         Ok(())
     }
 
     fn advance(&mut self, tau: &Vec6) -> Result<()> {
         self.state = if self.implicit {
             // Stick–slip friction stepped implicitly and held over the tick (the plant's law
-            // with `implicit_friction`), then the friction-free model with τ − τ_f.
-            let s = &self.state;
+            // with `implicit_friction`), then the friction-free model with τ − τ_f: one core call
+            // that shares the first stage with the friction step, from the angles of the last IK.
             let (kp, env) = (&self.kp, &self.env);
-            let f = implicit_friction(kp, &self.dp, &s.pose, &s.pose_dot, tau, env, self.dt)?;
+            let theta = self.theta_is_ik.then_some(&self.theta);
+            let (next, f) =
+                rk4_step_implicit_friction(kp, &self.dp, &self.state, tau, self.dt, env, theta)?;
             self.inexact += u64::from(!f.exact);
-            let mut dp_nf = self.dp;
-            dp_nf.coulomb = [0.0; LEGS];
-            dp_nf.viscous = [0.0; LEGS];
-            rk4_step_with_env(kp, &dp_nf, s, &(tau - f.torque), self.dt, env)?
+            next
         } else if self.smoothing > 0.0 {
             // f_c tanh(θ̇/ε) at every stage: the Coulomb part as a known joint torque on the
             // friction-free model (the same arithmetic as rss6-ident's CLOE loop).
@@ -100,7 +103,9 @@ impl Physics for ModelPhysics {
         } else {
             rk4_step_with_env(&self.kp, &self.dp, &self.state, tau, self.dt, &self.env)?
         };
+        self.theta_is_ik = false;
         self.theta = ik(&self.kp, &self.state.pose)?;
+        self.theta_is_ik = true;
         Ok(())
     }
 

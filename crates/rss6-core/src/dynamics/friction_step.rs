@@ -43,12 +43,17 @@
 //! an O(dt) change of discretisation moves where joints stick by mrad — 0.5 mm of platform motion
 //! against the twin. The law must be the same discrete map in both simulators.)
 
+use super::integration::{rk4_step_by, ModelState};
 use super::load::Environment;
-use super::newton_euler::{solve6, twist_dynamics, TwistDynamics};
+use super::newton_euler::{
+    forward_dynamics_with_env, forward_from, solve6, twist_dynamics_at, TwistDynamics,
+};
 use super::{check_finite, check_state};
 use crate::error::{CoreError, Result, SingularKind};
+use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
 use crate::types::{Mat6, Vec6, LEGS};
+use nalgebra::{Cholesky, U6};
 
 /// Gauss–Seidel sweeps at most.
 const MAX_SWEEPS: u32 = 400;
@@ -94,19 +99,34 @@ pub fn implicit_friction(
     env: &Environment,
     dt: f64,
 ) -> Result<FrictionStep> {
+    // The checks in the order callers have always seen their errors (repeated inside: cheap).
     check_state(pose_dot, tau_a)?;
-    if !(dt > 0.0 && dt.is_finite()) {
-        return Err(CoreError::InvalidParameter(
-            "dt must be positive and finite",
-        ));
-    }
+    check_dt(dt)?;
+    env.check()?;
+    let geom = LegGeometry::at_pose(kp, pose)?;
+    implicit_friction_at(&geom, dp, pose_dot, tau_a, env, dt).map(|(s, ..)| s)
+}
+
+/// [`implicit_friction`] at a known geometry (the environment already checked); also returns the
+/// twist dynamics and the Cholesky factor of M it used, for the tick's first RK4 stage.
+fn implicit_friction_at(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+    dt: f64,
+) -> Result<(FrictionStep, TwistDynamics, Cholesky<f64, U6>)> {
+    check_state(pose_dot, tau_a)?;
+    check_dt(dt)?;
+    let td = twist_dynamics_at(geom, dp, pose_dot, env)?;
     let TwistDynamics {
         m,
         bias,
         theta_dot,
         j_ad_t,
         ..
-    } = twist_dynamics(kp, dp, pose, pose_dot, env)?;
+    } = td;
     let chol = m
         .cholesky()
         .ok_or(CoreError::Singular(SingularKind::Matrix))?;
@@ -120,7 +140,60 @@ pub fn implicit_friction(
     let fv = Vec6::from_fn(|i, _| dp.viscous[i].max(0.0));
     let mut s = solve(&k, &w0, &fc, &fv);
     s.twist_change = -(x * s.torque) * dt;
-    Ok(s)
+    Ok((s, td, chol))
+}
+
+/// One tick of the implicit friction law: the friction τ_f of [`implicit_friction`], then one RK4
+/// step ([`crate::rk4_step_with_env`]) of the friction-free model (`dp` with zero Coulomb and
+/// viscous coefficients) under τ_a − τ_f. The result is bit for bit that of the two calls; the
+/// first stage reuses the friction step's mass matrix and forces (four dynamics evaluations per
+/// tick instead of five). `theta`: the joint angles of `state.pose` when already known (from
+/// [`crate::ik`] at that pose: anything else gives a wrong step), else `None` (one IK more).
+///
+/// Errors: as [`implicit_friction`] and [`crate::rk4_step_with_env`].
+pub fn rk4_step_implicit_friction(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    state: &ModelState,
+    tau_a: &Vec6,
+    dt: f64,
+    env: &Environment,
+    theta: Option<&Vec6>,
+) -> Result<(ModelState, FrictionStep)> {
+    env.check()?;
+    check_finite(state.pose.as_slice())?;
+    let geom = match theta {
+        Some(th) => LegGeometry::from_pose_and_theta(kp, &state.pose, th),
+        None => LegGeometry::at_pose(kp, &state.pose)?,
+    };
+    let (f, td, chol) = implicit_friction_at(&geom, dp, &state.pose_dot, tau_a, env, dt)?;
+    let mut dp_nf = *dp;
+    dp_nf.coulomb = [0.0; LEGS];
+    dp_nf.viscous = [0.0; LEGS];
+    let net = tau_a - f.torque;
+    check_state(&state.pose_dot, &net)?;
+    let first = forward_from(&geom, &td, chol, &dp_nf, &state.pose_dot, &net)?.chi_ddot;
+    // rk4_step_by evaluates its stages in order: the first is the one computed above.
+    let stage = core::cell::Cell::new(0u8);
+    let next = rk4_step_by(state, dt, |p, v| {
+        stage.set(stage.get() + 1);
+        if stage.get() == 1 {
+            Ok(first)
+        } else {
+            forward_dynamics_with_env(kp, &dp_nf, p, v, &net, env)
+        }
+    })?;
+    Ok((next, f))
+}
+
+fn check_dt(dt: f64) -> Result<()> {
+    if dt > 0.0 && dt.is_finite() {
+        Ok(())
+    } else {
+        Err(CoreError::InvalidParameter(
+            "dt must be positive and finite",
+        ))
+    }
 }
 
 /// One joint's friction torque given r, its rate if its own friction were zero.

@@ -481,19 +481,33 @@ pub(super) fn forward_at(
     tau_a: &Vec6,
     env: &Environment,
 ) -> Result<ForwardAt> {
+    let td = twist_dynamics_at(geom, dp, pose_dot, env)?;
+    let chol =
+        td.m.cholesky()
+            .ok_or(CoreError::Singular(SingularKind::Matrix))?;
+    forward_from(geom, &td, chol, dp, pose_dot, tau_a)
+}
+
+/// [`forward_at`] from the twist dynamics `td` at `geom` and the Cholesky factor of `td.m`
+/// (computed once where a caller needs them too: the implicit friction step).
+pub(super) fn forward_from(
+    geom: &LegGeometry,
+    td: &TwistDynamics,
+    chol: nalgebra::Cholesky<f64, nalgebra::U6>,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+) -> Result<ForwardAt> {
     let pose = &geom.pose;
     let TwistDynamics {
-        m,
         bias,
         theta_dot,
         j_ad_t,
         v,
-    } = twist_dynamics_at(geom, dp, pose_dot, env)?;
+        ..
+    } = *td;
     let tau_rigid = tau_a - joint_friction(dp, &theta_dot);
     let rhs = j_ad_t * tau_rigid - bias;
-    let chol = m
-        .cholesky()
-        .ok_or(CoreError::Singular(SingularKind::Matrix))?;
     let v_dot = chol.solve(&rhs);
     let js_inv = twist_jacobian_inverse(pose)?;
     let chi_ddot = js_inv * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
@@ -520,20 +534,7 @@ pub(super) struct TwistDynamics {
     pub v: Vec6,
 }
 
-/// [`TwistDynamics`] of the state; checks the environment.
-pub(super) fn twist_dynamics(
-    kp: &KinematicParams,
-    dp: &DynamicParams,
-    pose: &Vec6,
-    pose_dot: &Vec6,
-    env: &Environment,
-) -> Result<TwistDynamics> {
-    env.check()?;
-    let geom = LegGeometry::at_pose(kp, pose)?;
-    twist_dynamics_at(&geom, dp, pose_dot, env)
-}
-
-/// [`twist_dynamics`] at a known geometry (the environment already checked).
+/// The [`TwistDynamics`] at a known geometry (the environment already checked).
 pub(super) fn twist_dynamics_at(
     geom: &LegGeometry,
     dp: &DynamicParams,

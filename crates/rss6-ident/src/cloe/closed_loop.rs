@@ -38,7 +38,10 @@
 
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
-use rss6_core::{ik, jacobian_theta, DynamicParams, ForwardJacobians, Mat6, Vec6, LEGS};
+use rss6_core::{
+    ik, jacobian_theta, rk4_step_implicit_friction, DynamicParams, ForwardJacobians, Mat6,
+    ModelState, Vec6, LEGS,
+};
 use rss6_ctrl::{PidGains, Trajectory};
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -290,6 +293,8 @@ impl<'a> Lean<'a> {
         };
         let mut jac_rows: Vec<Sens> = Vec::new();
         let mut frame = self.camera_tick(0.0);
+        // IK(χ) of the current pose when the last tick computed it (the potentiometers' ticks).
+        let mut theta_at_pose: Option<Vec6> = None;
         for tick in 0..ticks {
             let t = self.time(tick);
             if let Some((chi, s_chi)) = frame.take() {
@@ -317,7 +322,12 @@ impl<'a> Lean<'a> {
                 .iter()
                 .filter(|t| t.abs() >= cfg.torque_limit)
                 .count();
-            if cfg.implicit_friction {
+            let ik_now = theta_at_pose.take();
+            if cfg.implicit_friction && self.sens.is_none() && self.record.is_none() {
+                // A plain primal run: core's one-call tick, whose first stage reuses the friction
+                // step's dynamics (bit for bit the branch below; see `lean_tick`).
+                self.lean_tick(&tau_sens.0, t, ik_now.as_ref(), &mut out)?;
+            } else if cfg.implicit_friction {
                 let (p0, v0) = (self.pose, self.pose_dot);
                 let st = friction::solve(cfg, &self.dp, &p0, &v0, &tau_sens.0, t)?;
                 out.inexact_friction += usize::from(!st.exact);
@@ -332,6 +342,7 @@ impl<'a> Lean<'a> {
             let tick_new = tick + 1;
             if tick_new % self.pot_ticks == 0 {
                 let theta = ik(&cfg.kp, &self.pose).map_err(|e| sim_err(t + cfg.dt, e))?;
+                theta_at_pose = Some(theta);
                 // The last reading of the run is never used: no dither row is needed for it.
                 self.theta_meas = cfg.pot_angle(&theta, t + cfg.dt);
                 if cfg.record_pot_angles {
@@ -512,6 +523,38 @@ impl<'a> Lean<'a> {
         };
         let (p, v) = (&self.pose, &self.pose_dot);
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
+    }
+
+    /// One tick of a primal run with implicit friction: [`rss6_core::rk4_step_implicit_friction`]
+    /// from IK(χ) `theta` when known. The same arithmetic as the implicit branch of [`Self::run`]
+    /// (`friction::solve`, then [`Self::rk4`] with its first stage), errors at the same times.
+    fn lean_tick(
+        &mut self,
+        tau: &Vec6,
+        t: f64,
+        theta: Option<&Vec6>,
+        out: &mut LoopRun,
+    ) -> Result<()> {
+        let cfg = self.cfg;
+        let state = ModelState {
+            pose: self.pose,
+            pose_dot: self.pose_dot,
+        };
+        let env = cfg.environment();
+        let (next, f) =
+            rk4_step_implicit_friction(&cfg.kp, &self.dp, &state, tau, cfg.dt, &env, theta)
+                .map_err(|e| sim_err(t, e))?;
+        out.inexact_friction += usize::from(!f.exact);
+        out.stuck_joint_ticks += f.stuck.iter().filter(|&&b| b).count();
+        self.pose = next.pose;
+        self.pose_dot = next.pose_dot;
+        if !(self.pose.iter().chain(self.pose_dot.iter())).all(|x| x.is_finite()) {
+            return Err(IdentError::Simulation {
+                time: t + cfg.dt,
+                message: "non-finite model state".into(),
+            });
+        }
+        Ok(())
     }
 
     /// One RK4 step with the torques held (the same arithmetic as `rss6_core::rk4_step_with_gravity`).
