@@ -13,7 +13,8 @@ use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
     forward_dynamics_with_env, ik, jacobian_theta, rk4_step_by, rk4_step_implicit_friction,
-    rk4_step_with_env, DynamicParams, Environment, KinematicParams, ModelState, Vec6, LEGS,
+    rk4_step_with_env, DynamicParams, Environment, KinematicParams, LegGeometry, ModelState, Vec6,
+    LEGS,
 };
 
 /// Analytic-model physics.
@@ -32,6 +33,9 @@ pub struct ModelPhysics {
     theta: Vec6,
     /// `theta` is IK(χ) of the current pose (set by a step; `place` takes its angles on trust).
     theta_is_ik: bool,
+    /// θ̇ = J_θ(χ) χ̇ of the current state (NaN where J_θ fails), computed once per state: the
+    /// experiment loop reads it twice a tick.
+    theta_dot: Vec6,
     /// Implicit friction solves that hit their sweep bound.
     inexact: u64,
 }
@@ -56,6 +60,7 @@ impl ModelPhysics {
             },
             theta: Vec6::zeros(),
             theta_is_ik: false,
+            theta_dot: Vec6::zeros(),
             inexact: 0,
         }
     }
@@ -63,6 +68,19 @@ impl ModelPhysics {
     /// The model state (χ, χ̇).
     pub fn state(&self) -> ModelState {
         self.state
+    }
+
+    /// θ̇ = J_θ(χ) χ̇ (NaN where J_θ fails), J_θ from the angles of the last IK when known (the
+    /// same geometry, without the IK).
+    fn rates(&self) -> Vec6 {
+        let (kp, pose) = (&self.kp, &self.state.pose);
+        let j = if self.theta_is_ik {
+            LegGeometry::from_pose_and_theta(kp, pose, &self.theta).j_theta()
+        } else {
+            jacobian_theta(kp, pose)
+        };
+        j.map(|j| j * self.state.pose_dot)
+            .unwrap_or_else(|_| Vec6::from_element(f64::NAN))
     }
 }
 
@@ -74,6 +92,7 @@ impl Physics for ModelPhysics {
         };
         self.theta = *theta;
         self.theta_is_ik = false;
+        self.theta_dot = self.rates();
         Ok(())
     }
 
@@ -104,9 +123,19 @@ impl Physics for ModelPhysics {
             rk4_step_with_env(&self.kp, &self.dp, &self.state, tau, self.dt, &self.env)?
         };
         self.theta_is_ik = false;
-        self.theta = ik(&self.kp, &self.state.pose)?;
-        self.theta_is_ik = true;
-        Ok(())
+        match ik(&self.kp, &self.state.pose) {
+            Ok(theta) => {
+                self.theta = theta;
+                self.theta_is_ik = true;
+                self.theta_dot = self.rates();
+                Ok(())
+            }
+            Err(e) => {
+                // J_θ fails where the IK does.
+                self.theta_dot = Vec6::from_element(f64::NAN);
+                Err(e.into())
+            }
+        }
     }
 
     fn pose(&self) -> Vec6 {
@@ -118,9 +147,7 @@ impl Physics for ModelPhysics {
     }
 
     fn theta_dot(&self) -> Vec6 {
-        jacobian_theta(&self.kp, &self.state.pose)
-            .map(|j| j * self.state.pose_dot)
-            .unwrap_or_else(|_| Vec6::from_element(f64::NAN))
+        self.theta_dot
     }
 
     fn loop_closure_error(&self) -> f64 {

@@ -72,3 +72,23 @@ fn implicit_friction_excludes_smoothing() {
     assert!(Plant::new(cfg.clone()).is_err());
     assert!(ModelSim::new(cfg).is_err());
 }
+
+/// The twin keeps θ̇ from its last step (read twice a tick by the experiment loop): it is J_θ(χ) χ̇ of
+/// its model state, bit for bit, through slip and stick.
+#[test]
+fn the_twins_joint_rates_are_those_of_its_state() {
+    let mut twin = ModelSim::new(config(4, true)).unwrap();
+    let kp = KinematicParams::nominal();
+    let th0 = ik(&kp, &home_pose()).unwrap();
+    let mut moving = 0;
+    for k in 0..600 {
+        let t = (k.min(300) as f64) * 1e-3;
+        let cmd = Vec6::from_fn(|i, _| th0[i] + 0.04 * (9.0 * t + i as f64).sin());
+        twin.step_joint_command(&cmd).unwrap();
+        let s = twin.model_state();
+        let expect = rss6_core::jacobian_theta(&kp, &s.pose).unwrap() * s.pose_dot;
+        assert_eq!(twin.true_theta_dot(), expect, "tick {k}");
+        moving += usize::from(expect.amax() > 1e-3);
+    }
+    assert!(moving > 100, "{moving}");
+}
