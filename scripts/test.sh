@@ -25,5 +25,5 @@ python3 -m mypy python/rss6
 step "mypy stubtest rss6._rss6 (every runtime name must be in the stub)"
 python3 -m mypy.stubtest rss6._rss6
 step "pytest (pytest-xdist: one worker per core)"
-python3 -m pytest python/tests -q -n auto
+python3 -m pytest python/tests -q -n auto --dist worksteal
 step "done"

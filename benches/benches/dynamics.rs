@@ -52,6 +52,24 @@ fn bench_dynamics(c: &mut Criterion) {
     g.bench_function("rk4_step", |b| {
         b.iter(|| rk4_step(black_box(&kp), &dp, black_box(&s), &tau, 1e-3))
     });
+    // One tick of the implicit friction law: the two calls, and core's one call that shares the
+    // first RK4 stage with the friction step (and takes the angles of the last IK).
+    let env = Environment::default();
+    let mut nf = dp;
+    nf.coulomb = [0.0; 6];
+    nf.viscous = [0.0; 6];
+    let theta = ik(&kp, &p).unwrap();
+    g.bench_function("implicit_friction_tick_two_calls", |b| {
+        b.iter(|| {
+            let f = implicit_friction(&kp, &dp, &p, &pd, &tau, &env, 1e-3).unwrap();
+            rk4_step_with_env(&kp, &nf, black_box(&s), &(tau - f.torque), 1e-3, &env)
+        })
+    });
+    g.bench_function("implicit_friction_tick_one_call", |b| {
+        b.iter(|| {
+            rk4_step_implicit_friction(&kp, &dp, black_box(&s), &tau, 1e-3, &env, Some(&theta))
+        })
+    });
     g.finish();
 }
 

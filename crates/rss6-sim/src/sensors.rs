@@ -237,13 +237,14 @@ impl OpticalCmm {
         measure_with(&self.cfg, c_chi_t, &mut self.rng)
     }
 
-    /// Advances the frame clock to `time` (s). `truth` gives the true ᶜχ_t now.
-    pub(crate) fn tick(&mut self, time: f64, truth: &Vec6) -> Result<()> {
+    /// Advances the frame clock to `time` (s). `truth` gives the true ᶜχ_t now (called only when a
+    /// frame is captured).
+    pub(crate) fn tick(&mut self, time: f64, truth: impl FnOnce() -> Vec6) -> Result<()> {
         const EPS: f64 = 1e-9;
         if time + EPS >= self.next_capture {
             // A frame in which the target cannot be measured (a reflector outside an image,
             // degenerate geometry) is dropped, as a tracker drops occluded frames.
-            match self.measure(truth) {
+            match self.measure(&truth()) {
                 Ok(m) => self
                     .pending
                     .push_back((self.next_capture + self.latency, m)),

@@ -405,10 +405,7 @@ impl<P: Physics> Robot<P> {
 
     /// The true ᶜχ_t now (no noise, no latency).
     pub fn true_camera_pose(&self) -> Vec6 {
-        compose(
-            &pose_inverse(&self.cfg.sensor_in_base),
-            &compose(&self.physics.pose(), &self.cfg.target_in_effector),
-        )
+        camera_pose_of(&self.cfg, &self.physics.pose())
     }
 
     /// Joint rates θ̇ (rad/s).
@@ -475,8 +472,8 @@ impl<P: Physics> RobotSim for Robot<P> {
         let drive = self.drive_theta();
         self.pots.tick(0, &drive);
         self.cmm.reset(0.0);
-        let truth = self.true_camera_pose();
-        self.cmm.tick(0.0, &truth)?;
+        let (cfg, pose) = (&self.cfg, self.physics.pose());
+        self.cmm.tick(0.0, || camera_pose_of(cfg, &pose))?;
         Ok(())
     }
 
@@ -531,9 +528,9 @@ impl<P: Physics> RobotSim for Robot<P> {
                 message: "non-finite pose".into(),
             });
         }
-        let truth = self.true_camera_pose();
         let t = self.time();
-        self.cmm.tick(t, &truth)?;
+        // The true ᶜχ_t only at the camera's captures (≈ one tick in 33).
+        self.cmm.tick(t, || camera_pose_of(&self.cfg, &p))?;
         Ok(())
     }
 
@@ -578,6 +575,14 @@ impl<P: Physics> RobotSim for Robot<P> {
                 .collect(),
         }
     }
+}
+
+/// The true ᶜχ_t of the effector pose `pose` (ᴼχ_E) through `cfg`'s ᴼχ_C and ᴱχ_t.
+fn camera_pose_of(cfg: &SimConfig, pose: &Vec6) -> Vec6 {
+    compose(
+        &pose_inverse(&cfg.sensor_in_base),
+        &compose(pose, &cfg.target_in_effector),
+    )
 }
 
 /// Friction of the truth plus the friction effect, per joint: (f_c, f_v).
