@@ -131,4 +131,8 @@ fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
         stuck > 100 && slipping > 100,
         "{stuck} stuck, {slipping} slipping"
     );
+    // Angles of an earlier pose (the start, 400 ticks back) are refused, not stepped.
+    let stale = ik(&kp, &start).unwrap();
+    let r = rk4_step_implicit_friction(&kp, &dp, &s, &hold, DT, &env, Some(&stale));
+    assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{r:?}");
 }

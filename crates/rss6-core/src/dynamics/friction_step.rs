@@ -59,6 +59,8 @@ use nalgebra::{Cholesky, U6};
 const MAX_SWEEPS: u32 = 400;
 /// A polish is tried after every this many sweeps.
 const POLISH_EVERY: u32 = 2;
+/// Largest relative error of |l_i|² accepted from angles said to be IK(χ) (rounding is ~10⁻¹⁵).
+const CLOSURE_TOL: f64 = 1e-9;
 /// Relative tolerance of the stick / slip conditions accepted from a polish.
 const TOL: f64 = 1e-9;
 
@@ -148,9 +150,12 @@ fn implicit_friction_at(
 /// viscous coefficients) under τ_a − τ_f. The result is bit for bit that of the two calls; the
 /// first stage reuses the friction step's mass matrix and forces (four dynamics evaluations per
 /// tick instead of five). `theta`: the joint angles of `state.pose` when already known (from
-/// [`crate::ik`] at that pose: anything else gives a wrong step), else `None` (one IK more).
+/// [`crate::ik`] at that pose), else `None` (one IK more). Angles that do not close every leg at
+/// the pose (relative error of |l_i|² above 10⁻⁹, e.g. those of an earlier pose) are refused; the
+/// other root of a leg's IK closes it too, so angles from anything but `ik` are the caller's risk.
 ///
-/// Errors: as [`implicit_friction`] and [`crate::rk4_step_with_env`].
+/// Errors: as [`implicit_friction`] and [`crate::rk4_step_with_env`];
+/// [`CoreError::InvalidParameter`] for angles that do not close the legs.
 pub fn rk4_step_implicit_friction(
     kp: &KinematicParams,
     dp: &DynamicParams,
@@ -163,7 +168,20 @@ pub fn rk4_step_implicit_friction(
     env.check()?;
     check_finite(state.pose.as_slice())?;
     let geom = match theta {
-        Some(th) => LegGeometry::from_pose_and_theta(kp, &state.pose, th),
+        Some(th) => {
+            check_finite(th.as_slice())?;
+            let g = LegGeometry::from_pose_and_theta(kp, &state.pose, th);
+            // Angles from another pose do not close the legs: refused, not stepped.
+            for i in 0..LEGS {
+                let l = kp.link_lengths[i];
+                if (g.l[i].norm_squared() - l * l).abs() > CLOSURE_TOL * l * l {
+                    return Err(CoreError::InvalidParameter(
+                        "theta does not close the legs at the pose: not IK(pose)",
+                    ));
+                }
+            }
+            g
+        }
         None => LegGeometry::at_pose(kp, &state.pose)?,
     };
     let (f, td, chol) = implicit_friction_at(&geom, dp, &state.pose_dot, tau_a, env, dt)?;
