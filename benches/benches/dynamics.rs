@@ -70,6 +70,23 @@ fn bench_dynamics(c: &mut Criterion) {
             rk4_step_implicit_friction(&kp, &dp, black_box(&s), &tau, 1e-3, &env, Some(&theta))
         })
     });
+    // One RK4 stage of the smoothed Coulomb law (f_c tanh(θ̇/ε) as a known torque, the twin's
+    // and CLOE's default): θ̇ by `jacobian_theta` then the forward dynamics (two IKs), and
+    // `forward_dynamics_by_joint_rates` (one).
+    let mut nc = dp;
+    nc.coulomb = [0.0; 6];
+    let law = |td: &Vec6| Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (td[i] / 1e-3).tanh());
+    g.bench_function("smoothed_stage_two_calls", |b| {
+        b.iter(|| {
+            let td = jacobian_theta(black_box(&kp), black_box(&p)).unwrap() * pd;
+            forward_dynamics_with_env(&kp, &nc, black_box(&p), &pd, &law(&td), &env)
+        })
+    });
+    g.bench_function("smoothed_stage_one_call", |b| {
+        b.iter(|| {
+            forward_dynamics_by_joint_rates(black_box(&kp), &nc, black_box(&p), &pd, &env, law)
+        })
+    });
     g.finish();
 }
 

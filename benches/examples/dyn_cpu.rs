@@ -13,8 +13,9 @@ mod rounds;
 use rounds::measure;
 
 use rss6_core::{
-    dynamics_terms, forward_dynamics, inverse_dynamics, leg_jacobians, mass_matrix, regressor,
-    rk4_step, DynamicParams, KinematicParams, ModelState, Vec6,
+    dynamics_terms, forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_with_env,
+    inverse_dynamics, jacobian_theta, leg_jacobians, mass_matrix, regressor, rk4_step,
+    DynamicParams, Environment, KinematicParams, ModelState, Vec6,
 };
 use std::hint::black_box;
 
@@ -58,5 +59,23 @@ fn main() {
             pose_dot: rates[k],
         };
         black_box(rk4_step(&kp, &dp, black_box(&s), &taus[k], 1e-3).unwrap());
+    });
+    // One stage of the smoothed Coulomb law (the twin's default): θ̇ then the dynamics by two
+    // calls (two IKs), and by `forward_dynamics_by_joint_rates` (one IK).
+    let mut nc = dp;
+    nc.coulomb = [0.0; 6];
+    let env = Environment::default();
+    let law = |k: usize, td: &Vec6| {
+        Vec6::from_fn(|i, _| taus[k][i] - dp.coulomb[i] * (td[i] / 1e-3).tanh())
+    };
+    measure("smoothed_stage_two_calls", reps, n, |k| {
+        let td = jacobian_theta(&kp, black_box(&poses[k])).unwrap() * rates[k];
+        let tau = law(k, &td);
+        black_box(forward_dynamics_with_env(&kp, &nc, &poses[k], &rates[k], &tau, &env).unwrap());
+    });
+    measure("smoothed_stage_one_call", reps, n, |k| {
+        let p = black_box(&poses[k]);
+        let a = forward_dynamics_by_joint_rates(&kp, &nc, p, &rates[k], &env, |td| law(k, td));
+        black_box(a.unwrap());
     });
 }

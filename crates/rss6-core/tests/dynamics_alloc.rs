@@ -82,6 +82,8 @@ fn dynamics_hot_paths_do_not_allocate() {
                 .unwrap()
                 .0
                 .pose[1];
+            sink += forward_dynamics_by_joint_rates(&kp, &dp, p, &pose_dot, &env, |td| tau - td)
+                .unwrap()[2];
             sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();
             sink += potential_energy_with_gravity(&kp, &dp, p, &GRAVITY).unwrap();
             sink += joint_friction_smooth(&dp, &pose_dot, 1e-3)[0];

@@ -196,6 +196,12 @@ proptest! {
         let _ = inverse_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         let _ = inverse_dynamics_derivatives_with_env(&kp, &dp, &p, &pd, &pdd, &env);
         let _ = forward_dynamics_with_env(&kp, &dp, &p, &pd, &pdd, &env);
+        // A rate-dependent torque, errors as the two calls give them.
+        let two = jacobian_theta(&kp, &p).and_then(|j| {
+            forward_dynamics_with_env(&kp, &dp, &p, &pd, &(pdd - j * pd), &env)
+        });
+        let one = forward_dynamics_by_joint_rates(&kp, &dp, &p, &pd, &env, |td| pdd - td);
+        prop_assert_eq!(one.map(|a| a.map(f64::to_bits)), two.map(|a| a.map(f64::to_bits)));
         for one_sided in [false, true] {
             let req = JacobianRequest {
                 state: true, rate_step: Some(h), one_sided_step: one_sided.then_some(h), param_columns: k.to_bits(),

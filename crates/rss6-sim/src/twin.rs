@@ -12,7 +12,7 @@ use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    forward_dynamics_with_env, ik, jacobian_theta, rk4_step_by, rk4_step_implicit_friction,
+    forward_dynamics_by_joint_rates, ik, jacobian_theta, rk4_step_by, rk4_step_implicit_friction,
     rk4_step_with_env, DynamicParams, Environment, KinematicParams, LegGeometry, ModelState, Vec6,
     LEGS,
 };
@@ -113,11 +113,11 @@ impl Physics for ModelPhysics {
             let mut dp_nc = self.dp;
             dp_nc.coulomb = [0.0; LEGS];
             let (kp, dp, env, eps) = (&self.kp, &self.dp, &self.env, self.smoothing);
+            // One IK a stage: θ̇ and the dynamics from the same geometry.
             rk4_step_by(&self.state, self.dt, |p, v| {
-                let theta_dot = jacobian_theta(kp, p)? * v;
-                let tau_eff =
-                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (theta_dot[i] / eps).tanh());
-                forward_dynamics_with_env(kp, &dp_nc, p, v, &tau_eff, env)
+                forward_dynamics_by_joint_rates(kp, &dp_nc, p, v, env, |theta_dot| {
+                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (theta_dot[i] / eps).tanh())
+                })
             })?
         } else {
             rk4_step_with_env(&self.kp, &self.dp, &self.state, tau, self.dt, &self.env)?

@@ -330,8 +330,7 @@ impl<'a> Lean<'a> {
             } else if cfg.implicit_friction {
                 let (p0, v0) = (self.pose, self.pose_dot);
                 let st = friction::solve(cfg, &self.dp, &p0, &v0, &tau_sens.0, t)?;
-                out.inexact_friction += usize::from(!st.exact);
-                out.stuck_joint_ticks += st.stuck;
+                out.count_friction(st.exact, st.stuck);
                 // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
                 let s1 = self.stage(&p0, &v0, &st.net, t, (true, StateJac::Compute), true)?;
                 let s_net = self.friction_sensitivity(&st, &tau_sens.1, &s1, t)?;
@@ -544,13 +543,17 @@ impl<'a> Lean<'a> {
         let (next, f) =
             rk4_step_implicit_friction(&cfg.kp, &self.dp, &state, tau, cfg.dt, &env, theta)
                 .map_err(|e| sim_err(t, e))?;
-        out.inexact_friction += usize::from(!f.exact);
-        out.stuck_joint_ticks += f.stuck.iter().filter(|&&b| b).count();
-        self.pose = next.pose;
-        self.pose_dot = next.pose_dot;
-        if !(self.pose.iter().chain(self.pose_dot.iter())).all(|x| x.is_finite()) {
+        out.count_friction(f.exact, f.stuck.iter().filter(|&&b| b).count());
+        self.set_state(next.pose, next.pose_dot, t + cfg.dt)
+    }
+
+    /// Takes the state at the end of a tick (time `t_end`); a non-finite one ends the run.
+    fn set_state(&mut self, pose: Vec6, pose_dot: Vec6, t_end: f64) -> Result<()> {
+        self.pose = pose;
+        self.pose_dot = pose_dot;
+        if !(pose.iter().chain(pose_dot.iter())).all(|x| x.is_finite()) {
             return Err(IdentError::Simulation {
-                time: t + cfg.dt,
+                time: t_end,
                 message: "non-finite model state".into(),
             });
         }
@@ -582,14 +585,9 @@ impl<'a> Lean<'a> {
         let (p4, v4) = (p0 + v3 * dt, v0 + a3 * dt);
         let s4 = self.stage(&p4, &v4, tau, t, (false, frozen), false)?;
         let a4 = s4.a;
-        self.pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
-        self.pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);
-        if !(self.pose.iter().chain(self.pose_dot.iter())).all(|x| x.is_finite()) {
-            return Err(IdentError::Simulation {
-                time: t + dt,
-                message: "non-finite model state".into(),
-            });
-        }
+        let pose = p0 + (v0 + v2 * 2.0 + v3 * 2.0 + v4) * (dt / 6.0);
+        let pose_dot = v0 + (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (dt / 6.0);
+        self.set_state(pose, pose_dot, t + dt)?;
         if let (Some(s), Some(s_tau)) = (self.sens.as_mut(), s_tau) {
             stages::propagate(s, [&s1, &s2, &s3, &s4], s_tau, dt);
         }

@@ -354,6 +354,13 @@ pub struct LoopRun {
 }
 
 impl LoopRun {
+    /// Counts one tick's implicit friction solve: inexact if it stopped at its sweep bound,
+    /// `stuck` joints held.
+    pub(crate) fn count_friction(&mut self, exact: bool, stuck: usize) {
+        self.inexact_friction += usize::from(!exact);
+        self.stuck_joint_ticks += stuck;
+    }
+
     /// Index of the model frame at each time of `t` (within half a tick of `dt`), or an error
     /// naming the first time the model's loop has no frame at.
     pub(crate) fn frames_at(&self, t: &[f64], dt: f64) -> Result<Vec<usize>> {

@@ -5,9 +5,9 @@ use super::super::friction::{central_jacobians, sim_err, Sens, COULOMB};
 use super::super::sens_state::SensState;
 use crate::error::{IdentError, Result};
 use rss6_core::{
-    forward_dynamics_jacobians_with_env, forward_dynamics_with_env, jacobian_theta,
-    mass_matrix_with_env, regressor_with_gravity, DynamicParams, ForwardJacobians, JacobianRequest,
-    Mat6, Vec6, LEGS, N_DYN,
+    forward_dynamics_by_joint_rates, forward_dynamics_jacobians_with_env,
+    forward_dynamics_with_env, jacobian_theta, mass_matrix_with_env, regressor_with_gravity,
+    DynamicParams, ForwardJacobians, JacobianRequest, Mat6, Vec6, LEGS, N_DYN,
 };
 
 /// Pose step (m, rad) of the one-sided state Jacobians of [`StateJacobians::PerTick`].
@@ -171,15 +171,12 @@ impl<'a> StageModel<'a> {
         let env = cfg.environment();
         let g = &cfg.gravity;
         let eps = cfg.friction_smoothing;
-        let smooth_tau = |pp: &Vec6, vv: &Vec6| -> Result<Vec6> {
-            let theta_dot = jacobian_theta(&cfg.kp, pp).map_err(|e| sim_err(t, e))? * vv;
-            Ok(Vec6::from_fn(|i, _| {
-                tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh()
-            }))
-        };
+        // θ̇ and the dynamics from one IK (bit for bit θ̇ = J_θ(χ)χ̇ then the forward dynamics).
         let fd = |pp: &Vec6, vv: &Vec6| {
-            forward_dynamics_with_env(&cfg.kp, &self.dp_nc, pp, vv, &smooth_tau(pp, vv)?, &env)
-                .map_err(|e| sim_err(t, e))
+            forward_dynamics_by_joint_rates(&cfg.kp, &self.dp_nc, pp, vv, &env, |theta_dot| {
+                Vec6::from_fn(|i, _| tau[i] - self.dp.coulomb[i] * (theta_dot[i] / eps).tanh())
+            })
+            .map_err(|e| sim_err(t, e))
         };
         let a = fd(p, v)?;
         let Some(columns) = self.columns.as_deref() else {
