@@ -2,7 +2,9 @@
 no-effect twin case of the benchmark (stick–slip law, 5× magnitude, seed 0), its fitting run
 replayed with the recorded commands by ``rss6.discrepancy.model.simulate``. Run on an idle machine.
 
-    python benches/python/twin_replay.py [--repeats 30]
+    python benches/python/twin_replay.py [--repeats 30] [--friction-law implicit|tanh]
+
+``tanh``: the twin cases' default law (f_c tanh(θ̇/ε) at every RK4 stage).
 
 Fortieth session, slow machine: 0.151 s (0.210 s before ``rk4_step_implicit_friction``).
 """
@@ -19,10 +21,11 @@ from rss6.discrepancy import model as m
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=30)
+    ap.add_argument("--friction-law", choices=("implicit", "tanh"), default="implicit")
     args = ap.parse_args()
     spec = {
         "robot": "twin",
-        "friction_law": "implicit",
+        "friction_law": args.friction_law,
         "magnitude": 5.0,
         "seed": 0,
         "effect": None,
@@ -33,7 +36,10 @@ def main() -> None:
     for _ in range(args.repeats):
         m.simulate(case.model, run)
     per = (time.perf_counter() - t0) / args.repeats
-    print(f"{run.duration:.1f} s replay: {per:.3f} s ({per / run.duration * 1e3:.1f} µs per tick)")
+    tick_us = per / run.duration * 1e3
+    print(
+        f"{args.friction_law}: {run.duration:.1f} s replay: {per:.3f} s ({tick_us:.1f} µs per tick)"
+    )
 
 
 if __name__ == "__main__":
