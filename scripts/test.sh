@@ -8,14 +8,6 @@ step() { printf '\n==> [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*";
 
 step "cargo fmt --all --check"
 cargo fmt --all --check
-# The Python install (pip, then maturin's release build of the extension in its own profile
-# directory) runs beside the Rust checks and tests: each leaves part of the 2 cores idle (downloads,
-# links, test binaries with one long test). Its output is shown when it ends; a failure fails the run.
-step "install the Python package from this checkout (in the background, log below)"
-setup_log=$(mktemp)
-bash scripts/setup.sh >"$setup_log" 2>&1 &
-setup_pid=$!
-trap 'kill "$setup_pid" 2>/dev/null || true' EXIT
 step "cargo clippy --workspace --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 step "offline estimation builds without the physics engine (rss6-exp, rss6-sim without 'rapier')"
@@ -24,16 +16,8 @@ step "cargo doc --no-deps (warnings are errors)"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --exclude rss6-py
 step "cargo test --workspace (rss6-py is tested through pytest below)"
 cargo test --workspace --exclude rss6-py
-step "waiting for the Python install"
-setup_rc=0
-wait "$setup_pid" || setup_rc=$?
-trap - EXIT
-cat "$setup_log"
-rm -f "$setup_log"
-if [ "$setup_rc" -ne 0 ]; then
-    echo "scripts/setup.sh failed (exit $setup_rc)" >&2
-    exit "$setup_rc"
-fi
+step "install the Python package from this checkout"
+bash scripts/setup.sh
 step "ruff check python/rss6 python/tests"
 python3 -m ruff check python/rss6 python/tests
 step "mypy python/rss6 (settings in pyproject.toml)"
