@@ -31,8 +31,9 @@ pub use crate::dynamics::{
     kinetic_energy_with_env, link_transverse_inertia, mass_matrix, mass_matrix_twist,
     mass_matrix_with_env, platform_inertia, potential_energy_with_env,
     potential_energy_with_gravity, rk4_step, rk4_step_by, rk4_step_implicit_friction,
-    rk4_step_with_env, rk4_step_with_gravity, wrench_axial_inertia, DynamicsTerms, Environment,
-    ForwardJacobians, FrictionStep, JacobianRequest, ModelState, PlatformLoad, GRAVITY,
+    rk4_step_implicit_friction_observed, rk4_step_with_env, rk4_step_with_gravity,
+    wrench_axial_inertia, DynamicsTerms, Environment, ForwardJacobians, FrictionStep,
+    JacobianRequest, ModelState, PlatformLoad, GRAVITY,
 };
 pub use crate::error::{CoreError, Result, SingularKind};
 pub use crate::fk::{fk, fk_theta_newton, FkOptions, FkSolution};

@@ -82,6 +82,21 @@ fn dynamics_hot_paths_do_not_allocate() {
                 .unwrap()
                 .0
                 .pose[1];
+            let mut last = 0.0;
+            sink += rk4_step_implicit_friction_observed(
+                &kp,
+                &dp,
+                &s,
+                &tau,
+                1e-3,
+                &env,
+                None,
+                |p, _| last = p[0],
+            )
+            .unwrap()
+            .0
+            .pose[1]
+                + last;
             sink += forward_dynamics_by_joint_rates(&kp, &dp, p, &pose_dot, &env, |td| tau - td)
                 .unwrap()[2];
             sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();

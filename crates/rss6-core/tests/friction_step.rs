@@ -98,7 +98,8 @@ fn bad_input_is_a_typed_error() {
 }
 
 /// The one-call tick equals `implicit_friction` then RK4 of the friction-free model, bit for bit,
-/// with and without the angles of the last IK, while joints slip, stick and reverse.
+/// with and without the angles of the last IK, while joints slip, stick and reverse; its observed
+/// variant reports the four stage states the two calls' RK4 evaluates.
 #[test]
 fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
     let (kp, dp) = (KinematicParams::nominal(), with_friction());
@@ -121,6 +122,22 @@ fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
             let (one, g) = rk4_step_implicit_friction(&kp, &dp, &s, &tau, DT, &env, known).unwrap();
             assert_eq!(one, two, "tick {k}");
             assert_eq!(g, f, "tick {k}");
+            // The observed variant: the same step, and the four stage states at which the two
+            // calls' RK4 evaluates the friction-free model.
+            let mut seen = Vec::new();
+            let (obs, h) =
+                rk4_step_implicit_friction_observed(&kp, &dp, &s, &tau, DT, &env, known, |p, v| {
+                    seen.push((*p, *v))
+                })
+                .unwrap();
+            assert_eq!((obs, h), (one, g), "tick {k}");
+            let mut at = Vec::new();
+            rk4_step_by(&s, DT, |p, v| {
+                at.push((*p, *v));
+                forward_dynamics_with_env(&kp, &nf, p, v, &(tau - f.torque), &env)
+            })
+            .unwrap();
+            assert_eq!(seen, at, "tick {k}");
         }
         stuck += f.stuck.iter().filter(|&&b| b).count();
         slipping += f.stuck.iter().filter(|&&b| !b).count();

@@ -242,7 +242,13 @@ proptest! {
         }
         let s = ModelState { pose: p, pose_dot: pd };
         let theta = ik(&kp, &p).ok();
-        let _ = rk4_step_implicit_friction(&kp, &dp, &s, &tau, dt, &env, theta.as_ref());
+        let plain = rk4_step_implicit_friction(&kp, &dp, &s, &tau, dt, &env, theta.as_ref());
+        let mut stages = 0;
+        let observed = rk4_step_implicit_friction_observed(
+            &kp, &dp, &s, &tau, dt, &env, theta.as_ref(), |_, _| stages += 1);
+        // The same outcome, bit for bit (errors too); four stages observed when it succeeds.
+        prop_assert_eq!(format!("{plain:?}"), format!("{observed:?}"));
+        prop_assert!(observed.is_err() || stages == 4);
     }
 
     #[test]

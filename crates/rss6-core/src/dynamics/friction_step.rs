@@ -165,6 +165,27 @@ pub fn rk4_step_implicit_friction(
     env: &Environment,
     theta: Option<&Vec6>,
 ) -> Result<(ModelState, FrictionStep)> {
+    rk4_step_implicit_friction_observed(kp, dp, state, tau_a, dt, env, theta, |_, _| {})
+}
+
+/// [`rk4_step_implicit_friction`], calling `stage(χ, χ̇)` with each RK4 stage's state in order
+/// (four calls when the step succeeds; all four stages are under τ_a − τ_f, the step's
+/// [`FrictionStep::torque`] taken from τ_a): what a caller needs to evaluate the same stages
+/// again, e.g. with their parameter derivatives. The result is bit for bit
+/// [`rk4_step_implicit_friction`]'s.
+///
+/// Errors: as [`rk4_step_implicit_friction`].
+#[allow(clippy::too_many_arguments)]
+pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    state: &ModelState,
+    tau_a: &Vec6,
+    dt: f64,
+    env: &Environment,
+    theta: Option<&Vec6>,
+    mut stage_state: F,
+) -> Result<(ModelState, FrictionStep)> {
     env.check()?;
     check_finite(state.pose.as_slice())?;
     let geom = match theta {
@@ -192,10 +213,11 @@ pub fn rk4_step_implicit_friction(
     check_state(&state.pose_dot, &net)?;
     let first = forward_from(&geom, &td, chol, &dp_nf, &state.pose_dot, &net)?.chi_ddot;
     // rk4_step_by evaluates its stages in order: the first is the one computed above.
-    let stage = core::cell::Cell::new(0u8);
+    let mut stage = 0u8;
     let next = rk4_step_by(state, dt, |p, v| {
-        stage.set(stage.get() + 1);
-        if stage.get() == 1 {
+        stage_state(p, v);
+        stage = stage.saturating_add(1);
+        if stage == 1 {
             Ok(first)
         } else {
             forward_dynamics_with_env(kp, &dp_nf, p, v, &net, env)

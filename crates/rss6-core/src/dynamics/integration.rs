@@ -67,12 +67,13 @@ pub fn rk4_step_with_env(
 }
 
 /// One classical RK4 step of χ̈ = f(χ, χ̇) over `dt` (s): the integrator of [`rk4_step`] for any
-/// acceleration function (e.g. forward dynamics with a modified friction law).
+/// acceleration function (e.g. forward dynamics with a modified friction law). `f` is called
+/// once per stage, in order (it may keep state, e.g. to reuse a first stage already evaluated).
 ///
 /// Errors: [`CoreError::NonFinite`] for a non-finite `dt`; whatever `f` returns.
-pub fn rk4_step_by<F>(state: &ModelState, dt: f64, f: F) -> Result<ModelState>
+pub fn rk4_step_by<F>(state: &ModelState, dt: f64, mut f: F) -> Result<ModelState>
 where
-    F: Fn(&Vec6, &Vec6) -> Result<Vec6>,
+    F: FnMut(&Vec6, &Vec6) -> Result<Vec6>,
 {
     if !dt.is_finite() {
         return Err(CoreError::NonFinite);

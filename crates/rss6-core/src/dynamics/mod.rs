@@ -68,7 +68,10 @@ mod pose_tangent;
 mod rate_tangent;
 mod sensitivity;
 
-pub use self::friction_step::{implicit_friction, rk4_step_implicit_friction, FrictionStep};
+pub use self::friction_step::{
+    implicit_friction, rk4_step_implicit_friction, rk4_step_implicit_friction_observed,
+    FrictionStep,
+};
 pub use self::integration::{
     rk4_step, rk4_step_by, rk4_step_with_env, rk4_step_with_gravity, ModelState,
 };

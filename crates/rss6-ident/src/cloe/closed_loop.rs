@@ -38,10 +38,7 @@
 
 use crate::error::{IdentError, Result};
 use nalgebra::DMatrix;
-use rss6_core::{
-    ik, jacobian_theta, rk4_step_implicit_friction, DynamicParams, ForwardJacobians, Mat6,
-    ModelState, Vec6, LEGS,
-};
+use rss6_core::{ik, jacobian_theta, DynamicParams, ForwardJacobians, Mat6, Vec6, LEGS};
 use rss6_ctrl::{PidGains, Trajectory};
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -323,9 +320,9 @@ impl<'a> Lean<'a> {
                 .filter(|t| t.abs() >= cfg.torque_limit)
                 .count();
             let ik_now = theta_at_pose.take();
-            if cfg.implicit_friction && self.sens.is_none() && self.record.is_none() {
-                // A plain primal run: core's one-call tick, whose first stage reuses the friction
-                // step's dynamics (bit for bit the branch below; see `lean_tick`).
+            if cfg.implicit_friction && self.sens.is_none() {
+                // A primal run (recording or not): core's one-call tick, whose first stage reuses
+                // the friction step's dynamics (bit for bit the branch below; see `lean_tick`).
                 self.lean_tick(&tau_sens.0, t, ik_now.as_ref(), &mut out)?;
             } else if cfg.implicit_friction {
                 let (p0, v0) = (self.pose, self.pose_dot);
@@ -522,29 +519,6 @@ impl<'a> Lean<'a> {
         };
         let (p, v) = (&self.pose, &self.pose_dot);
         friction::sensitivity(self.cfg, &self.dp, st, p, v, sens, first, t).map(Some)
-    }
-
-    /// One tick of a primal run with implicit friction: [`rss6_core::rk4_step_implicit_friction`]
-    /// from IK(χ) `theta` when known. The same arithmetic as the implicit branch of [`Self::run`]
-    /// (`friction::solve`, then [`Self::rk4`] with its first stage), errors at the same times.
-    fn lean_tick(
-        &mut self,
-        tau: &Vec6,
-        t: f64,
-        theta: Option<&Vec6>,
-        out: &mut LoopRun,
-    ) -> Result<()> {
-        let cfg = self.cfg;
-        let state = ModelState {
-            pose: self.pose,
-            pose_dot: self.pose_dot,
-        };
-        let env = cfg.environment();
-        let (next, f) =
-            rk4_step_implicit_friction(&cfg.kp, &self.dp, &state, tau, cfg.dt, &env, theta)
-                .map_err(|e| sim_err(t, e))?;
-        out.count_friction(f.exact, f.stuck.iter().filter(|&&b| b).count());
-        self.set_state(next.pose, next.pose_dot, t + cfg.dt)
     }
 
     /// Takes the state at the end of a tick (time `t_end`); a non-finite one ends the run.

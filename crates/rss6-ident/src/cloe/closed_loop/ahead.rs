@@ -15,8 +15,10 @@
 
 use super::stages::{Stage, StageModel};
 use super::{Lean, StateJacobians};
+use crate::cloe::config::LoopRun;
+use crate::cloe::friction::sim_err;
 use crate::error::Result;
-use rss6_core::{ForwardJacobians, Mat6, Vec6};
+use rss6_core::{rk4_step_implicit_friction_observed, ForwardJacobians, Mat6, ModelState, Vec6};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
@@ -351,5 +353,61 @@ mod tests {
         );
         assert!(run.stages_ahead < 1200);
         assert!(run.jacobian == seq.jacobian);
+    }
+}
+
+impl Lean<'_> {
+    /// One tick of a primal run with implicit friction:
+    /// [`rss6_core::rk4_step_implicit_friction_observed`] from IK(χ) `theta` when known. The same
+    /// arithmetic as the implicit branch of [`Self::run`] (`friction::solve`, then [`Self::rk4`]
+    /// with its first stage), errors at the same times; a recording run records the same four
+    /// stage calls that branch makes.
+    pub(super) fn lean_tick(
+        &mut self,
+        tau: &Vec6,
+        t: f64,
+        theta: Option<&Vec6>,
+        out: &mut LoopRun,
+    ) -> Result<()> {
+        let cfg = self.cfg;
+        let state = ModelState {
+            pose: self.pose,
+            pose_dot: self.pose_dot,
+        };
+        let env = cfg.environment();
+        let mut stages = [(Vec6::zeros(), Vec6::zeros()); 4];
+        let mut k = 0;
+        let (next, f) = rk4_step_implicit_friction_observed(
+            &cfg.kp,
+            &self.dp,
+            &state,
+            tau,
+            cfg.dt,
+            &env,
+            theta,
+            |p, v| {
+                if let Some(s) = stages.get_mut(k) {
+                    *s = (*p, *v);
+                }
+                k += 1;
+            },
+        )
+        .map_err(|e| sim_err(t, e))?;
+        out.count_friction(f.exact, f.stuck.iter().filter(|&&b| b).count());
+        if let Some(rec) = &self.record {
+            // As `friction::solve` and `Self::rk4` call `Self::stage`: the first stage with its
+            // state Jacobians and free rates, all under τ_a − τ_f.
+            let net = tau - f.torque;
+            rec.borrow_mut()
+                .extend(stages.iter().enumerate().map(|(i, &(p, v))| StageCall {
+                    p,
+                    v,
+                    tau: net,
+                    t,
+                    first: i == 0,
+                    free_rates: i == 0,
+                }));
+        }
+        self.set_state(next.pose, next.pose_dot, t + cfg.dt)
     }
 }
