@@ -307,56 +307,7 @@ impl Lean<'_> {
         let mut fj = self.scratch.borrow_mut();
         self.model.stage(&mut fj, p, v, tau, t, frozen, free_rates)
     }
-}
 
-#[cfg(test)]
-#[allow(clippy::unwrap_used)]
-mod tests {
-    use super::super::{simulate, simulate_recorded, LoopConfig};
-    use crate::cloe::truth::table_5_2_truth;
-    use crate::excitation::Excitation;
-    use rss6_core::{home_pose, KinematicParams};
-
-    /// A plain run's recording (exact state Jacobians configured) serves the per-tick sensitivity
-    /// run at the same parameters: every stage comes from the blocks and the result is the
-    /// sequential one bit for bit. A recording from other parameters is never used wrongly.
-    #[test]
-    fn a_plain_runs_recording_serves_the_sensitivity_run_at_the_same_parameters() {
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build_global();
-        let free: Vec<f64> = (0..24).map(|k| 0.004 * ((k % 5) as f64 - 2.0)).collect();
-        let exc = Excitation::at_rest(3, 0.5, &home_pose(), &free).unwrap();
-        let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.3);
-        (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
-        let a = table_5_2_truth();
-        let cols = [0usize, 3, 33, 54, 61, 65];
-        let (plain, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
-        assert!(rec.is_some());
-        let mut per_tick = cfg.clone();
-        per_tick.state_jacobians = crate::StateJacobians::PerTick;
-        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
-        let mut in_turn = per_tick.clone();
-        in_turn.parallel_stages = false;
-        let seq = simulate(&in_turn, &a, &exc, Some(&cols)).unwrap();
-        assert_eq!((run.stages_ahead, seq.stages_ahead), (1200, 0));
-        assert!(run.chi == plain.chi && run.chi == seq.chi);
-        assert!(run.jacobian == seq.jacobian);
-        // Another viscous friction: the trajectory parts from the recording.
-        let mut other = a;
-        other.dynamics.viscous[2] *= 1.5;
-        let (_, rec) = simulate_recorded(&cfg, &other, &exc, None, None, true).unwrap();
-        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
-        println!(
-            "stages taken from another run's recording: {}",
-            run.stages_ahead
-        );
-        assert!(run.stages_ahead < 1200);
-        assert!(run.jacobian == seq.jacobian);
-    }
-}
-
-impl Lean<'_> {
     /// One tick of a primal run with implicit friction:
     /// [`rss6_core::rk4_step_implicit_friction_observed`] from IK(χ) `theta` when known. The same
     /// arithmetic as the implicit branch of [`Self::run`] (`friction::solve`, then [`Self::rk4`]
@@ -409,5 +360,52 @@ impl Lean<'_> {
                 }));
         }
         self.set_state(next.pose, next.pose_dot, t + cfg.dt)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::super::{simulate, simulate_recorded, LoopConfig};
+    use crate::cloe::truth::table_5_2_truth;
+    use crate::excitation::Excitation;
+    use rss6_core::{home_pose, KinematicParams};
+
+    /// A plain run's recording (exact state Jacobians configured) serves the per-tick sensitivity
+    /// run at the same parameters: every stage comes from the blocks and the result is the
+    /// sequential one bit for bit. A recording from other parameters is never used wrongly.
+    #[test]
+    fn a_plain_runs_recording_serves_the_sensitivity_run_at_the_same_parameters() {
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build_global();
+        let free: Vec<f64> = (0..24).map(|k| 0.004 * ((k % 5) as f64 - 2.0)).collect();
+        let exc = Excitation::at_rest(3, 0.5, &home_pose(), &free).unwrap();
+        let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 0.3);
+        (cfg.implicit_friction, cfg.derivative_filter) = (true, 5e-3);
+        let a = table_5_2_truth();
+        let cols = [0usize, 3, 33, 54, 61, 65];
+        let (plain, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
+        assert!(rec.is_some());
+        let mut per_tick = cfg.clone();
+        per_tick.state_jacobians = crate::StateJacobians::PerTick;
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
+        let mut in_turn = per_tick.clone();
+        in_turn.parallel_stages = false;
+        let seq = simulate(&in_turn, &a, &exc, Some(&cols)).unwrap();
+        assert_eq!((run.stages_ahead, seq.stages_ahead), (1200, 0));
+        assert!(run.chi == plain.chi && run.chi == seq.chi);
+        assert!(run.jacobian == seq.jacobian);
+        // Another viscous friction: the trajectory parts from the recording.
+        let mut other = a;
+        other.dynamics.viscous[2] *= 1.5;
+        let (_, rec) = simulate_recorded(&cfg, &other, &exc, None, None, true).unwrap();
+        let (run, _) = simulate_recorded(&per_tick, &a, &exc, Some(&cols), rec, false).unwrap();
+        println!(
+            "stages taken from another run's recording: {}",
+            run.stages_ahead
+        );
+        assert!(run.stages_ahead < 1200);
+        assert!(run.jacobian == seq.jacobian);
     }
 }
