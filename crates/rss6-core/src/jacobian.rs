@@ -37,6 +37,9 @@ pub struct LegGeometry {
     pub l: [Vec3; LEGS],
 }
 
+/// Largest relative error of |l_i|² accepted from angles said to be IK(χ) (rounding is ~10⁻¹⁵).
+pub(crate) const CLOSURE_TOL: f64 = 1e-9;
+
 impl LegGeometry {
     /// Runs IK at χ and assembles the leg vectors.
     pub fn at_pose(kp: &KinematicParams, pose: &Vec6) -> Result<Self> {
@@ -48,6 +51,35 @@ impl LegGeometry {
             theta[i] = ik_leg(kp, i, ai)?;
         }
         Ok(Self::from_parts(kp, pose, &theta, rot, a))
+    }
+
+    /// [`Self::at_pose`] from the angles of an earlier IK of `pose` when known (`theta`; one IK
+    /// less), else with one IK. Angles that do not close every leg at the pose (relative error of
+    /// |l_i|² above [`CLOSURE_TOL`], e.g. those of an earlier pose) are refused; the other root of
+    /// a leg's IK closes it too, so angles from anything but [`crate::ik`] are the caller's risk.
+    ///
+    /// Errors: as [`Self::at_pose`]; [`CoreError::NonFinite`] for non-finite angles,
+    /// [`CoreError::InvalidParameter`] for angles that do not close the legs.
+    pub(crate) fn at_pose_from(
+        kp: &KinematicParams,
+        pose: &Vec6,
+        theta: Option<&Vec6>,
+    ) -> Result<Self> {
+        let Some(th) = theta else {
+            return Self::at_pose(kp, pose);
+        };
+        check_finite(pose.as_slice())?;
+        check_finite(th.as_slice())?;
+        let g = Self::from_pose_and_theta(kp, pose, th);
+        for i in 0..LEGS {
+            let l = kp.link_lengths[i];
+            if (g.l[i].norm_squared() - l * l).abs() > CLOSURE_TOL * l * l {
+                return Err(CoreError::InvalidParameter(
+                    "theta does not close the legs at the pose: not IK(pose)",
+                ));
+            }
+        }
+        Ok(g)
     }
 
     /// Leg vectors for a pose and joint angles that are already known to be consistent (e.g. inside FK).

@@ -23,17 +23,17 @@ mod workspace;
 
 pub use crate::dynamics::{
     coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_env, dynamics_terms_with_gravity,
-    forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_jacobians_with_env,
-    forward_dynamics_with_env, forward_dynamics_with_gravity, friction, friction_twist, gravity,
-    gravity_twist, gravity_with, gravity_with_env, implicit_friction, inverse_dynamics,
-    inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,
-    inverse_dynamics_with_gravity, joint_friction, joint_friction_smooth, kinetic_energy,
-    kinetic_energy_with_env, link_transverse_inertia, mass_matrix, mass_matrix_twist,
-    mass_matrix_with_env, platform_inertia, potential_energy_with_env,
-    potential_energy_with_gravity, rk4_step, rk4_step_by, rk4_step_implicit_friction,
-    rk4_step_implicit_friction_observed, rk4_step_with_env, rk4_step_with_gravity,
-    wrench_axial_inertia, DynamicsTerms, Environment, ForwardJacobians, FrictionStep,
-    JacobianRequest, ModelState, PlatformLoad, GRAVITY,
+    forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_by_joint_rates_from,
+    forward_dynamics_jacobians_with_env, forward_dynamics_with_env, forward_dynamics_with_gravity,
+    friction, friction_twist, gravity, gravity_twist, gravity_with, gravity_with_env,
+    implicit_friction, inverse_dynamics, inverse_dynamics_derivatives_with_env,
+    inverse_dynamics_with_env, inverse_dynamics_with_gravity, joint_friction,
+    joint_friction_smooth, kinetic_energy, kinetic_energy_with_env, link_transverse_inertia,
+    mass_matrix, mass_matrix_twist, mass_matrix_with_env, platform_inertia,
+    potential_energy_with_env, potential_energy_with_gravity, rk4_step, rk4_step_by,
+    rk4_step_implicit_friction, rk4_step_implicit_friction_observed, rk4_step_with_env,
+    rk4_step_with_gravity, wrench_axial_inertia, DynamicsTerms, Environment, ForwardJacobians,
+    FrictionStep, JacobianRequest, ModelState, PlatformLoad, GRAVITY,
 };
 pub use crate::error::{CoreError, Result, SingularKind};
 pub use crate::fk::{fk, fk_theta_newton, FkOptions, FkSolution};

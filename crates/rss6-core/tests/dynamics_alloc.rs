@@ -97,6 +97,17 @@ fn dynamics_hot_paths_do_not_allocate() {
             .0
             .pose[1]
                 + last;
+            let theta = ik(&kp, p).unwrap();
+            sink += forward_dynamics_by_joint_rates_from(
+                &kp,
+                &dp,
+                p,
+                &pose_dot,
+                &env,
+                Some(&theta),
+                |td| tau - td,
+            )
+            .unwrap()[1];
             sink += forward_dynamics_by_joint_rates(&kp, &dp, p, &pose_dot, &env, |td| tau - td)
                 .unwrap()[2];
             sink += kinetic_energy(&kp, &dp, p, &pose_dot).unwrap();

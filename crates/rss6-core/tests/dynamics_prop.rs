@@ -68,6 +68,17 @@ proptest! {
             ).unwrap();
             let one = forward_dynamics_by_joint_rates(&kp, &dp, &p, &pd, &env, law).unwrap();
             prop_assert_eq!(one, two);
+            // From the angles of an IK of the pose (no IK): the same bits.
+            let theta = ik(&kp, &p).unwrap();
+            let from =
+                forward_dynamics_by_joint_rates_from(&kp, &dp, &p, &pd, &env, Some(&theta), law);
+            prop_assert_eq!(from.unwrap(), two);
+            // Angles of another pose (the legs do not close) are refused, not used.
+            let mut other = p;
+            other[2] += 0.01;
+            let stale = ik(&kp, &other).unwrap();
+            let r = forward_dynamics_by_joint_rates_from(&kp, &dp, &p, &pd, &env, Some(&stale), law);
+            prop_assert!(matches!(r, Err(CoreError::InvalidParameter(_))), "{:?}", r);
         }
     }
 

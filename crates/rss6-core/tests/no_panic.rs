@@ -202,6 +202,13 @@ proptest! {
         });
         let one = forward_dynamics_by_joint_rates(&kp, &dp, &p, &pd, &env, |td| pdd - td);
         prop_assert_eq!(one.map(|a| a.map(f64::to_bits)), two.map(|a| a.map(f64::to_bits)));
+        // From the angles of an IK of the pose: the same bits; from any angles: no panic.
+        if let Ok(theta) = ik(&kp, &p) {
+            let from = forward_dynamics_by_joint_rates_from(
+                &kp, &dp, &p, &pd, &env, Some(&theta), |td| pdd - td);
+            prop_assert_eq!(from.map(|a| a.map(f64::to_bits)), one.map(|a| a.map(f64::to_bits)));
+        }
+        let _ = forward_dynamics_by_joint_rates_from(&kp, &dp, &p, &pd, &env, Some(&pdd), |td| td * h);
         for one_sided in [false, true] {
             let req = JacobianRequest {
                 state: true, rate_step: Some(h), one_sided_step: one_sided.then_some(h), param_columns: k.to_bits(),

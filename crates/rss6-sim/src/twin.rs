@@ -12,9 +12,9 @@ use crate::effects::EffectSetup;
 use crate::error::Result;
 use crate::sim::{total_friction, Physics, Robot, SimConfig};
 use rss6_core::{
-    forward_dynamics_by_joint_rates, ik, jacobian_theta, rk4_step_by, rk4_step_implicit_friction,
-    rk4_step_with_env, DynamicParams, Environment, KinematicParams, LegGeometry, ModelState, Vec6,
-    LEGS,
+    forward_dynamics_by_joint_rates_from, ik, jacobian_theta, rk4_step_by,
+    rk4_step_implicit_friction, rk4_step_with_env, DynamicParams, Environment, KinematicParams,
+    LegGeometry, ModelState, Vec6, LEGS,
 };
 
 /// Analytic-model physics.
@@ -113,10 +113,13 @@ impl Physics for ModelPhysics {
             let mut dp_nc = self.dp;
             dp_nc.coulomb = [0.0; LEGS];
             let (kp, dp, env, eps) = (&self.kp, &self.dp, &self.env, self.smoothing);
-            // One IK a stage: θ̇ and the dynamics from the same geometry.
+            // One IK a stage: θ̇ and the dynamics from the same geometry; the first stage (at
+            // the tick's pose) from the angles of the last IK when known, so none there.
+            let mut known = self.theta_is_ik.then_some(self.theta);
             rk4_step_by(&self.state, self.dt, |p, v| {
-                forward_dynamics_by_joint_rates(kp, &dp_nc, p, v, env, |theta_dot| {
-                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (theta_dot[i] / eps).tanh())
+                let theta = known.take();
+                forward_dynamics_by_joint_rates_from(kp, &dp_nc, p, v, env, theta.as_ref(), |td| {
+                    Vec6::from_fn(|i, _| tau[i] - dp.coulomb[i] * (td[i] / eps).tanh())
                 })
             })?
         } else {

@@ -59,8 +59,6 @@ use nalgebra::{Cholesky, U6};
 const MAX_SWEEPS: u32 = 400;
 /// A polish is tried after every this many sweeps.
 const POLISH_EVERY: u32 = 2;
-/// Largest relative error of |l_i|² accepted from angles said to be IK(χ) (rounding is ~10⁻¹⁵).
-const CLOSURE_TOL: f64 = 1e-9;
 /// Relative tolerance of the stick / slip conditions accepted from a polish.
 const TOL: f64 = 1e-9;
 
@@ -187,24 +185,7 @@ pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
     mut stage_state: F,
 ) -> Result<(ModelState, FrictionStep)> {
     env.check()?;
-    check_finite(state.pose.as_slice())?;
-    let geom = match theta {
-        Some(th) => {
-            check_finite(th.as_slice())?;
-            let g = LegGeometry::from_pose_and_theta(kp, &state.pose, th);
-            // Angles from another pose do not close the legs: refused, not stepped.
-            for i in 0..LEGS {
-                let l = kp.link_lengths[i];
-                if (g.l[i].norm_squared() - l * l).abs() > CLOSURE_TOL * l * l {
-                    return Err(CoreError::InvalidParameter(
-                        "theta does not close the legs at the pose: not IK(pose)",
-                    ));
-                }
-            }
-            g
-        }
-        None => LegGeometry::at_pose(kp, &state.pose)?,
-    };
+    let geom = LegGeometry::at_pose_from(kp, &state.pose, theta)?;
     let (f, td, chol) = implicit_friction_at(&geom, dp, &state.pose_dot, tau_a, env, dt)?;
     let mut dp_nf = *dp;
     dp_nf.coulomb = [0.0; LEGS];

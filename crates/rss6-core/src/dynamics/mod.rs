@@ -84,9 +84,10 @@ pub use self::matrices::{
 };
 pub(crate) use self::newton_euler::leg_acc;
 pub use self::newton_euler::{
-    forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_with_env,
-    forward_dynamics_with_gravity, inverse_dynamics, inverse_dynamics_derivatives_with_env,
-    inverse_dynamics_with_env, inverse_dynamics_with_gravity,
+    forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_by_joint_rates_from,
+    forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
+    inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,
+    inverse_dynamics_with_gravity,
 };
 pub use self::sensitivity::{
     forward_dynamics_jacobians_with_env, ForwardJacobians, JacobianRequest,

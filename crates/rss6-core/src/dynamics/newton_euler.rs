@@ -480,7 +480,29 @@ pub fn forward_dynamics_by_joint_rates<F>(
 where
     F: FnOnce(&Vec6) -> Vec6,
 {
-    let geom = LegGeometry::at_pose(kp, pose)?;
+    forward_dynamics_by_joint_rates_from(kp, dp, pose, pose_dot, env, None, tau_of)
+}
+
+/// [`forward_dynamics_by_joint_rates`] from the joint angles of an earlier IK of `pose` when known
+/// (`theta`: no IK at all), else with one IK; bit for bit the same result. Angles that do not
+/// close every leg at the pose (relative error of |l_i|² above 10⁻⁹, e.g. those of an earlier
+/// pose) are refused, as [`crate::rk4_step_implicit_friction`] refuses them.
+///
+/// Errors: as [`forward_dynamics_by_joint_rates`]; [`CoreError::InvalidParameter`] for angles that
+/// do not close the legs.
+pub fn forward_dynamics_by_joint_rates_from<F>(
+    kp: &KinematicParams,
+    dp: &DynamicParams,
+    pose: &Vec6,
+    pose_dot: &Vec6,
+    env: &Environment,
+    theta: Option<&Vec6>,
+    tau_of: F,
+) -> Result<Vec6>
+where
+    F: FnOnce(&Vec6) -> Vec6,
+{
+    let geom = LegGeometry::at_pose_from(kp, pose, theta)?;
     let tau_a = tau_of(&(geom.j_theta()? * pose_dot));
     check_state(pose_dot, &tau_a)?;
     env.check()?;
