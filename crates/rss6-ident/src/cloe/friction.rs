@@ -165,20 +165,36 @@ pub(super) fn free_rate_jacobians(
 ) -> Result<(Mat6, Mat6)> {
     let dt = cfg.dt;
     let u = v + first.a * dt;
-    let nu = |pp: &Vec6, vv: &Vec6, uu: &Vec6| -> Vec6 {
-        twist_jacobian(pp) * uu + twist_jacobian_dot(pp, vv) * vv * dt
-    };
+    // ν = J_s(χ) u + dt J̇_s(χ, χ̇) χ̇. J_s reads χ only through α, β and J̇_s χ̇ only through α, β,
+    // α̇, β̇ (`euler_rate_jacobian`): along the other coordinates the differences of the two
+    // matrices are exactly zero, so they are built once (the same bits as building them per step).
+    let js = twist_jacobian(p);
+    let jd = twist_jacobian_dot(p, v);
+    let nu = |js: &Mat6, jd: &Mat6, vv: &Vec6, uu: &Vec6| -> Vec6 { js * uu + jd * vv * dt };
+    let angle = |c: usize| c == 3 || c == 4;
     let (mut np, mut nv) = (Mat6::zeros(), Mat6::zeros());
     for c in 0..6 {
-        let (mut pp, mut pm) = (*p, *p);
-        pp[c] += 1e-6;
-        pm[c] -= 1e-6;
-        np.set_column(c, &((nu(&pp, v, &u) - nu(&pm, v, &u)) / (pp[c] - pm[c])));
+        if angle(c) {
+            let (mut pp, mut pm) = (*p, *p);
+            pp[c] += 1e-6;
+            pm[c] -= 1e-6;
+            let plus = nu(&twist_jacobian(&pp), &twist_jacobian_dot(&pp, v), v, &u);
+            let minus = nu(&twist_jacobian(&pm), &twist_jacobian_dot(&pm, v), v, &u);
+            np.set_column(c, &((plus - minus) / (pp[c] - pm[c])));
+        }
         let (mut vp, mut vm) = (*v, *v);
         vp[c] += 1e-2;
         vm[c] -= 1e-2;
         let (up, um) = (vp + first.a * dt, vm + first.a * dt);
-        nv.set_column(c, &((nu(p, &vp, &up) - nu(p, &vm, &um)) / (vp[c] - vm[c])));
+        let (jdp, jdm) = if angle(c) {
+            (twist_jacobian_dot(p, &vp), twist_jacobian_dot(p, &vm))
+        } else {
+            (jd, jd)
+        };
+        nv.set_column(
+            c,
+            &((nu(&js, &jdp, &vp, &up) - nu(&js, &jdm, &vm, &um)) / (vp[c] - vm[c])),
+        );
     }
     let j_ad = first.j_theta * twist_jacobian_inverse(p).map_err(|e| sim_err(t, e))?;
     let jdt = first.j_theta * dt;
