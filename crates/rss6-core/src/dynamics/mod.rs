@@ -61,6 +61,7 @@
 
 mod friction_step;
 mod integration;
+mod joint_rates;
 mod load;
 mod matrices;
 mod newton_euler;
@@ -75,6 +76,9 @@ pub use self::friction_step::{
 pub use self::integration::{
     rk4_step, rk4_step_by, rk4_step_with_env, rk4_step_with_gravity, ModelState,
 };
+pub use self::joint_rates::{
+    forward_dynamics_by_joint_rates, forward_dynamics_by_joint_rates_from,
+};
 pub use self::load::{Environment, PlatformLoad};
 pub use self::matrices::{
     coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_env, dynamics_terms_with_gravity,
@@ -84,8 +88,7 @@ pub use self::matrices::{
 };
 pub(crate) use self::newton_euler::leg_acc;
 pub use self::newton_euler::{
-    forward_dynamics, forward_dynamics_by_joint_rates, forward_dynamics_by_joint_rates_from,
-    forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
+    forward_dynamics, forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
     inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,
     inverse_dynamics_with_gravity,
 };
