@@ -166,7 +166,7 @@ pub fn rk4_step_implicit_friction(
     rk4_step_implicit_friction_observed(kp, dp, state, tau_a, dt, env, theta, |_, _| {})
 }
 
-/// [`rk4_step_implicit_friction`], calling `stage(χ, χ̇)` with each RK4 stage's state in order
+/// [`rk4_step_implicit_friction`], calling `stage_state(χ, χ̇)` with each RK4 stage's state in order
 /// (four calls when the step succeeds; all four stages are under τ_a − τ_f, the step's
 /// [`FrictionStep::torque`] taken from τ_a): what a caller needs to evaluate the same stages
 /// again, e.g. with their parameter derivatives. The result is bit for bit
