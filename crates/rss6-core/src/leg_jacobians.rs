@@ -73,36 +73,6 @@ fn cross_block(left: &nalgebra::Matrix3<f64>, right: &nalgebra::Matrix3<f64>) ->
     j
 }
 
-/// Position-level blocks of one leg: enough for the mass matrix and gravity.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct LegStatic {
-    /// Row i of J_ad (as a column vector).
-    pub(crate) r: Vec6,
-    /// ŝ × c_w (J_au = (ŝ × c_w) J_ad,i).
-    pub(crate) s_cw: Vec3,
-    pub(crate) jbu: Mat3x6,
-    pub(crate) jbd: Mat3x6,
-}
-
-/// Leg `i` position-level Jacobian blocks (no velocity terms).
-pub(crate) fn leg_static(geom: &LegGeometry, i: usize) -> Result<LegStatic> {
-    let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
-    let m = leg_m(&w, &l)?;
-    let r = stack(&l, &a.cross(&l)) * (1.0 / m);
-    let inv_l2 = 1.0 / l.norm_squared();
-    // −[l]×[a]× = (l·a) I − a lᵀ
-    let right = nalgebra::Matrix3::from_diagonal_element(l.dot(&a)) - a * l.transpose();
-    let ws = w.cross(&S_HAT);
-    let jbd = (cross_block(&l.cross_matrix(), &right) + l.cross(&ws) * r.transpose()) * inv_l2;
-    let jbu = -(ws * r.transpose()) - (l * 0.5).cross_matrix() * jbd;
-    Ok(LegStatic {
-        r,
-        s_cw: S_HAT.cross(&(w * 0.5)),
-        jbu,
-        jbd,
-    })
-}
-
 /// Leg `i` kinematics for the twist `v` (v_E = [Ė; ω]).
 pub(crate) fn leg_kin(geom: &LegGeometry, i: usize, v: &Vec6) -> Result<LegKin> {
     let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);

@@ -7,10 +7,10 @@ use super::{check_finite, joint_friction, link_transverse_inertia, platform_iner
 use super::{wrench_axial_inertia, GRAVITY};
 use crate::error::Result;
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::{leg_kin, leg_static, LegKin};
+use crate::leg_jacobians::{leg_kin, leg_m, LegKin};
 use crate::params::{DynamicParams, KinematicParams};
 use crate::pose::{twist_jacobian, twist_jacobian_dot};
-use crate::types::{Mat6, Vec3, Vec6, LEGS};
+use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
 
 // ---------------------------------------------------------------------------------------------
 // Matrix path: M, C, G in twist coordinates.
@@ -24,21 +24,46 @@ pub(super) struct TwistTerms {
 }
 
 /// Twist-coordinate mass matrix M = M_p + Σ (J_a,iᵀ M_w,i J_a,i + J_b,iᵀ M_l,i J_b,i) (eq. 3.47).
+///
+/// Every leg Jacobian is a 3 × 3 block times P_i = [I, −[a_i]×], the map from the twist to the
+/// velocity of platform joint i: J_ad,i = lᵀP/m, J_b,d = D P with D = ([l]× + q lᵀ/m)/|l|²
+/// (q = l × (w × ŝ)), J_b,u = U P with U = −(w × ŝ) lᵀ/m − [l/2]× D. So a leg adds P_iᵀ N_i P_i with
+/// the 3 × 3 N_i = (I_w/m²) l lᵀ + m_l UᵀU + I_l DᵀD, whose blocks are N, N A, Aᵀ N A (A = −[a]×):
+/// the same matrix as the products of the 3 × 6 blocks, at a third of their cost.
 pub(super) fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Result<Mat6> {
-    let mut m = Mat6::zeros();
-    for k in 0..3 {
-        m[(k, k)] = dp.platform.mass;
-    }
-    m.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&platform_inertia(&geom.rot, &dp.platform));
+    let mut tl = Mat3::from_diagonal_element(dp.platform.mass);
+    let mut tr = Mat3::zeros();
+    let mut br = platform_inertia(&geom.rot, &dp.platform);
     for i in 0..LEGS {
-        let k = leg_static(geom, i)?;
+        let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
+        let inv_m = 1.0 / leg_m(&w, &l)?;
+        let inv_l2 = 1.0 / l.norm_squared();
+        let ws = Vec3::new(w[1], -w[0], 0.0); // w × ŝ
+        let q = l.cross(&ws);
+        let lx = l.cross_matrix();
+        let d = (lx + q * (l.transpose() * inv_m)) * inv_l2;
+        let u = ws * (l.transpose() * -inv_m) - lx * d * 0.5;
         let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
-        // J_auᵀ J_au = |ŝ × c_w|² J_ad,iᵀ J_ad,i: the wrench is one rank-1 term.
-        let iw = wb.mass * k.s_cw.norm_squared() + wrench_axial_inertia(wb);
-        m += k.r * k.r.transpose() * iw
-            + k.jbu.transpose() * k.jbu * lb.mass
-            + k.jbd.transpose() * k.jbd * link_transverse_inertia(lb);
+        // |ŝ × c_w|² with c_w = w/2.
+        let s_cw2 = 0.25 * (w[0] * w[0] + w[1] * w[1]);
+        let iw = (wb.mass * s_cw2 + wrench_axial_inertia(wb)) * inv_m * inv_m;
+        let n = l * l.transpose() * iw
+            + u.tr_mul(&u) * lb.mass
+            + d.tr_mul(&d) * link_transverse_inertia(lb);
+        let b = -(n * a.cross_matrix());
+        tl += n;
+        tr += b;
+        br += a.cross_matrix() * b;
+    }
+    let mut m = Mat6::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&tl);
+    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&tr);
+    m.fixed_view_mut::<3, 3>(3, 0).copy_from(&tr.transpose());
+    // The lower-right block is symmetric in exact arithmetic; keep M exactly so.
+    for r in 0..3 {
+        for c in 0..3 {
+            m[(3 + r, 3 + c)] = if c >= r { br[(r, c)] } else { br[(c, r)] };
+        }
     }
     Ok(m)
 }
