@@ -14,7 +14,8 @@
 //! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler), and
 //! the exact sensitivities from a recorded run, as CLOE computes them at its stop.
 //! `--exact-only`: one simulation, then only the exact sensitivities from one recorded run (for a
-//! profiler, or with `RAYON_NUM_THREADS=1` for the CPU time without the threads' scheduling).
+//! profiler, or with `RAYON_NUM_THREADS=1` for the CPU time without the threads' scheduling);
+//! `--per-tick-recorded-only`: the same for the per-tick sensitivities CLOE iterates on.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
@@ -35,6 +36,7 @@ fn main() {
     let sequential = args.iter().any(|a| a == "--sequential");
     let per_tick_only = args.iter().any(|a| a == "--per-tick-only");
     let exact_only = args.iter().any(|a| a == "--exact-only");
+    let per_tick_recorded_only = args.iter().any(|a| a == "--per-tick-recorded-only");
     let repeat: usize = args
         .iter()
         .position(|a| a == "--repeat")
@@ -79,14 +81,19 @@ fn main() {
     let cols = Consistent::a_columns();
     let mut cfg_fast = cfg.clone();
     cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
-    if exact_only {
-        // Only the exact sensitivities from a recording (for a profiler).
+    if exact_only || per_tick_recorded_only {
+        // Only the exact (or per-tick) sensitivities from a recording (for a profiler).
         let (_, rec) = simulate_loop_recording(&cfg, &truth, &exc).unwrap();
+        let (c, what) = if exact_only {
+            (&cfg, "exact")
+        } else {
+            (&cfg_fast, "per-tick")
+        };
         let t_e = time(&|| {
-            simulate_loop_from(&cfg, &truth, &exc, &cols, rec.clone()).unwrap();
+            simulate_loop_from(c, &truth, &exc, &cols, rec.clone()).unwrap();
         });
         println!(
-            "exact ones from a recording {t_e:.3} s = {:.2} × one simulation",
+            "{what} ones from a recording {t_e:.3} s = {:.2} × one simulation",
             t_e / t_sim
         );
         return;

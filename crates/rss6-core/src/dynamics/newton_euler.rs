@@ -474,6 +474,7 @@ pub(super) struct ForwardAt {
 }
 
 /// [`forward_dynamics_with_env`] at a known geometry (the state and environment already checked).
+#[inline]
 pub(super) fn forward_at(
     geom: &LegGeometry,
     dp: &DynamicParams,
@@ -490,6 +491,7 @@ pub(super) fn forward_at(
 
 /// [`forward_at`] from the twist dynamics `td` at `geom` and the Cholesky factor of `td.m`
 /// (computed once where a caller needs them too: the implicit friction step).
+#[inline]
 pub(super) fn forward_from(
     geom: &LegGeometry,
     td: &TwistDynamics,
@@ -535,6 +537,7 @@ pub(super) struct TwistDynamics {
 }
 
 /// The [`TwistDynamics`] at a known geometry (the environment already checked).
+#[inline]
 pub(super) fn twist_dynamics_at(
     geom: &LegGeometry,
     dp: &DynamicParams,
