@@ -147,9 +147,8 @@ def test_noise_free_round_trip_on_the_twin(kp: rss6.KinematicParams, tmp_path) -
     psi_est, _, _ = _rss6.cloe_psi(res.dynamics, res.pid)
     names = identify.parameter_names()
     worst = max(abs(np.expm1(psi_est[names.index(n)] - psi_true[names.index(n)])) for n in SUBSET)
-    # Measured: worst relative error 1.5e-7 (platform.Szz), 10 iterations, Φ 692 → 2.9e-18;
-    # since the factored mass matrix (forty-third session) 1.9e-7, 9 iterations, Φ → 3.7e-18
-    # (stopped as stationary at rounding); bound ≈ 3×.
+    # Measured (factored mass matrix, forty-third session): worst relative error 1.9e-7
+    # (platform.Szz), 9 iterations, Φ 692 → 3.7e-18, stationary at rounding; bound ≈ 3×.
     assert worst < 5e-7
     assert res.cost_history[-1] < 1e-12 * res.cost_history[0]
     assert costs == pytest.approx(list(res.cost_history))
