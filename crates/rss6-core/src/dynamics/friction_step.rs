@@ -46,10 +46,10 @@
 use super::integration::{rk4_step_by, ModelState};
 use super::load::Environment;
 use super::newton_euler::{
-    forward_dynamics_with_env, forward_from, solve6, twist_dynamics_at, TwistDynamics,
+    accel_from, factor, forward_dynamics_with_env, solve6, twist_dynamics_at, TwistDynamics,
 };
 use super::{check_finite, check_state};
-use crate::error::{CoreError, Result, SingularKind};
+use crate::error::{CoreError, Result};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
 use crate::types::{Mat6, Vec6, LEGS};
@@ -121,15 +121,12 @@ fn implicit_friction_at(
     check_dt(dt)?;
     let td = twist_dynamics_at(geom, dp, pose_dot, env)?;
     let TwistDynamics {
-        m,
         bias,
         theta_dot,
         j_ad_t,
         ..
     } = td;
-    let chol = m
-        .cholesky()
-        .ok_or(CoreError::Singular(SingularKind::Matrix))?;
+    let chol = factor(&td)?;
     let x = chol.solve(&j_ad_t);
     let k = j_ad_t.transpose() * x * dt;
     let k = (k + k.transpose()) * 0.5;
@@ -192,7 +189,7 @@ pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
     dp_nf.viscous = [0.0; LEGS];
     let net = tau_a - f.torque;
     check_state(&state.pose_dot, &net)?;
-    let first = forward_from(&geom, &td, chol, &dp_nf, &state.pose_dot, &net)?.chi_ddot;
+    let first = accel_from(&geom, &td, &chol, &dp_nf, &state.pose_dot, &net)?.chi_ddot;
     // rk4_step_by evaluates its stages in order: the first is the one computed above.
     let mut stage = 0u8;
     let next = rk4_step_by(state, dt, |p, v| {

@@ -3,7 +3,7 @@
 
 use super::check_state;
 use super::load::Environment;
-use super::newton_euler::forward_at;
+use super::newton_euler::chi_ddot_at;
 use crate::error::Result;
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
@@ -55,5 +55,5 @@ where
     let tau_a = tau_of(&(geom.j_theta()? * pose_dot));
     check_state(pose_dot, &tau_a)?;
     env.check()?;
-    Ok(forward_at(&geom, dp, pose_dot, &tau_a, env)?.chi_ddot)
+    chi_ddot_at(&geom, dp, pose_dot, &tau_a, env)
 }

@@ -457,7 +457,7 @@ pub fn forward_dynamics_with_env(
     check_state(pose_dot, tau_a)?;
     env.check()?;
     let geom = LegGeometry::at_pose(kp, pose)?;
-    Ok(forward_at(&geom, dp, pose_dot, tau_a, env)?.chi_ddot)
+    chi_ddot_at(&geom, dp, pose_dot, tau_a, env)
 }
 
 /// The forward dynamics at a known geometry, with what the sensitivities reuse.
@@ -483,10 +483,29 @@ pub(super) fn forward_at(
     env: &Environment,
 ) -> Result<ForwardAt> {
     let td = twist_dynamics_at(geom, dp, pose_dot, env)?;
-    let chol =
-        td.m.cholesky()
-            .ok_or(CoreError::Singular(SingularKind::Matrix))?;
+    let chol = factor(&td)?;
     forward_from(geom, &td, chol, dp, pose_dot, tau_a)
+}
+
+/// [`forward_at`]'s χ̈ alone (nothing else built or copied).
+#[inline]
+pub(super) fn chi_ddot_at(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+) -> Result<Vec6> {
+    let td = twist_dynamics_at(geom, dp, pose_dot, env)?;
+    let chol = factor(&td)?;
+    Ok(accel_from(geom, &td, &chol, dp, pose_dot, tau_a)?.chi_ddot)
+}
+
+/// The Cholesky factor of the twist-space mass matrix.
+#[inline]
+pub(super) fn factor(td: &TwistDynamics) -> Result<nalgebra::Cholesky<f64, nalgebra::U6>> {
+    td.m.cholesky()
+        .ok_or(CoreError::Singular(SingularKind::Matrix))
 }
 
 /// [`forward_at`] from the twist dynamics `td` at `geom` and the Cholesky factor of `td.m`
@@ -500,27 +519,47 @@ pub(super) fn forward_from(
     pose_dot: &Vec6,
     tau_a: &Vec6,
 ) -> Result<ForwardAt> {
+    let a = accel_from(geom, td, &chol, dp, pose_dot, tau_a)?;
+    Ok(ForwardAt {
+        chi_ddot: a.chi_ddot,
+        v: td.v,
+        v_dot: a.v_dot,
+        j_ad_t: td.j_ad_t,
+        js_inv: a.js_inv,
+        chol,
+        tau_rigid: a.tau_rigid,
+    })
+}
+
+/// The acceleration of [`forward_from`] and what it derives on the way.
+pub(super) struct Accel {
+    pub chi_ddot: Vec6,
+    pub v_dot: Vec6,
+    pub js_inv: Mat6,
+    pub tau_rigid: Vec6,
+}
+
+/// M v̇ = J_adᵀ(τ_a − τ_f) − b by the factor `chol` of `td.m`, then χ̈ = J_s⁻¹(v̇ − J̇_s χ̇).
+#[inline]
+pub(super) fn accel_from(
+    geom: &LegGeometry,
+    td: &TwistDynamics,
+    chol: &nalgebra::Cholesky<f64, nalgebra::U6>,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+) -> Result<Accel> {
     let pose = &geom.pose;
-    let TwistDynamics {
-        bias,
-        theta_dot,
-        j_ad_t,
-        v,
-        ..
-    } = *td;
-    let tau_rigid = tau_a - joint_friction(dp, &theta_dot);
-    let rhs = j_ad_t * tau_rigid - bias;
+    let tau_rigid = tau_a - joint_friction(dp, &td.theta_dot);
+    let rhs = td.j_ad_t * tau_rigid - td.bias;
     let v_dot = chol.solve(&rhs);
     let js_inv = twist_jacobian_inverse(pose)?;
     let chi_ddot = js_inv * (v_dot - twist_jacobian_dot(pose, pose_dot) * pose_dot);
     check_finite(chi_ddot.as_slice())?;
-    Ok(ForwardAt {
+    Ok(Accel {
         chi_ddot,
-        v,
         v_dot,
-        j_ad_t,
         js_inv,
-        chol,
         tau_rigid,
     })
 }
