@@ -508,8 +508,7 @@ pub(super) fn factor(td: &TwistDynamics) -> Result<nalgebra::Cholesky<f64, nalge
         .ok_or(CoreError::Singular(SingularKind::Matrix))
 }
 
-/// [`forward_at`] from the twist dynamics `td` at `geom` and the Cholesky factor of `td.m`
-/// (computed once where a caller needs them too: the implicit friction step).
+/// [`forward_at`] from the twist dynamics `td` at `geom` and the Cholesky factor of `td.m`.
 #[inline]
 pub(super) fn forward_from(
     geom: &LegGeometry,
