@@ -62,6 +62,8 @@
 mod friction_step;
 mod integration;
 mod joint_rates;
+mod lanes;
+mod leg_state;
 mod load;
 mod matrices;
 mod newton_euler;
@@ -100,6 +102,8 @@ use crate::error::{check_finite, Result};
 use crate::params::{Body, DynamicParams};
 use crate::pose::{euler_rate_jacobian, euler_rate_jacobian_dot};
 use crate::types::{Mat3, Vec3, Vec6};
+use lanes::Lane;
+use nalgebra::Vector3;
 
 /// Standard gravity in the base frame, g = [0, 0, −9.81] m/s² (the base's z axis points up).
 pub const GRAVITY: Vec3 = Vec3::new(0.0, 0.0, -9.81);
@@ -155,13 +159,13 @@ pub fn joint_friction_smooth(dp: &DynamicParams, theta_dot: &Vec6, eps: f64) -> 
 
 /// ŝ × u for ŝ = ẑ: [−u_y, u_x, 0].
 #[inline(always)]
-pub(super) fn z_cross(u: &Vec3) -> Vec3 {
-    Vec3::new(-u[1], u[0], 0.0)
+pub(super) fn z_cross<T: Lane>(u: &Vector3<T>) -> Vector3<T> {
+    Vector3::new(-u[1], u[0], T::zero())
 }
 
 /// ŝ·(u × v) for ŝ = ẑ: u_x v_y − u_y v_x.
 #[inline(always)]
-pub(super) fn z_triple(u: &Vec3, v: &Vec3) -> f64 {
+pub(super) fn z_triple<T: Lane>(u: &Vector3<T>, v: &Vector3<T>) -> T {
     u[0] * v[1] - u[1] * v[0]
 }
 

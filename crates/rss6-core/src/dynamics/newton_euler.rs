@@ -1,10 +1,11 @@
 //! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
 //! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
 
+use super::leg_state::Leg;
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
-use super::pose_tangent::rigid_pose_tangents;
-use super::rate_tangent::{force_rate_tangents, twist_rate_directions};
+use super::pose_tangent::{stepped_pose_columns, PoseTangents};
+use super::rate_tangent::{twist_rate_directions, RateTangents};
 use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
 use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
 use crate::error::{CoreError, Result, SingularKind};
@@ -246,7 +247,7 @@ pub fn inverse_dynamics_with_env(
 }
 
 /// The twist-space force of the rigid bodies (load included), θ̇ and J_adᵀ at a known geometry.
-fn rigid_forces(
+pub(super) fn rigid_forces(
     geom: &LegGeometry,
     dp: &DynamicParams,
     pose: &Vec6,
@@ -359,48 +360,43 @@ pub(super) fn derivatives_at(
 ) -> Result<ForceTangents> {
     let pose = &geom.pose;
     let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
-    // Columns of ∂f − ∂J_adᵀ τ_rigid (pose), with ∂θ̇ for the viscous term: forward differences
-    // from the state, or the exact tangent.
-    let (b_pose, d_rate_pose, d_rates) = if let Some(h_pose) = one_sided_step {
-        // The state's twist-space force, θ̇ and J_adᵀ, evaluated as the steps are.
-        let (f0, td0, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
-        let mut d_rates = twist.map(|_| Mat6::zeros());
-        let (mut b_pose, mut d_rate_pose) = (Mat6::zeros(), Mat6::zeros());
-        for k in 0..6 {
-            // The geometry at χ + h e_k with the IK linearised along the step (h as taken).
-            let mut pp = *pose;
-            pp[k] += h_pose;
-            let h = pp[k] - pose[k];
-            let gp =
-                LegGeometry::from_pose_and_theta(kp, &pp, &(geom.theta + j_theta.column(k) * h));
-            let (fp, tdp, jp) = rigid_forces(&gp, dp, &pp, pose_dot, pose_ddot, env)?;
-            b_pose.set_column(k, &((fp - f0 - (jp - j0) * tau_rigid) / h));
-            d_rate_pose.set_column(k, &((tdp - td0) / h));
-            if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
-                d.set_column(k, &((jp - j0).tr_mul(nu) / h));
-            }
-        }
-        (b_pose, d_rate_pose, d_rates)
-    } else {
-        rigid_pose_tangents(
-            geom,
-            j_theta,
-            dp,
-            load.as_ref(),
-            pose_dot,
-            pose_ddot,
-            &env.gravity,
-            tau_rigid,
-            twist,
-        )?
-    };
-    // χ̇: the force's exact tangent at this geometry.
     let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    // Columns of ∂f − ∂J_adᵀ τ_rigid (pose), with ∂θ̇ for the viscous term: the exact tangent
+    // or forward differences from the state; the χ̇ columns are the force's exact tangent at this
+    // geometry. The tangents take the legs two at a time.
+    let g = &env.gravity;
+    let mut exact = one_sided_step
+        .is_none()
+        .then(|| PoseTangents::new(geom, dp, load.as_ref(), (pose_dot, pose_ddot), g, twist));
     let (dv, dvd) = twist_rate_directions(pose, pose_dot);
-    let vel = force_rate_tangents(geom, dp, load.as_ref(), &v, &v_dot, &dv, &dvd)?;
+    let mut vel = RateTangents::new(geom, dp, load.as_ref(), &v, (&dv, &dvd));
+    for k in 0..LEGS / 2 {
+        let pair = Leg::pair(geom, dp, k, (&v, &v_dot), g)?;
+        if let Some(t) = exact.as_mut() {
+            t.add_pair(k, &pair, j_theta, tau_rigid);
+        }
+        vel.add_pair(&pair);
+    }
+    let (b_pose, d_rate_pose, d_rates) = match (exact, one_sided_step) {
+        (Some(t), _) => t.finish(),
+        (None, h) => {
+            let h = h.unwrap_or_default();
+            stepped_pose_columns(
+                kp,
+                geom,
+                j_theta,
+                dp,
+                (pose_dot, pose_ddot),
+                env,
+                tau_rigid,
+                twist,
+                h,
+            )?
+        }
+    };
     Ok(ForceTangents {
         pose: b_pose,
-        vel,
+        vel: vel.out,
         rate_pose: d_rate_pose,
         rates: d_rates,
     })

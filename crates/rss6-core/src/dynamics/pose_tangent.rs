@@ -4,25 +4,29 @@
 //! the orientation along the rotation J_e δφ). One product-rule pass per direction instead of the
 //! two stepped Newton–Euler passes of a central difference.
 
-use super::load::LoadAt;
+use super::lanes::{self, Lane, Lanes, Pair};
+use super::leg_state::Leg;
+use super::load::{Environment, LoadAt};
+use super::newton_euler::rigid_forces;
+use super::platform_inertia;
 use super::rate_tangent::{bottom, stack, top};
-use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia};
 use super::{twist_and_rate, z_cross, z_triple};
 use crate::error::Result;
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::leg_m;
 use crate::params::DynamicParams;
+use crate::params::KinematicParams;
 use crate::pose::euler_rate_jacobian;
-use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
+use crate::types::{Mat3, Mat6, Vec3, Vec6};
+use nalgebra::{Vector3, Vector6};
 
 /// One pose direction e_k: the platform's displacement δE and rotation δφ (world frame), and the
 /// changes of the twist v and its rate v̇ at the held χ̇, χ̈.
 #[derive(Clone, Copy)]
-struct Direction {
-    e: Vec3,
-    phi: Vec3,
-    v: Vec6,
-    v_dot: Vec6,
+struct Direction<T: Lane> {
+    e: Vector3<T>,
+    phi: Vector3<T>,
+    v: Vector6<T>,
+    v_dot: Vector6<T>,
 }
 
 /// ∂J_e/∂α and ∂J_e/∂β.
@@ -65,7 +69,7 @@ fn euler_rate_jacobian_dot_partials(alpha: f64, beta: f64, ad: f64, bd: f64) -> 
     )
 }
 
-fn directions(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction; 6] {
+fn directions(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction<f64>; 6] {
     let (al, be) = (pose[3], pose[4]);
     let je = euler_rate_jacobian(al, be);
     let (pd, pdd) = (bottom(pose_dot), bottom(pose_ddot));
@@ -100,187 +104,148 @@ fn directions(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction; 6] 
 
 /// The pose derivatives at a fixed (χ̇, χ̈) of the rigid bodies' torques, column k for e_k:
 /// ∂f − ∂J_adᵀ τ_rigid (to be mapped by J_adᵀ⁻¹), ∂θ̇ (for the viscous term) and, with `twist`,
-/// ∂(J_ad ν) at ν held. `tau_rigid` is J_adᵀ⁻¹ f at the state.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn rigid_pose_tangents(
-    geom: &LegGeometry,
-    j_theta: &Mat6,
-    dp: &DynamicParams,
-    load: Option<&LoadAt>,
-    pose_dot: &Vec6,
-    pose_ddot: &Vec6,
-    g: &Vec3,
-    tau_rigid: &Vec6,
-    twist: Option<&Vec6>,
-) -> Result<(Mat6, Mat6, Option<Mat6>)> {
-    let (v, v_dot) = twist_and_rate(&geom.pose, pose_dot, pose_ddot);
-    let (e_dot, omega) = (top(&v), bottom(&v));
-    let (e_ddot, omega_dot) = (top(&v_dot), bottom(&v_dot));
-    let dirs = directions(&geom.pose, pose_dot, pose_ddot);
-    let ip = platform_inertia(&geom.rot, &dp.platform);
-    let ip_omega = ip * omega;
-    let mut b = Mat6::zeros();
-    let mut d_theta_dot = Mat6::zeros();
-    let mut d_rates = twist.map(|_| Mat6::zeros());
-    for (c, d) in dirs.iter().enumerate() {
-        let (d_omega, d_omega_dot) = (bottom(&d.v), bottom(&d.v_dot));
-        let sx = d.phi.cross_matrix();
-        let d_ip = sx * ip - ip * sx;
-        let f_lin = top(&d.v_dot) * dp.platform.mass;
-        let f_ang = d_ip * omega_dot
-            + ip * d_omega_dot
-            + d_omega.cross(&ip_omega)
-            + omega.cross(&(d_ip * omega + ip * d_omega));
-        let mut f = stack(&f_lin, &f_ang);
-        if let Some(load) = load {
-            f += load.force_pose_tangent(&v, &v_dot, g, &d.phi, &d.v, &d.v_dot);
-        }
-        b.set_column(c, &f);
-    }
-    for i in 0..LEGS {
-        let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
-        let inv_m = 1.0 / leg_m(&w, &l)?;
-        let al = a.cross(&l);
-        let r = stack(&l, &al) * inv_m;
-        let th_d = r.dot(&v);
-        let s_w = z_cross(&w);
-        let w_dot = s_w * th_d;
-        let a_dot = omega.cross(&a);
-        let l_dot = e_dot + a_dot - w_dot;
-        let m_dot = z_triple(&w_dot, &l) + z_triple(&w, &l_dot);
-        let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-        let num = l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * th_d;
-        let th_dd = r.dot(&v_dot) + num * inv_m;
-        let t_acc = s_w * th_dd + z_cross(&w_dot) * th_d;
-        let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
-        let inv_l2 = 1.0 / l.norm_squared();
-        let omega2 = l.cross(&l_dot) * inv_l2;
-        let c2 = 2.0 * l.dot(&l_dot) * inv_l2;
-        let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * c2;
-        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
-        let (iz, it) = (wrench_axial_inertia(wb), link_transverse_inertia(lb));
-        let s_cw = s_w * 0.5;
-        let cw_acc = t_acc * 0.5;
-        let cl_acc = t_acc + l_acc * 0.5;
-        let q_w = wb.mass * s_cw.dot(&(cw_acc - g)) + iz * th_dd;
-        let f_l = (cl_acc - g) * lb.mass;
-        let n_l = omega2_dot * it;
-        let cl = l * 0.5;
-        let u = cl.cross(&f_l) + n_l;
-        let p = u.cross(&l);
-        let ap = a.cross(&p);
-        let kk = z_triple(&p, &w);
-        let jv = stack(&p, &ap) + r * kk;
-        let s_f = q_w + z_triple(&w, &f_l);
-        let leg = Leg {
-            w,
-            l,
-            a,
-            s_w,
-            inv_m,
-            al,
-            r,
-            th_d,
-            w_dot,
-            a_dot,
-            l_dot,
-            m_dot,
-            al_dot,
-            num,
-            th_dd,
-            l_acc,
-            inv_l2,
-            omega2,
-            c2,
-            iz,
-            it,
-            s_cw,
-            cw_acc,
-            mass_w: wb.mass,
-            mass_l: lb.mass,
-            f_l,
-            cl,
-            u,
-            p,
-            kk,
-            jv,
-            s_f,
-        };
-        let body = Body {
-            v: &v,
-            v_dot: &v_dot,
-            e_dot,
-            omega,
-            omega_dot,
-            g,
-        };
+/// ∂(J_ad ν) at ν held: the platform's and the load's part from [`Self::new`], each pair of legs'
+/// from [`Self::add_pair`] (legs 0 to 5 in turn), the sums from [`Self::finish`].
+pub(super) struct PoseTangents {
+    dirs: [Direction<Pair>; 6],
+    body: Body<Pair>,
+    nu: Option<Vector6<Pair>>,
+    b: Mat6,
+    d_theta_dot: Mat6,
+    d_rates: Option<Mat6>,
+}
+
+impl PoseTangents {
+    pub(super) fn new(
+        geom: &LegGeometry,
+        dp: &DynamicParams,
+        load: Option<&LoadAt>,
+        (pose_dot, pose_ddot): (&Vec6, &Vec6),
+        g: &Vec3,
+        twist: Option<&Vec6>,
+    ) -> Self {
+        let (v, v_dot) = twist_and_rate(&geom.pose, pose_dot, pose_ddot);
+        let (e_dot, omega) = (top(&v), bottom(&v));
+        let omega_dot = bottom(&v_dot);
+        let dirs = directions(&geom.pose, pose_dot, pose_ddot);
+        let ip = platform_inertia(&geom.rot, &dp.platform);
+        let ip_omega = ip * omega;
+        let mut b = Mat6::zeros();
         for (c, d) in dirs.iter().enumerate() {
+            let (d_omega, d_omega_dot) = (bottom(&d.v), bottom(&d.v_dot));
+            let sx = d.phi.cross_matrix();
+            let d_ip = sx * ip - ip * sx;
+            let f_lin = top(&d.v_dot) * dp.platform.mass;
+            let f_ang = d_ip * omega_dot
+                + ip * d_omega_dot
+                + d_omega.cross(&ip_omega)
+                + omega.cross(&(d_ip * omega + ip * d_omega));
+            let mut f = stack(&f_lin, &f_ang);
+            if let Some(load) = load {
+                f += load.force_pose_tangent(&v, &v_dot, g, &d.phi, &d.v, &d.v_dot);
+            }
+            b.set_column(c, &f);
+        }
+        PoseTangents {
+            dirs: dirs.map(|d| Direction {
+                e: d.e.splat(),
+                phi: d.phi.splat(),
+                v: d.v.splat(),
+                v_dot: d.v_dot.splat(),
+            }),
+            body: Body {
+                v: v.splat(),
+                v_dot: v_dot.splat(),
+                e_dot: e_dot.splat(),
+                omega: omega.splat(),
+                omega_dot: omega_dot.splat(),
+                g: g.splat(),
+            },
+            nu: twist.map(Lanes::splat),
+            b,
+            d_theta_dot: Mat6::zeros(),
+            d_rates: twist.map(|_| Mat6::zeros()),
+        }
+    }
+
+    /// Adds legs 2k and 2k + 1 (`leg`, side by side): their joint angles move by J_θ e_c along
+    /// direction c; `tau_rigid` is J_adᵀ⁻¹ f at the state.
+    pub(super) fn add_pair(&mut self, k: usize, leg: &Leg<Pair>, j_theta: &Mat6, tau_rigid: &Vec6) {
+        let (i, j) = (2 * k, 2 * k + 1);
+        let tau = Pair::new(tau_rigid[i], tau_rigid[j]);
+        for (c, d) in self.dirs.iter().enumerate() {
+            let dth = Pair::new(j_theta[(i, c)], j_theta[(j, c)]);
             // The translations move neither the orientation nor the twist; the yaw turns the
             // platform at an unchanged twist: their zero terms skipped (the sums are the same).
-            let dth = j_theta[(i, c)];
             let (df, dr, d_th_d) = match c {
-                0..=2 => leg.direction::<false, false>(&body, d, dth),
-                5 => leg.direction::<true, false>(&body, d, dth),
-                _ => leg.direction::<true, true>(&body, d, dth),
+                0..=2 => leg.direction::<false, false>(&self.body, d, dth),
+                5 => leg.direction::<true, false>(&self.body, d, dth),
+                _ => leg.direction::<true, true>(&self.body, d, dth),
             };
-            let mut col = b.column_mut(c);
-            col += df - dr * tau_rigid[i];
-            d_theta_dot[(i, c)] = d_th_d;
-            if let (Some(dr_nu), Some(nu)) = (d_rates.as_mut(), twist) {
-                dr_nu[(i, c)] = dr.dot(nu);
+            let t = df - dr * tau;
+            let dr_nu = self.nu.map(|nu| dr.dot(&nu));
+            for (lane, leg) in [i, j].into_iter().enumerate() {
+                let mut col = self.b.column_mut(c);
+                col += lanes::lane(&t, lane);
+                self.d_theta_dot[(leg, c)] = d_th_d.get(lane);
+                if let (Some(out), Some(x)) = (self.d_rates.as_mut(), dr_nu) {
+                    out[(leg, c)] = x.get(lane);
+                }
             }
         }
     }
-    Ok((b, d_theta_dot, d_rates))
+
+    /// (∂f − ∂J_adᵀ τ_rigid, ∂θ̇, ∂(J_ad ν) if asked).
+    pub(super) fn finish(self) -> (Mat6, Mat6, Option<Mat6>) {
+        (self.b, self.d_theta_dot, self.d_rates)
+    }
 }
 
-/// The platform's motion at the state, shared by every leg.
-struct Body<'a> {
-    v: &'a Vec6,
-    v_dot: &'a Vec6,
-    e_dot: Vec3,
-    omega: Vec3,
-    omega_dot: Vec3,
-    g: &'a Vec3,
+/// The pose columns of [`PoseTangents`] by forward differences with step `h_pose`: the geometry
+/// at χ + h e_k with the IK linearised along the step, θ + h J_θ e_k (h as taken).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn stepped_pose_columns(
+    kp: &KinematicParams,
+    geom: &LegGeometry,
+    j_theta: &Mat6,
+    dp: &DynamicParams,
+    (pose_dot, pose_ddot): (&Vec6, &Vec6),
+    env: &Environment,
+    tau_rigid: &Vec6,
+    twist: Option<&Vec6>,
+    h_pose: f64,
+) -> Result<(Mat6, Mat6, Option<Mat6>)> {
+    let pose = &geom.pose;
+    // The state's twist-space force, θ̇ and J_adᵀ, evaluated as the steps are.
+    let (f0, td0, j0) = rigid_forces(geom, dp, pose, pose_dot, pose_ddot, env)?;
+    let mut d_rates = twist.map(|_| Mat6::zeros());
+    let (mut b_pose, mut d_rate_pose) = (Mat6::zeros(), Mat6::zeros());
+    for k in 0..6 {
+        let mut pp = *pose;
+        pp[k] += h_pose;
+        let h = pp[k] - pose[k];
+        let gp = LegGeometry::from_pose_and_theta(kp, &pp, &(geom.theta + j_theta.column(k) * h));
+        let (fp, tdp, jp) = rigid_forces(&gp, dp, &pp, pose_dot, pose_ddot, env)?;
+        b_pose.set_column(k, &((fp - f0 - (jp - j0) * tau_rigid) / h));
+        d_rate_pose.set_column(k, &((tdp - td0) / h));
+        if let (Some(d), Some(nu)) = (d_rates.as_mut(), twist) {
+            d.set_column(k, &((jp - j0).tr_mul(nu) / h));
+        }
+    }
+    Ok((b_pose, d_rate_pose, d_rates))
 }
 
-/// One leg's kinematics and forces at the state (the names of [`rigid_pose_tangents`]).
-struct Leg {
-    w: Vec3,
-    l: Vec3,
-    a: Vec3,
-    s_w: Vec3,
-    inv_m: f64,
-    al: Vec3,
-    r: Vec6,
-    th_d: f64,
-    w_dot: Vec3,
-    a_dot: Vec3,
-    l_dot: Vec3,
-    m_dot: f64,
-    al_dot: Vec3,
-    num: f64,
-    th_dd: f64,
-    l_acc: Vec3,
-    inv_l2: f64,
-    omega2: Vec3,
-    c2: f64,
-    iz: f64,
-    it: f64,
-    s_cw: Vec3,
-    cw_acc: Vec3,
-    mass_w: f64,
-    mass_l: f64,
-    f_l: Vec3,
-    cl: Vec3,
-    u: Vec3,
-    p: Vec3,
-    kk: f64,
-    jv: Vec6,
-    s_f: f64,
+/// The platform's motion at the state, shared by every leg (in both lanes).
+struct Body<T: Lane> {
+    v: Vector6<T>,
+    v_dot: Vector6<T>,
+    e_dot: Vector3<T>,
+    omega: Vector3<T>,
+    omega_dot: Vector3<T>,
+    g: Vector3<T>,
 }
 
-impl Leg {
+impl<T: Lane> Leg<T> {
     /// The leg's tangent along `d` (its joint angle moving by `dth`): the change of the
     /// twist-space force, of the rate row r and of θ̇. `TURN`: the direction turns the platform
     /// (δφ ≠ 0); `RATE`: it changes the twist or its rate. A term a direction makes zero is
@@ -288,10 +253,10 @@ impl Leg {
     #[inline(always)]
     fn direction<const TURN: bool, const RATE: bool>(
         &self,
-        body: &Body<'_>,
-        d: &Direction,
-        dth: f64,
-    ) -> (Vec6, Vec6, f64) {
+        body: &Body<T>,
+        d: &Direction<T>,
+        dth: T,
+    ) -> (Vector6<T>, Vector6<T>, T) {
         let Leg {
             w,
             l,
@@ -336,7 +301,8 @@ impl Leg {
             omega_dot,
             g,
         } = body;
-        let zero = Vec3::zeros();
+        let zero = Vector3::zeros();
+        let half = T::from(0.5);
         let (de_dot, d_omega) = (top(&d.v), bottom(&d.v));
         let (de_ddot, d_omega_dot) = (top(&d.v_dot), bottom(&d.v_dot));
         let dw = s_w * dth;
@@ -404,18 +370,19 @@ impl Leg {
             (true, false) => omega_dot.cross(&da) + omega.cross(&da_dot) - dt_acc,
             _ => -dt_acc,
         };
-        let d_inv_l2 = -2.0 * l.dot(&dl) * inv_l2 * inv_l2;
+        let d_inv_l2 = T::from(-2.0) * l.dot(&dl) * inv_l2 * inv_l2;
         let d_omega2 = (dl.cross(l_dot) + l.cross(&dl_dot)) * inv_l2 + l.cross(l_dot) * d_inv_l2;
-        let dc2 = 2.0 * (dl.dot(l_dot) + l.dot(&dl_dot)) * inv_l2 + 2.0 * l.dot(l_dot) * d_inv_l2;
+        let two = T::from(2.0);
+        let dc2 = two * (dl.dot(l_dot) + l.dot(&dl_dot)) * inv_l2 + two * l.dot(l_dot) * d_inv_l2;
         let d_omega2_dot = (dl.cross(l_acc) + l.cross(&dl_acc)) * inv_l2
             + l.cross(l_acc) * d_inv_l2
             - d_omega2 * c2
             - omega2 * dc2;
-        let dq_w = mass_w * (z_cross(&dw).dot(&(cw_acc - *g)) * 0.5 + s_cw.dot(&(dt_acc * 0.5)))
-            + iz * d_th_dd;
-        let df_l = (dt_acc + dl_acc * 0.5) * *mass_l;
+        let dq_w = *mass_w * (z_cross(&dw).dot(&(cw_acc - *g)) * half + s_cw.dot(&(dt_acc * half)))
+            + *iz * d_th_dd;
+        let df_l = (dt_acc + dl_acc * half) * *mass_l;
         let dn_l = d_omega2_dot * *it;
-        let du = (dl * 0.5).cross(f_l) + cl.cross(&df_l) + dn_l;
+        let du = (dl * half).cross(f_l) + cl.cross(&df_l) + dn_l;
         let dp_ = du.cross(l) + u.cross(&dl);
         let dap = if TURN {
             da.cross(p) + a.cross(&dp_)
@@ -427,5 +394,85 @@ impl Leg {
         let ds_f = dq_w + z_triple(&dw, f_l) + z_triple(w, &df_l);
         let df = dr * *s_f + r * ds_f + djv * inv_l2 + jv * d_inv_l2;
         (df, dr, d_th_d)
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::types::Vec3;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Two legs side by side give each leg's own tangents bit for bit (lane 0 leg 2k, lane 1
+    /// leg 2k + 1), for every kind of direction and for the rate columns.
+    #[test]
+    fn paired_legs_give_each_legs_scalar_tangents_bit_for_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let kp = KinematicParams::nominal();
+        let mut checked = 0;
+        for _ in 0..20 {
+            let mut u = |s: f64| Vec6::from_fn(|_, _| s * rng.random_range(-1.0..1.0));
+            let pose = Vec6::new(0.0, 0.0, 0.12, 0.0, 0.0, 0.0) + u(0.02);
+            let (pose_dot, pose_ddot, dth) = (u(0.5), u(3.0), u(2.0));
+            let (de, dphi, dv, dvd) = (u(1.0), u(1.0), u(1.0), u(1.0));
+            let mut dp = DynamicParams::nominal();
+            dp.links[2].mass *= 1.3;
+            dp.wrenches[5].mass *= 0.7;
+            let geom = LegGeometry::at_pose(&kp, &pose).unwrap();
+            let (v, v_dot) = twist_and_rate(&pose, &pose_dot, &pose_ddot);
+            let g = Vec3::new(0.3, -0.2, -9.81);
+            let body = Body {
+                v,
+                v_dot,
+                e_dot: top(&v),
+                omega: bottom(&v),
+                omega_dot: bottom(&v_dot),
+                g,
+            };
+            let d = Direction {
+                e: top(&de),
+                phi: top(&dphi),
+                v: dv,
+                v_dot: dvd,
+            };
+            let split = |d: &Direction<f64>| Direction {
+                e: d.e.splat(),
+                phi: d.phi.splat(),
+                v: d.v.splat(),
+                v_dot: d.v_dot.splat(),
+            };
+            let body2 = Body {
+                v: v.splat(),
+                v_dot: v_dot.splat(),
+                e_dot: body.e_dot.splat(),
+                omega: body.omega.splat(),
+                omega_dot: body.omega_dot.splat(),
+                g: g.splat(),
+            };
+            for k in 0..3 {
+                let pair = Leg::pair(&geom, &dp, k, (&v, &v_dot), &g).unwrap();
+                let dth2 = Pair::new(dth[2 * k], dth[2 * k + 1]);
+                for lane in 0..2 {
+                    let leg = Leg::at(&geom, &dp, 2 * k + lane, &v, &v_dot, &g).unwrap();
+                    let one = leg.direction::<true, true>(&body, &d, dth[2 * k + lane]);
+                    let two = pair.direction::<true, true>(&body2, &split(&d), dth2);
+                    assert_eq!(one.0, lanes::lane(&two.0, lane));
+                    assert_eq!(one.1, lanes::lane(&two.1, lane));
+                    assert_eq!(one.2.to_bits(), two.2.get(lane).to_bits());
+                    let one = leg.direction::<false, false>(&body, &d, dth[2 * k + lane]);
+                    let two = pair.direction::<false, false>(&body2, &split(&d), dth2);
+                    assert_eq!(one.0, lanes::lane(&two.0, lane));
+                    let one = leg.column(&body.e_dot, &body.omega, &dv, &dvd);
+                    let (e2, w2) = (body.e_dot.splat(), body.omega.splat());
+                    let two = pair.column(&e2, &w2, &dv.splat(), &dvd.splat());
+                    assert_eq!(one, lanes::lane(&two, lane));
+                    assert!(one.amax() > 0.0);
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 120);
     }
 }
