@@ -107,7 +107,7 @@ fn directions(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction<f64>
 /// ∂(J_ad ν) at ν held: the platform's and the load's part from [`Self::new`], each pair of legs'
 /// from [`Self::add_pair`] (legs 0 to 5 in turn), the sums from [`Self::finish`].
 pub(super) struct PoseTangents {
-    dirs: [Direction<Pair>; 6],
+    dirs: [Direction<f64>; 6],
     body: Body<Pair>,
     nu: Option<Vector6<Pair>>,
     b: Mat6,
@@ -129,17 +129,17 @@ impl PoseTangents {
         let omega_dot = bottom(&v_dot);
         let dirs = directions(&geom.pose, pose_dot, pose_ddot);
         let ip = platform_inertia(&geom.rot, &dp.platform);
-        let ip_omega = ip * omega;
+        let (ip_omega, ip_omega_dot) = (ip * omega, ip * omega_dot);
         let mut b = Mat6::zeros();
         for (c, d) in dirs.iter().enumerate() {
             let (d_omega, d_omega_dot) = (bottom(&d.v), bottom(&d.v_dot));
-            let sx = d.phi.cross_matrix();
-            let d_ip = sx * ip - ip * sx;
+            // ∂I_p = [δφ]× I_p − I_p [δφ]×, applied to vectors only.
+            let d_ip = |x: &Vec3, ip_x: &Vec3| d.phi.cross(ip_x) - ip * d.phi.cross(x);
             let f_lin = top(&d.v_dot) * dp.platform.mass;
-            let f_ang = d_ip * omega_dot
+            let f_ang = d_ip(&omega_dot, &ip_omega_dot)
                 + ip * d_omega_dot
                 + d_omega.cross(&ip_omega)
-                + omega.cross(&(d_ip * omega + ip * d_omega));
+                + omega.cross(&(d_ip(&omega, &ip_omega) + ip * d_omega));
             let mut f = stack(&f_lin, &f_ang);
             if let Some(load) = load {
                 f += load.force_pose_tangent(&v, &v_dot, g, &d.phi, &d.v, &d.v_dot);
@@ -147,12 +147,7 @@ impl PoseTangents {
             b.set_column(c, &f);
         }
         PoseTangents {
-            dirs: dirs.map(|d| Direction {
-                e: d.e.splat(),
-                phi: d.phi.splat(),
-                v: d.v.splat(),
-                v_dot: d.v_dot.splat(),
-            }),
+            dirs,
             body: Body {
                 v: v.splat(),
                 v_dot: v_dot.splat(),
@@ -174,6 +169,12 @@ impl PoseTangents {
         let (i, j) = (2 * k, 2 * k + 1);
         let tau = Pair::new(tau_rigid[i], tau_rigid[j]);
         for (c, d) in self.dirs.iter().enumerate() {
+            let d = &Direction {
+                e: d.e.splat(),
+                phi: d.phi.splat(),
+                v: d.v.splat(),
+                v_dot: d.v_dot.splat(),
+            };
             let dth = Pair::new(j_theta[(i, c)], j_theta[(j, c)]);
             // The translations move neither the orientation nor the twist; the yaw turns the
             // platform at an unchanged twist: their zero terms skipped (the sums are the same).

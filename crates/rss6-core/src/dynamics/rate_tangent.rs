@@ -57,8 +57,8 @@ pub(super) fn twist_rate_directions(pose: &Vec6, pose_dot: &Vec6) -> (Mat6, Mat6
 pub(super) struct RateTangents {
     e_dot: Vector3<Pair>,
     omega: Vector3<Pair>,
-    dv: [Vector6<Pair>; 6],
-    dvd: [Vector6<Pair>; 6],
+    dv: Mat6,
+    dvd: Mat6,
     pub(super) out: Mat6,
 }
 
@@ -88,8 +88,8 @@ impl RateTangents {
         RateTangents {
             e_dot: e_dot.splat(),
             omega: omega.splat(),
-            dv: core::array::from_fn(|c| dv.column(c).into_owned().splat()),
-            dvd: core::array::from_fn(|c| dvd.column(c).into_owned().splat()),
+            dv: *dv,
+            dvd: *dvd,
             out,
         }
     }
@@ -97,7 +97,9 @@ impl RateTangents {
     /// Adds the next two legs (`leg`, side by side).
     pub(super) fn add_pair(&mut self, leg: &Leg<Pair>) {
         for c in 0..6 {
-            let d_f = leg.column(&self.e_dot, &self.omega, &self.dv[c], &self.dvd[c]);
+            let d_v = self.dv.column(c).into_owned().splat();
+            let d_vd = self.dvd.column(c).into_owned().splat();
+            let d_f = leg.column(&self.e_dot, &self.omega, &d_v, &d_vd);
             for lane in 0..2 {
                 let mut col = self.out.column_mut(c);
                 col += lanes::lane(&d_f, lane);
