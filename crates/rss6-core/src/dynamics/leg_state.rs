@@ -175,7 +175,9 @@ impl Leg<f64> {
 }
 
 impl Leg<Pair> {
-    /// Legs 2k and 2k + 1 side by side at the twist v, its rate v̇ and gravity g.
+    /// Legs 2k and 2k + 1 side by side at the twist v, its rate v̇ and gravity g (inlined: its
+    /// result is too big to copy).
+    #[inline(always)]
     pub(super) fn pair(
         geom: &LegGeometry,
         dp: &DynamicParams,
