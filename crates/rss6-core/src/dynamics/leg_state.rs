@@ -1,14 +1,14 @@
 //! Each leg's kinematics and forces at one state, shared by the pose and rate tangents and
 //! held two legs at a time ([`Pair`] lanes).
 
-use super::lanes::{Lane, Lanes, Pair};
+use super::lanes::{self, Lane, Lanes, Pair};
 use super::rate_tangent::{bottom, stack, top};
 use super::{link_transverse_inertia, wrench_axial_inertia, z_cross, z_triple};
 use crate::error::Result;
 use crate::jacobian::LegGeometry;
 use crate::leg_jacobians::leg_m;
 use crate::params::DynamicParams;
-use crate::types::{Vec3, Vec6};
+use crate::types::{Mat6, Vec3, Vec6, LEGS};
 use nalgebra::{Vector3, Vector6};
 
 /// One leg's kinematics and forces at the state (the names of
@@ -188,4 +188,157 @@ impl Leg<Pair> {
         let at = |i| Leg::at(geom, dp, i, v, v_dot, g);
         Ok(Leg::zip(&at(2 * k)?, &at(2 * k + 1)?))
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Vector (Newton–Euler) path: body accelerations of one leg (or two side by side).
+
+/// Accelerations of one leg's bodies (`T = f64`) or two legs' ([`Pair`]) for twist v and twist
+/// rate v̇.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LegAcc<T: Lane = f64> {
+    /// Row i of J_ad.
+    pub(crate) r: Vector6<T>,
+    pub(crate) theta_dot: T,
+    pub(crate) theta_ddot: T,
+    pub(crate) w: Vector3<T>,
+    pub(crate) l: Vector3<T>,
+    pub(crate) a: Vector3<T>,
+    pub(crate) inv_l2: T,
+    /// ŝ × c_w (c_w = w/2).
+    pub(crate) s_cw: Vector3<T>,
+    /// c̈_w (wrench centre-of-mass acceleration).
+    pub(crate) cw_acc: Vector3<T>,
+    /// c̈_l (link centre-of-mass acceleration).
+    pub(crate) cl_acc: Vector3<T>,
+    /// ω̇_2.
+    pub(crate) omega2_dot: Vector3<T>,
+}
+
+impl<T: Lane> LegAcc<T> {
+    /// J_bd,iᵀ u for a 3-vector u (no matrix formed).
+    #[inline]
+    pub(crate) fn jbd_t(&self, u: &Vector3<T>) -> Vector6<T> {
+        let p = u.cross(&self.l);
+        let ap = self.a.cross(&p);
+        let k = z_triple(&p, &self.w);
+        (stack(&p, &ap) + self.r * k) * self.inv_l2
+    }
+
+    /// Generalised force of a force f at the link's centre of mass: J_buᵀ f.
+    #[inline]
+    pub(crate) fn jbu_t(&self, f: &Vector3<T>) -> Vector6<T> {
+        let cl = self.l * T::from(0.5);
+        self.r * z_triple(&self.w, f) + self.jbd_t(&cl.cross(f))
+    }
+
+    /// The accelerations from the leg vectors w, l, a, 1/m (m = (w × l)·ẑ, checked by the
+    /// caller) and 1/‖l‖².
+    #[inline(always)]
+    fn from_vectors(
+        (w, l, a): (Vector3<T>, Vector3<T>, Vector3<T>),
+        (inv_m, inv_l2): (T, T),
+        v: &Vector6<T>,
+        v_dot: &Vector6<T>,
+    ) -> Self {
+        let (e_dot, omega) = (top(v), bottom(v));
+        let (e_ddot, omega_dot) = (top(v_dot), bottom(v_dot));
+        let al = a.cross(&l);
+        let r = stack(&l, &al) * inv_m;
+        let theta_dot = r.dot(v);
+        let s_w = z_cross(&w);
+        let w_dot = s_w * theta_dot;
+        let a_dot = omega.cross(&a);
+        let l_dot = e_dot + a_dot - w_dot;
+        let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
+        let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
+        // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
+        let theta_ddot =
+            r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
+        // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
+        let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
+        let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
+        // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
+        let omega2 = l.cross(&l_dot) * inv_l2;
+        let two = T::from(2.0);
+        let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * (two * l.dot(&l_dot) * inv_l2);
+        let half = T::from(0.5);
+        LegAcc {
+            r,
+            theta_dot,
+            theta_ddot,
+            w,
+            l,
+            a,
+            inv_l2,
+            s_cw: s_w * half,
+            cw_acc: t_acc * half,
+            cl_acc: t_acc + l_acc * half,
+            omega2_dot,
+        }
+    }
+}
+
+/// A leg's vectors (w, l, a) and (1/m, 1/‖l‖²).
+type LegVectors = ((Vec3, Vec3, Vec3), (f64, f64));
+
+/// Leg i's vectors w, l, a and (1/m, 1/‖l‖²); errors at a type I singularity (m = 0).
+#[inline(always)]
+fn leg_vectors(geom: &LegGeometry, i: usize) -> Result<LegVectors> {
+    let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
+    let m = leg_m(&w, &l)?;
+    Ok(((w, l, a), (1.0 / m, 1.0 / l.norm_squared())))
+}
+
+/// Accelerations of leg i's bodies for twist v and twist rate v̇.
+#[inline(always)]
+pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
+    let (vectors, inverses) = leg_vectors(geom, i)?;
+    Ok(LegAcc::from_vectors(vectors, inverses, v, v_dot))
+}
+
+/// Adds every leg's part of the twist-space force Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g) to `f`
+/// (legs 0 to 5 in turn, two at a time in [`Pair`] lanes), and writes θ̇ and J_adᵀ (its columns are
+/// the rows J_ad,i).
+pub(super) fn add_leg_forces(
+    geom: &LegGeometry,
+    dp: &DynamicParams,
+    (v, v_dot): (&Vec6, &Vec6),
+    g: &Vec3,
+    f: &mut Vec6,
+    theta_dot: &mut Vec6,
+    j_ad_t: &mut Mat6,
+) -> Result<()> {
+    let (v2, v_dot2, g2) = (v.splat(), v_dot.splat(), g.splat());
+    for k in 0..LEGS / 2 {
+        let (i, j) = (2 * k, 2 * k + 1);
+        let ((wi, li, ai), (mi, l2i)) = leg_vectors(geom, i)?;
+        let ((wj, lj, aj), (mj, l2j)) = leg_vectors(geom, j)?;
+        let vectors = (
+            Lanes::zip(&wi, &wj),
+            Lanes::zip(&li, &lj),
+            Lanes::zip(&ai, &aj),
+        );
+        let inverses = (Pair::new(mi, mj), Pair::new(l2i, l2j));
+        let ka = LegAcc::from_vectors(vectors, inverses, &v2, &v_dot2);
+        let (wb, lb) = (
+            (&dp.wrenches[i], &dp.wrenches[j]),
+            (&dp.links[i], &dp.links[j]),
+        );
+        let mass_w = Pair::new(wb.0.mass, wb.1.mass);
+        let iz = Pair::new(wrench_axial_inertia(wb.0), wrench_axial_inertia(wb.1));
+        let mass_l = Pair::new(lb.0.mass, lb.1.mass);
+        let it = Pair::new(link_transverse_inertia(lb.0), link_transverse_inertia(lb.1));
+        let q_w = mass_w * ka.s_cw.dot(&(ka.cw_acc - g2)) + iz * ka.theta_ddot;
+        let f_l = (ka.cl_acc - g2) * mass_l;
+        let n_l = ka.omega2_dot * it;
+        let cl = ka.l * Pair::from(0.5);
+        let part = ka.r * (q_w + z_triple(&ka.w, &f_l)) + ka.jbd_t(&(cl.cross(&f_l) + n_l));
+        for (lane, leg) in [i, j].into_iter().enumerate() {
+            theta_dot[leg] = ka.theta_dot.get(lane);
+            j_ad_t.set_column(leg, &lanes::lane(&ka.r, lane));
+            *f += lanes::lane(&part, lane);
+        }
+    }
+    Ok(())
 }

@@ -81,6 +81,7 @@ pub use self::integration::{
 pub use self::joint_rates::{
     forward_dynamics_by_joint_rates, forward_dynamics_by_joint_rates_from,
 };
+pub(crate) use self::leg_state::leg_acc;
 pub use self::load::{Environment, PlatformLoad};
 pub use self::matrices::{
     coriolis, coriolis_twist, dynamics_terms, dynamics_terms_with_env, dynamics_terms_with_gravity,
@@ -88,7 +89,6 @@ pub use self::matrices::{
     kinetic_energy, kinetic_energy_with_env, mass_matrix, mass_matrix_twist, mass_matrix_with_env,
     potential_energy_with_env, potential_energy_with_gravity, DynamicsTerms,
 };
-pub(crate) use self::newton_euler::leg_acc;
 pub use self::newton_euler::{
     forward_dynamics, forward_dynamics_with_env, forward_dynamics_with_gravity, inverse_dynamics,
     inverse_dynamics_derivatives_with_env, inverse_dynamics_with_env,

@@ -1,104 +1,18 @@
 //! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
 //! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
 
-use super::leg_state::Leg;
+use super::leg_state::{add_leg_forces, Leg};
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
 use super::pose_tangent::{stepped_pose_columns, PoseTangents};
 use super::rate_tangent::{twist_rate_directions, RateTangents};
-use super::{check_finite, check_state, joint_friction, twist_and_rate, z_cross, z_triple};
-use super::{link_transverse_inertia, platform_inertia, wrench_axial_inertia, GRAVITY};
+use super::{check_finite, check_state, joint_friction, twist_and_rate};
+use super::{platform_inertia, GRAVITY};
 use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
-use crate::leg_jacobians::leg_m;
 use crate::params::{DynamicParams, KinematicParams};
 use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
 use crate::types::{Mat6, Vec3, Vec6, LEGS};
-
-// ---------------------------------------------------------------------------------------------
-// Vector (Newton–Euler) path: body accelerations of one leg.
-
-/// Accelerations of one leg's bodies for twist v and twist rate v̇.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct LegAcc {
-    /// Row i of J_ad.
-    pub(crate) r: Vec6,
-    pub(crate) theta_dot: f64,
-    pub(crate) theta_ddot: f64,
-    pub(crate) w: Vec3,
-    pub(crate) l: Vec3,
-    pub(crate) a: Vec3,
-    pub(crate) inv_l2: f64,
-    /// ŝ × c_w (c_w = w/2).
-    pub(crate) s_cw: Vec3,
-    /// c̈_w (wrench centre-of-mass acceleration).
-    pub(crate) cw_acc: Vec3,
-    /// c̈_l (link centre-of-mass acceleration).
-    pub(crate) cl_acc: Vec3,
-    /// ω̇_2.
-    pub(crate) omega2_dot: Vec3,
-}
-
-impl LegAcc {
-    /// J_bd,iᵀ u for a 3-vector u (no matrix formed).
-    #[inline]
-    pub(crate) fn jbd_t(&self, u: &Vec3) -> Vec6 {
-        let p = u.cross(&self.l);
-        let ap = self.a.cross(&p);
-        let k = z_triple(&p, &self.w);
-        (Vec6::new(p[0], p[1], p[2], ap[0], ap[1], ap[2]) + self.r * k) * self.inv_l2
-    }
-
-    /// Generalised force of a force f at the link's centre of mass: J_buᵀ f.
-    #[inline]
-    pub(crate) fn jbu_t(&self, f: &Vec3) -> Vec6 {
-        let cl = self.l * 0.5;
-        self.r * z_triple(&self.w, f) + self.jbd_t(&cl.cross(f))
-    }
-}
-
-#[inline(always)]
-pub(crate) fn leg_acc(geom: &LegGeometry, i: usize, v: &Vec6, v_dot: &Vec6) -> Result<LegAcc> {
-    let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
-    let e_dot = Vec3::new(v[0], v[1], v[2]);
-    let omega = Vec3::new(v[3], v[4], v[5]);
-    let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
-    let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
-    let m = leg_m(&w, &l)?;
-    let inv_m = 1.0 / m;
-    let al = a.cross(&l);
-    let r = Vec6::new(l[0], l[1], l[2], al[0], al[1], al[2]) * inv_m;
-    let theta_dot = r.dot(v);
-    let s_w = z_cross(&w);
-    let w_dot = s_w * theta_dot;
-    let a_dot = omega.cross(&a);
-    let l_dot = e_dot + a_dot - w_dot;
-    let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
-    let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-    // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
-    let theta_ddot =
-        r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
-    // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
-    let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
-    let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
-    let inv_l2 = 1.0 / l.norm_squared();
-    // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
-    let omega2 = l.cross(&l_dot) * inv_l2;
-    let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * (2.0 * l.dot(&l_dot) * inv_l2);
-    Ok(LegAcc {
-        r,
-        theta_dot,
-        theta_ddot,
-        w,
-        l,
-        a,
-        inv_l2,
-        s_cw: s_w * 0.5,
-        cw_acc: t_acc * 0.5,
-        cl_acc: t_acc + l_acc * 0.5,
-        omega2_dot,
-    })
-}
 
 /// Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g): the twist-space generalised force, i.e. J_adᵀ(τ_a − τ_f).
 /// Also returns θ̇ and J_adᵀ (its columns are the rows J_ad,i).
@@ -118,17 +32,7 @@ pub(super) fn twist_force(
     let mut f = Vec6::new(f_lin[0], f_lin[1], f_lin[2], f_ang[0], f_ang[1], f_ang[2]);
     let mut theta_dot = Vec6::zeros();
     let mut j_ad_t = Mat6::zeros();
-    for i in 0..LEGS {
-        let k = leg_acc(geom, i, v, v_dot)?;
-        theta_dot[i] = k.theta_dot;
-        j_ad_t.set_column(i, &k.r);
-        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
-        let q_w = wb.mass * k.s_cw.dot(&(k.cw_acc - g)) + wrench_axial_inertia(wb) * k.theta_ddot;
-        let f_l = (k.cl_acc - g) * lb.mass;
-        let n_l = k.omega2_dot * link_transverse_inertia(lb);
-        let cl = k.l * 0.5;
-        f += k.r * (q_w + z_triple(&k.w, &f_l)) + k.jbd_t(&(cl.cross(&f_l) + n_l));
-    }
+    add_leg_forces(geom, dp, (v, v_dot), g, &mut f, &mut theta_dot, &mut j_ad_t)?;
     Ok((f, theta_dot, j_ad_t))
 }
 
