@@ -64,6 +64,13 @@ impl num_traits::Zero for Pair {
     }
 }
 
+impl num_traits::One for Pair {
+    #[inline(always)]
+    fn one() -> Pair {
+        Pair(wide::f64x2::ONE)
+    }
+}
+
 impl From<f64> for Pair {
     /// The same value in both lanes.
     #[inline(always)]
@@ -140,4 +147,11 @@ impl<T> Lane for T where
         + MulAssign
         + From<f64>
 {
+}
+
+/// [u]×, the matrix of u × · (nalgebra's `cross_matrix`, which wants a real field).
+#[inline(always)]
+pub(super) fn cross_matrix<T: Lane>(u: &nalgebra::Vector3<T>) -> nalgebra::Matrix3<T> {
+    let z = T::zero();
+    nalgebra::Matrix3::new(z, -u[2], u[1], u[2], z, -u[0], -u[1], u[0], z)
 }

@@ -1,6 +1,7 @@
 //! The matrix path: M, C, G, τ_f in twist coordinates (eq. 3.41, 3.47) and in χ coordinates (eq. 6.2,
 //! 6.4), all terms in one pass ([`dynamics_terms`]), and the energies used by the tests.
 
+use super::lanes::{cross_matrix, Lanes, Pair};
 use super::load::{Environment, LoadAt};
 use super::newton_euler::twist_force;
 use super::{check_finite, joint_friction, link_transverse_inertia, platform_inertia};
@@ -11,6 +12,8 @@ use crate::leg_jacobians::{leg_kin, leg_m, LegKin};
 use crate::params::{DynamicParams, KinematicParams};
 use crate::pose::{twist_jacobian, twist_jacobian_dot};
 use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
+use nalgebra::{Matrix3, Vector3};
+use num_traits::Zero;
 
 // ---------------------------------------------------------------------------------------------
 // Matrix path: M, C, G in twist coordinates.
@@ -34,26 +37,51 @@ pub(super) fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Resul
     let mut tl = Mat3::from_diagonal_element(dp.platform.mass);
     let mut tr = Mat3::zeros();
     let mut br = platform_inertia(&geom.rot, &dp.platform);
-    for i in 0..LEGS {
-        let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
-        let inv_m = 1.0 / leg_m(&w, &l)?;
-        let inv_l2 = 1.0 / l.norm_squared();
-        let ws = Vec3::new(w[1], -w[0], 0.0); // w × ŝ
+    // Two legs at a time ([`Pair`] lanes); the blocks still sum the legs in order 0..6.
+    for k in 0..LEGS / 2 {
+        let (i, j) = (2 * k, 2 * k + 1);
+        let leg = |i: usize| -> Result<(Vec3, Vec3, Vec3, f64, f64, f64, f64, f64)> {
+            let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
+            let inv_m = 1.0 / leg_m(&w, &l)?;
+            let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+            let (mw, iz) = (wb.mass, wrench_axial_inertia(wb));
+            Ok((w, l, a, inv_m, 1.0 / l.norm_squared(), mw, iz, lb.mass))
+        };
+        let (wi, li, ai, mi, l2i, mwi, izi, mli) = leg(i)?;
+        let (wj, lj, aj, mj, l2j, mwj, izj, mlj) = leg(j)?;
+        let (w, l, a) = (
+            Lanes::zip(&wi, &wj),
+            Lanes::zip(&li, &lj),
+            Lanes::zip(&ai, &aj),
+        );
+        let (inv_m, inv_l2) = (Pair::new(mi, mj), Pair::new(l2i, l2j));
+        let (mass_w, iz, mass_l) = (
+            Pair::new(mwi, mwj),
+            Pair::new(izi, izj),
+            Pair::new(mli, mlj),
+        );
+        let it = Pair::new(
+            link_transverse_inertia(&dp.links[i]),
+            link_transverse_inertia(&dp.links[j]),
+        );
+        let ws = Vector3::new(w[1], -w[0], Pair::zero()); // w × ŝ
         let q = l.cross(&ws);
-        let lx = l.cross_matrix();
+        let lx = cross_matrix(&l);
         let d = (lx + q * (l.transpose() * inv_m)) * inv_l2;
-        let u = ws * (l.transpose() * -inv_m) - lx * d * 0.5;
-        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        let u = ws * (l.transpose() * -inv_m) - lx * d * Pair::from(0.5);
         // |ŝ × c_w|² with c_w = w/2.
-        let s_cw2 = 0.25 * (w[0] * w[0] + w[1] * w[1]);
-        let iw = (wb.mass * s_cw2 + wrench_axial_inertia(wb)) * inv_m * inv_m;
-        let n = l * l.transpose() * iw
-            + u.tr_mul(&u) * lb.mass
-            + d.tr_mul(&d) * link_transverse_inertia(lb);
-        let b = -(n * a.cross_matrix());
-        tl += n;
-        tr += b;
-        br += a.cross_matrix() * b;
+        let s_cw2 = Pair::from(0.25) * (w[0] * w[0] + w[1] * w[1]);
+        let iw = (mass_w * s_cw2 + iz) * inv_m * inv_m;
+        let n = l * l.transpose() * iw + u.tr_mul(&u) * mass_l + d.tr_mul(&d) * it;
+        let ax = cross_matrix(&a);
+        let b = -(n * ax);
+        let ab = ax * b;
+        for lane in 0..2 {
+            let at = |m: &Matrix3<Pair>| m.map(|p| p.get(lane));
+            tl += at(&n);
+            tr += at(&b);
+            br += at(&ab);
+        }
     }
     let mut m = Mat6::zeros();
     m.fixed_view_mut::<3, 3>(0, 0).copy_from(&tl);
