@@ -40,26 +40,18 @@ pub(super) fn twist_mass_matrix(geom: &LegGeometry, dp: &DynamicParams) -> Resul
     // Two legs at a time ([`Pair`] lanes); the blocks still sum the legs in order 0..6.
     for k in 0..LEGS / 2 {
         let (i, j) = (2 * k, 2 * k + 1);
-        let leg = |i: usize| -> Result<(Vec3, Vec3, Vec3, f64, f64, f64, f64, f64)> {
+        // A leg's vectors, then 1/m, 1/‖l‖², the wrench's mass and axial inertia, the link's mass.
+        let leg = |i: usize| -> Result<([Vec3; 3], [f64; 5])> {
             let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
             let inv_m = 1.0 / leg_m(&w, &l)?;
             let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
             let (mw, iz) = (wb.mass, wrench_axial_inertia(wb));
-            Ok((w, l, a, inv_m, 1.0 / l.norm_squared(), mw, iz, lb.mass))
+            Ok(([w, l, a], [inv_m, 1.0 / l.norm_squared(), mw, iz, lb.mass]))
         };
-        let (wi, li, ai, mi, l2i, mwi, izi, mli) = leg(i)?;
-        let (wj, lj, aj, mj, l2j, mwj, izj, mlj) = leg(j)?;
-        let (w, l, a) = (
-            Lanes::zip(&wi, &wj),
-            Lanes::zip(&li, &lj),
-            Lanes::zip(&ai, &aj),
-        );
-        let (inv_m, inv_l2) = (Pair::new(mi, mj), Pair::new(l2i, l2j));
-        let (mass_w, iz, mass_l) = (
-            Pair::new(mwi, mwj),
-            Pair::new(izi, izj),
-            Pair::new(mli, mlj),
-        );
+        let (vi, si) = leg(i)?;
+        let (vj, sj) = leg(j)?;
+        let [w, l, a]: [Vector3<Pair>; 3] = core::array::from_fn(|k| Lanes::zip(&vi[k], &vj[k]));
+        let [inv_m, inv_l2, mass_w, iz, mass_l] = core::array::from_fn(|k| Pair::new(si[k], sj[k]));
         let it = Pair::new(
             link_transverse_inertia(&dp.links[i]),
             link_transverse_inertia(&dp.links[j]),
