@@ -19,6 +19,9 @@ pub(super) struct SensState {
     pub command: Sens,
     pub v_integral: Sens,
     pub last_frame: Option<Sens>,
+    /// Scratch space of the RK4 step's sensitivities (stage χ, χ̇, χ̈ and the two weighted sums),
+    /// allocated once per run.
+    pub rk4: [Sens; 5],
 }
 
 impl SensState {
@@ -34,6 +37,7 @@ impl SensState {
             command: z(),
             v_integral: z(),
             last_frame: None,
+            rk4: [z(), z(), z(), z(), z()],
             columns,
             pot_scale,
         }

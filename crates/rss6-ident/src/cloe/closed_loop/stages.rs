@@ -220,41 +220,46 @@ impl<'a> StageModel<'a> {
     }
 }
 
-/// The RK4 step of the sensitivities (s_χ, s_χ̇) in `s`: the same arithmetic, in the same order,
-/// as the step of the state (χ̈'s sensitivity at a stage is fxi + F_χ s_χ + F_χ̇ s_χ̇ + F_τ s_τ,
-/// zero for a stage without derivatives). The columns are independent, so each runs through all
-/// four stages with its 6-vectors held in registers: no pass over a whole 6 × p block per stage.
+/// The RK4 step of the sensitivities (s_χ, s_χ̇) in `s`, in place in its scratch space: the same
+/// arithmetic, in the same order, as the step of the state (χ̈'s sensitivity at a stage is
+/// fxi + F_χ s_χ + F_χ̇ s_χ̇ + F_τ s_τ, zero for a stage without derivatives).
 pub(super) fn propagate(s: &mut SensState, stages: [&Stage; 4], s_tau: &Sens, dt: f64) {
-    let jacs = stages.map(|st| st.jac.as_ref());
-    let weights = [(0.5 * dt, 2.0), (0.5 * dt, 2.0), (dt, 1.0)];
-    let sixth = dt / 6.0;
-    let cols = s.p.column_iter_mut().zip(s.v.column_iter_mut());
-    for (c, ((mut pc, mut vc), t)) in cols.zip(s_tau.column_iter()).enumerate() {
-        let (p0, v0): (Vec6, Vec6) = (pc.clone_owned(), vc.clone_owned());
-        let da_at = |k: usize, p: &Vec6, v: &Vec6| -> Vec6 {
-            match jacs[k] {
-                Some(j) => {
-                    let mut d: Vec6 = j.fxi.column(c).into_owned();
-                    d += j.fp * p;
-                    d += j.fv * v;
-                    d += j.ft * t;
-                    d
-                }
-                None => Vec6::zeros(),
+    let [sp, sv, da, acc_p, acc_v] = &mut s.rk4;
+    let (sp0, sv0) = (&s.p, &s.v);
+    let stage_da = |da: &mut Sens, st: &Stage, sp: &Sens, sv: &Sens| match &st.jac {
+        Some(j) => {
+            // Column by column in one pass (the products of `mul_add`, the same sums).
+            let cols = da.column_iter_mut().zip(j.fxi.column_iter());
+            let cols = cols.zip(
+                sp.column_iter()
+                    .zip(sv.column_iter())
+                    .zip(s_tau.column_iter()),
+            );
+            for ((mut d, x), ((p, v), t)) in cols {
+                d.copy_from(&x);
+                d += j.fp * p;
+                d += j.fv * v;
+                d += j.ft * t;
             }
-        };
-        let mut da = da_at(0, &p0, &v0);
-        let (mut acc_p, mut acc_v) = (v0, da);
-        let mut sv = v0;
-        // Stages 2 and 3 at half a step along the previous stage's rates, stage 4 at a full step.
-        for (k, (h, w)) in weights.into_iter().enumerate() {
-            let sp = p0.zip_map(&sv, |a, b| a + b * h);
-            sv = v0.zip_map(&da, |a, b| a + b * h);
-            acc_p.zip_apply(&sv, |x, b| *x += b * w);
-            da = da_at(k + 1, &sp, &sv);
-            acc_v.zip_apply(&da, |x, b| *x += b * w);
         }
-        pc.zip_apply(&acc_p, |x, b| *x += b * sixth);
-        vc.zip_apply(&acc_v, |x, b| *x += b * sixth);
+        None => da.fill(0.0),
+    };
+    stage_da(da, stages[0], sp0, sv0);
+    acc_p.copy_from(sv0);
+    acc_v.copy_from(da);
+    // Stages 2 and 3 at half a step along the previous stage's rates, stage 4 at a full step.
+    for (k, (h, w)) in [(0.5 * dt, 2.0), (0.5 * dt, 2.0), (dt, 1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let prev_sv = if k == 0 { sv0 } else { &*sv };
+        sp.zip_zip_apply(sp0, prev_sv, |x, a, b| *x = a + b * h);
+        sv.zip_zip_apply(sv0, da, |x, a, b| *x = a + b * h);
+        acc_p.zip_apply(sv, |x, b| *x += b * w);
+        stage_da(da, stages[k + 1], sp, sv);
+        acc_v.zip_apply(da, |x, b| *x += b * w);
     }
+    let sixth = dt / 6.0;
+    s.p.zip_apply(acc_p, |x, b| *x += b * sixth);
+    s.v.zip_apply(acc_v, |x, b| *x += b * sixth);
 }
