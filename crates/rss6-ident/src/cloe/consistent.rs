@@ -170,4 +170,53 @@ impl Consistent {
         }
         d
     }
+
+    /// The rows of [`Self::jacobian`] for the columns `cols` of A (each one of
+    /// [`Self::a_columns`]), in their order.
+    pub(crate) fn jacobian_rows(&self, psi: &[f64], cols: &[usize]) -> DMatrix<f64> {
+        let all = Self::a_columns();
+        let rows: Vec<usize> = (cols.iter())
+            .filter_map(|c| all.iter().position(|a| a == c))
+            .collect();
+        self.jacobian(psi).select_rows(&rows)
+    }
+
+    /// The columns of A (of [`Self::a_columns`]) that the quantities ψ_j, j ∈ `active`, move:
+    /// ∂A/∂ψ's entries are exp(ψ_k) or a second moment, never zero, so its pattern is the same at
+    /// every ψ.
+    pub(crate) fn columns_moved_by(&self, psi: &[f64], active: &[usize]) -> Vec<usize> {
+        let d = self.jacobian(psi);
+        let all = Self::a_columns();
+        (0..all.len())
+            .filter(|&r| active.iter().any(|&j| d[(r, j)] != 0.0))
+            .filter_map(|r| all.get(r).copied())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::cloe::truth::table_5_2_truth;
+
+    /// Every ψ moves every propagated column; one ψ moves only its own (a second moment two).
+    #[test]
+    fn the_columns_each_quantity_moves() {
+        let cons = Consistent::new(&table_5_2_truth()).unwrap();
+        let psi = cons.psi(&table_5_2_truth()).unwrap();
+        let names = Consistent::names();
+        let at = |n: &str| names.iter().position(|m| m == n).unwrap();
+        let all: Vec<usize> = (0..N_PSI).collect();
+        assert_eq!(cons.columns_moved_by(&psi, &all), Consistent::a_columns());
+        assert_eq!(cons.columns_moved_by(&psi, &[at("platform.m")]), [0]);
+        assert_eq!(cons.columns_moved_by(&psi, &[at("platform.Sxx")]), [2, 3]);
+        assert_eq!(cons.columns_moved_by(&psi, &[at("link2.It")]), [33, 34]);
+        assert_eq!(cons.columns_moved_by(&psi, &[at("ld"), at("fc1")]), [52, 66]);
+        // The rows of ∂A/∂ψ for a subset, in the subset's order.
+        let rows = cons.jacobian_rows(&psi, &[66, 0]);
+        let d = cons.jacobian(&psi);
+        assert_eq!(rows.row(0), d.row(48));
+        assert_eq!(rows.row(1), d.row(0));
+    }
 }

@@ -206,11 +206,11 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     cfg_fast.state_jacobians = super::StateJacobians::PerTick;
     type Rec = Option<Recording>;
     let evaluate_with =
-        |psi: &[f64], jac: bool, fast: bool, rec: Rec, sims: &mut usize| -> Result<Eval> {
-            let a = cons.params(psi);
+        |psi: &[f64], cols: &[usize], fast: bool, rec: Rec, sims: &mut usize| -> Result<Eval> {
+            let (a, jac) = (cons.params(psi), !cols.is_empty());
             let c = if fast { &cfg_fast } else { cfg };
             let (run, recording) =
-                simulate_recorded(c, &a, reference, jac.then_some(&a_cols[..]), rec, !jac)?;
+                simulate_recorded(c, &a, reference, jac.then_some(cols), rec, !jac)?;
             *sims += 1;
             let idx = run.frames_at(&data.t, cfg.dt)?;
             let n = data.t.len();
@@ -226,7 +226,8 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             let rms = sq.map(|v| (v / n as f64).sqrt());
             let g = match (&run.jacobian, jac) {
                 (Some(ja), true) => {
-                    Some(weighted_sensitivity(ja, &idx, &cons.jacobian(psi), &weight))
+                    let dadpsi = cons.jacobian_rows(psi, cols);
+                    Some(weighted_sensitivity(ja, &idx, &dadpsi, &weight))
                 }
                 _ => None,
             };
@@ -257,7 +258,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     // With per-tick sensitivities on, the ones at the guess are per tick too: identifiability is
     // decided on them (their ≈ 10⁻³ error does not move the base set: `base_columns`' tie rule),
     // and the σ come from the exact ones at the stop.
-    let mut cur = evaluate_with(&psi, true, options.per_tick_jacobians, None, &mut sims)?;
+    let mut cur = evaluate_with(&psi, &a_cols, options.per_tick_jacobians, None, &mut sims)?;
     // Whether `cur`'s sensitivities are the exact ones (the final σ need them).
     let mut cur_exact = !options.per_tick_jacobians;
     // Set when a stop found on per-tick sensitivities is refused by the exact ones.
@@ -303,6 +304,8 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
             act
         }
     };
+    // Sensitivities only of the columns of A the active ψ move: the others' would go unused.
+    let moved = cons.columns_moved_by(&psi, &active);
     let unidentifiable: Vec<String> = free
         .iter()
         .copied()
@@ -409,10 +412,10 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                         let other = next.as_ref().map(|t| {
                             scope.spawn(|| {
                                 let mut n = 0;
-                                (evaluate_with(t, false, false, None, &mut n), n)
+                                (evaluate_with(t, &[], false, None, &mut n), n)
                             })
                         });
-                        let e = evaluate_with(&trial, false, false, None, &mut sims);
+                        let e = evaluate_with(&trial, &[], false, None, &mut sims);
                         match other.map(|h| h.join()) {
                             Some(Ok((e10, n))) => (e, Some(e10), n),
                             _ => (e, None, 0),
@@ -468,7 +471,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     };
                     if let Some(r) = rule {
                         let per_tick = !cur_exact;
-                        cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, false, rec.clone(), &mut sims)?;
                         cur_exact = true;
                         // A stop found on per-tick sensitivities stands if the exact ones see less
                         // than one residual variance left to gain (the settled rule's bound);
@@ -486,12 +489,12 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     }
                     iterations += 1;
                     if iterations > options.max_iterations {
-                        cur = evaluate_with(&psi, true, false, rec.clone(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, false, rec.clone(), &mut sims)?;
                         break 'outer;
                     }
                     // Per-tick sensitivities (≈ 10⁻³ relative) until a stop; the exact ones check it.
                     let fast = options.per_tick_jacobians && !exact_only;
-                    cur = evaluate_with(&psi, true, fast, rec, &mut sims)?;
+                    cur = evaluate_with(&psi, &moved, fast, rec, &mut sims)?;
                     cur_exact = !fast;
                     continue 'outer;
                 }
@@ -499,7 +502,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     lambda = next_lambda(&gtg, &gtr, lambda, options.max_log_step, &step);
                     if lambda > 1e12 && !cur_exact {
                         // No step of the per-tick sensitivities lowers Φ: try the exact ones.
-                        cur = evaluate_with(&psi, true, false, cur.recording.take(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, false, cur.recording.take(), &mut sims)?;
                         (cur_exact, exact_only, lambda) = (true, true, options.lambda0);
                         iterations += 1;
                         if iterations > options.max_iterations {
@@ -528,7 +531,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         });
     };
     if !cur_exact {
-        cur = evaluate_with(&psi, true, false, None, &mut sims)?;
+        cur = evaluate_with(&psi, &moved, false, None, &mut sims)?;
     }
     // Relative standard deviations from the exact Jacobian and the residual variance.
     let g = cur
