@@ -212,7 +212,10 @@ mod tests {
         assert_eq!(cons.columns_moved_by(&psi, &[at("platform.m")]), [0]);
         assert_eq!(cons.columns_moved_by(&psi, &[at("platform.Sxx")]), [2, 3]);
         assert_eq!(cons.columns_moved_by(&psi, &[at("link2.It")]), [33, 34]);
-        assert_eq!(cons.columns_moved_by(&psi, &[at("ld"), at("fc1")]), [52, 66]);
+        assert_eq!(
+            cons.columns_moved_by(&psi, &[at("ld"), at("fc1")]),
+            [52, 66]
+        );
         // The rows of ∂A/∂ψ for a subset, in the subset's order.
         let rows = cons.jacobian_rows(&psi, &[66, 0]);
         let d = cons.jacobian(&psi);
