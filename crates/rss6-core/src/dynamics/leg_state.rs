@@ -61,35 +61,28 @@ impl Leg<f64> {
         v_dot: &Vec6,
         g: &Vec3,
     ) -> Result<Self> {
-        let (e_dot, omega) = (top(v), bottom(v));
-        let (e_ddot, omega_dot) = (top(v_dot), bottom(v_dot));
-        let (w, l, a) = (geom.w[i], geom.l[i], geom.a_rel[i]);
-        let inv_m = 1.0 / leg_m(&w, &l)?;
-        let al = a.cross(&l);
-        let r = stack(&l, &al) * inv_m;
-        let th_d = r.dot(v);
-        let s_w = z_cross(&w);
-        let w_dot = s_w * th_d;
-        let a_dot = omega.cross(&a);
-        let l_dot = e_dot + a_dot - w_dot;
-        let m_dot = z_triple(&w_dot, &l) + z_triple(&w, &l_dot);
-        let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
-        let num = l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * th_d;
-        let th_dd = r.dot(v_dot) + num * inv_m;
-        let t_acc = s_w * th_dd + z_cross(&w_dot) * th_d;
-        let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
-        let inv_l2 = 1.0 / l.norm_squared();
-        let omega2 = l.cross(&l_dot) * inv_l2;
-        let c2 = 2.0 * l.dot(&l_dot) * inv_l2;
-        let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * c2;
+        let k = leg_acc(geom, i, v, v_dot)?;
+        let LegTerms {
+            s_w,
+            inv_m,
+            al,
+            w_dot,
+            a_dot,
+            l_dot,
+            m_dot,
+            al_dot,
+            num,
+            l_acc,
+            omega2,
+            c2,
+        } = k.terms;
+        let (w, l, a, r, inv_l2) = (k.w, k.l, k.a, k.r, k.inv_l2);
+        let (th_d, th_dd, s_cw, cw_acc) = (k.theta_dot, k.theta_ddot, k.s_cw, k.cw_acc);
         let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
         let (iz, it) = (wrench_axial_inertia(wb), link_transverse_inertia(lb));
-        let s_cw = s_w * 0.5;
-        let cw_acc = t_acc * 0.5;
-        let cl_acc = t_acc + l_acc * 0.5;
         let q_w = wb.mass * s_cw.dot(&(cw_acc - g)) + iz * th_dd;
-        let f_l = (cl_acc - g) * lb.mass;
-        let n_l = omega2_dot * it;
+        let f_l = (k.cl_acc - g) * lb.mass;
+        let n_l = k.omega2_dot * it;
         let cl = l * 0.5;
         let u = cl.cross(&f_l) + n_l;
         let p = u.cross(&l);
@@ -213,6 +206,26 @@ pub(crate) struct LegAcc<T: Lane = f64> {
     pub(crate) cl_acc: Vector3<T>,
     /// ω̇_2.
     pub(crate) omega2_dot: Vector3<T>,
+    /// The intermediate terms the tangents reuse ([`Leg`]): ŝ × w, 1/m, a × l, ẇ, ȧ, l̇, ṁ,
+    /// (a × l)˙, θ̈'s numerator (θ̈ = J_ad,i v̇_E + num/m), l̈, ω_2 and 2 (l·l̇)/‖l‖².
+    pub(crate) terms: LegTerms<T>,
+}
+
+/// See [`LegAcc::terms`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LegTerms<T: Lane> {
+    pub(crate) s_w: Vector3<T>,
+    pub(crate) inv_m: T,
+    pub(crate) al: Vector3<T>,
+    pub(crate) w_dot: Vector3<T>,
+    pub(crate) a_dot: Vector3<T>,
+    pub(crate) l_dot: Vector3<T>,
+    pub(crate) m_dot: T,
+    pub(crate) al_dot: Vector3<T>,
+    pub(crate) num: T,
+    pub(crate) l_acc: Vector3<T>,
+    pub(crate) omega2: Vector3<T>,
+    pub(crate) c2: T,
 }
 
 impl<T: Lane> LegAcc<T> {
@@ -253,15 +266,15 @@ impl<T: Lane> LegAcc<T> {
         let m_dot = w_dot[0] * l[1] - w_dot[1] * l[0] + w[0] * l_dot[1] - w[1] * l_dot[0];
         let al_dot = a_dot.cross(&l) + a.cross(&l_dot);
         // θ̈ = J_ad,i v̇_E + J̇_ad,i v_E with J̇_ad,i = ([l̇; ȧ × l + a × l̇] − ṁ J_ad,i)/m
-        let theta_ddot =
-            r.dot(v_dot) + (l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot) * inv_m;
+        let num = l_dot.dot(&e_dot) + al_dot.dot(&omega) - m_dot * theta_dot;
+        let theta_ddot = r.dot(v_dot) + num * inv_m;
         // T̈ = θ̈ ŝ × w + θ̇ ŝ × ẇ
         let t_acc = s_w * theta_ddot + z_cross(&w_dot) * theta_dot;
         let l_acc = e_ddot + omega_dot.cross(&a) + omega.cross(&a_dot) - t_acc;
         // ω_2 = l × l̇ / ‖l‖²  ⇒  ω̇_2 = l × l̈ / ‖l‖² − 2 (l·l̇)/‖l‖² ω_2
         let omega2 = l.cross(&l_dot) * inv_l2;
-        let two = T::from(2.0);
-        let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * (two * l.dot(&l_dot) * inv_l2);
+        let c2 = T::from(2.0) * l.dot(&l_dot) * inv_l2;
+        let omega2_dot = l.cross(&l_acc) * inv_l2 - omega2 * c2;
         let half = T::from(0.5);
         LegAcc {
             r,
@@ -275,6 +288,20 @@ impl<T: Lane> LegAcc<T> {
             cw_acc: t_acc * half,
             cl_acc: t_acc + l_acc * half,
             omega2_dot,
+            terms: LegTerms {
+                s_w,
+                inv_m,
+                al,
+                w_dot,
+                a_dot,
+                l_dot,
+                m_dot,
+                al_dot,
+                num,
+                l_acc,
+                omega2,
+                c2,
+            },
         }
     }
 }
