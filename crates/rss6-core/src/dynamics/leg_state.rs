@@ -13,32 +13,13 @@ use nalgebra::{Vector3, Vector6};
 
 /// One leg's kinematics and forces at the state (the names of
 /// [`rigid_pose_tangents`](super::pose_tangent::rigid_pose_tangents)), of one leg (`T = f64`) or
-/// two ([`Pair`]).
+/// two ([`Pair`]): the bodies' accelerations and the forces of
+/// [`twist_force`](super::newton_euler::twist_force)'s recursion.
 #[derive(Clone, Copy)]
 pub(super) struct Leg<T: Lane> {
-    pub(super) w: Vector3<T>,
-    pub(super) l: Vector3<T>,
-    pub(super) a: Vector3<T>,
-    pub(super) s_w: Vector3<T>,
-    pub(super) inv_m: T,
-    pub(super) al: Vector3<T>,
-    pub(super) r: Vector6<T>,
-    pub(super) th_d: T,
-    pub(super) w_dot: Vector3<T>,
-    pub(super) a_dot: Vector3<T>,
-    pub(super) l_dot: Vector3<T>,
-    pub(super) m_dot: T,
-    pub(super) al_dot: Vector3<T>,
-    pub(super) num: T,
-    pub(super) th_dd: T,
-    pub(super) l_acc: Vector3<T>,
-    pub(super) inv_l2: T,
-    pub(super) omega2: Vector3<T>,
-    pub(super) c2: T,
+    pub(super) acc: LegAcc<T>,
     pub(super) iz: T,
     pub(super) it: T,
-    pub(super) s_cw: Vector3<T>,
-    pub(super) cw_acc: Vector3<T>,
     pub(super) mass_w: T,
     pub(super) mass_l: T,
     pub(super) f_l: Vector3<T>,
@@ -46,75 +27,36 @@ pub(super) struct Leg<T: Lane> {
     pub(super) u: Vector3<T>,
     pub(super) p: Vector3<T>,
     pub(super) kk: T,
+    /// J_bd,iᵀ u ‖l‖² (u = c_l × f_l + n_l).
     pub(super) jv: Vector6<T>,
+    /// The factor of the rate row r in the leg's force.
     pub(super) s_f: T,
 }
 
-impl Leg<f64> {
-    /// Leg `i`'s state: its joint rate and acceleration, the link's rates and the forces of
-    /// [`twist_force`](super::newton_euler::twist_force)'s recursion.
-    pub(super) fn at(
-        geom: &LegGeometry,
-        dp: &DynamicParams,
-        i: usize,
-        v: &Vec6,
-        v_dot: &Vec6,
-        g: &Vec3,
-    ) -> Result<Self> {
-        let k = leg_acc(geom, i, v, v_dot)?;
-        let LegTerms {
-            s_w,
-            inv_m,
-            al,
-            w_dot,
-            a_dot,
-            l_dot,
-            m_dot,
-            al_dot,
-            num,
-            l_acc,
-            omega2,
-            c2,
-        } = k.terms;
-        let (w, l, a, r, inv_l2) = (k.w, k.l, k.a, k.r, k.inv_l2);
-        let (th_d, th_dd, s_cw, cw_acc) = (k.theta_dot, k.theta_ddot, k.s_cw, k.cw_acc);
-        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
-        let (iz, it) = (wrench_axial_inertia(wb), link_transverse_inertia(lb));
-        let q_w = wb.mass * s_cw.dot(&(cw_acc - g)) + iz * th_dd;
-        let f_l = (k.cl_acc - g) * lb.mass;
-        let n_l = k.omega2_dot * it;
-        let cl = l * 0.5;
+impl<T: Lane> Leg<T> {
+    /// The forces on the bodies whose accelerations are `acc`: the wrench's mass and axial
+    /// inertia, the link's mass and transverse inertia, gravity g.
+    #[inline(always)]
+    fn from_acc(
+        acc: LegAcc<T>,
+        (mass_w, iz): (T, T),
+        (mass_l, it): (T, T),
+        g: &Vector3<T>,
+    ) -> Self {
+        let q_w = mass_w * acc.s_cw.dot(&(acc.cw_acc - g)) + iz * acc.theta_ddot;
+        let f_l = (acc.cl_acc - g) * mass_l;
+        let n_l = acc.omega2_dot * it;
+        let cl = acc.l * T::from(0.5);
         let u = cl.cross(&f_l) + n_l;
-        let p = u.cross(&l);
-        let ap = a.cross(&p);
-        let kk = z_triple(&p, &w);
-        let jv = stack(&p, &ap) + r * kk;
-        let s_f = q_w + z_triple(&w, &f_l);
-        let (mass_w, mass_l) = (wb.mass, lb.mass);
-        Ok(Leg {
-            w,
-            l,
-            a,
-            s_w,
-            inv_m,
-            al,
-            r,
-            th_d,
-            w_dot,
-            a_dot,
-            l_dot,
-            m_dot,
-            al_dot,
-            num,
-            th_dd,
-            l_acc,
-            inv_l2,
-            omega2,
-            c2,
+        let p = u.cross(&acc.l);
+        let ap = acc.a.cross(&p);
+        let kk = z_triple(&p, &acc.w);
+        let jv = stack(&p, &ap) + acc.r * kk;
+        let s_f = q_w + z_triple(&acc.w, &f_l);
+        Leg {
+            acc,
             iz,
             it,
-            s_cw,
-            cw_acc,
             mass_w,
             mass_l,
             f_l,
@@ -124,46 +66,34 @@ impl Leg<f64> {
             kk,
             jv,
             s_f,
-        })
+        }
     }
 
-    /// Legs `a` and `b` side by side.
+    /// The leg's part of the twist-space force, J_iᵀ (M_i v̇_i + gyroscopic − m_i g).
     #[inline(always)]
-    pub(super) fn zip(a: &Self, b: &Self) -> Leg<Pair> {
-        Leg {
-            w: Lanes::zip(&a.w, &b.w),
-            l: Lanes::zip(&a.l, &b.l),
-            a: Lanes::zip(&a.a, &b.a),
-            s_w: Lanes::zip(&a.s_w, &b.s_w),
-            inv_m: Lanes::zip(&a.inv_m, &b.inv_m),
-            al: Lanes::zip(&a.al, &b.al),
-            r: Lanes::zip(&a.r, &b.r),
-            th_d: Lanes::zip(&a.th_d, &b.th_d),
-            w_dot: Lanes::zip(&a.w_dot, &b.w_dot),
-            a_dot: Lanes::zip(&a.a_dot, &b.a_dot),
-            l_dot: Lanes::zip(&a.l_dot, &b.l_dot),
-            m_dot: Lanes::zip(&a.m_dot, &b.m_dot),
-            al_dot: Lanes::zip(&a.al_dot, &b.al_dot),
-            num: Lanes::zip(&a.num, &b.num),
-            th_dd: Lanes::zip(&a.th_dd, &b.th_dd),
-            l_acc: Lanes::zip(&a.l_acc, &b.l_acc),
-            inv_l2: Lanes::zip(&a.inv_l2, &b.inv_l2),
-            omega2: Lanes::zip(&a.omega2, &b.omega2),
-            c2: Lanes::zip(&a.c2, &b.c2),
-            iz: Lanes::zip(&a.iz, &b.iz),
-            it: Lanes::zip(&a.it, &b.it),
-            s_cw: Lanes::zip(&a.s_cw, &b.s_cw),
-            cw_acc: Lanes::zip(&a.cw_acc, &b.cw_acc),
-            mass_w: Lanes::zip(&a.mass_w, &b.mass_w),
-            mass_l: Lanes::zip(&a.mass_l, &b.mass_l),
-            f_l: Lanes::zip(&a.f_l, &b.f_l),
-            cl: Lanes::zip(&a.cl, &b.cl),
-            u: Lanes::zip(&a.u, &b.u),
-            p: Lanes::zip(&a.p, &b.p),
-            kk: Lanes::zip(&a.kk, &b.kk),
-            jv: Lanes::zip(&a.jv, &b.jv),
-            s_f: Lanes::zip(&a.s_f, &b.s_f),
-        }
+    fn force(&self) -> Vector6<T> {
+        self.acc.r * self.s_f + self.jv * self.acc.inv_l2
+    }
+}
+
+impl Leg<f64> {
+    /// Leg `i`'s state at the twist v, its rate v̇ and gravity g.
+    #[cfg(test)]
+    pub(super) fn at(
+        geom: &LegGeometry,
+        dp: &DynamicParams,
+        i: usize,
+        v: &Vec6,
+        v_dot: &Vec6,
+        g: &Vec3,
+    ) -> Result<Self> {
+        let (wb, lb) = (&dp.wrenches[i], &dp.links[i]);
+        Ok(Leg::from_acc(
+            leg_acc(geom, i, v, v_dot)?,
+            (wb.mass, wrench_axial_inertia(wb)),
+            (lb.mass, link_transverse_inertia(lb)),
+            g,
+        ))
     }
 }
 
@@ -178,8 +108,27 @@ impl Leg<Pair> {
         (v, v_dot): (&Vec6, &Vec6),
         g: &Vec3,
     ) -> Result<Self> {
-        let at = |i| Leg::at(geom, dp, i, v, v_dot, g);
-        Ok(Leg::zip(&at(2 * k)?, &at(2 * k + 1)?))
+        let (i, j) = (2 * k, 2 * k + 1);
+        let ((wi, li, ai), (mi, l2i)) = leg_vectors(geom, i)?;
+        let ((wj, lj, aj), (mj, l2j)) = leg_vectors(geom, j)?;
+        let vectors = (
+            Lanes::zip(&wi, &wj),
+            Lanes::zip(&li, &lj),
+            Lanes::zip(&ai, &aj),
+        );
+        let inverses = (Pair::new(mi, mj), Pair::new(l2i, l2j));
+        let acc = LegAcc::from_vectors(vectors, inverses, &v.splat(), &v_dot.splat());
+        let (wi, wj) = (&dp.wrenches[i], &dp.wrenches[j]);
+        let (li, lj) = (&dp.links[i], &dp.links[j]);
+        let wrench = (
+            Pair::new(wi.mass, wj.mass),
+            Pair::new(wrench_axial_inertia(wi), wrench_axial_inertia(wj)),
+        );
+        let link = (
+            Pair::new(li.mass, lj.mass),
+            Pair::new(link_transverse_inertia(li), link_transverse_inertia(lj)),
+        );
+        Ok(Leg::from_acc(acc, wrench, link, &g.splat()))
     }
 }
 
@@ -336,31 +285,10 @@ pub(super) fn add_leg_forces(
     theta_dot: &mut Vec6,
     j_ad_t: &mut Mat6,
 ) -> Result<()> {
-    let (v2, v_dot2, g2) = (v.splat(), v_dot.splat(), g.splat());
     for k in 0..LEGS / 2 {
         let (i, j) = (2 * k, 2 * k + 1);
-        let ((wi, li, ai), (mi, l2i)) = leg_vectors(geom, i)?;
-        let ((wj, lj, aj), (mj, l2j)) = leg_vectors(geom, j)?;
-        let vectors = (
-            Lanes::zip(&wi, &wj),
-            Lanes::zip(&li, &lj),
-            Lanes::zip(&ai, &aj),
-        );
-        let inverses = (Pair::new(mi, mj), Pair::new(l2i, l2j));
-        let ka = LegAcc::from_vectors(vectors, inverses, &v2, &v_dot2);
-        let (wb, lb) = (
-            (&dp.wrenches[i], &dp.wrenches[j]),
-            (&dp.links[i], &dp.links[j]),
-        );
-        let mass_w = Pair::new(wb.0.mass, wb.1.mass);
-        let iz = Pair::new(wrench_axial_inertia(wb.0), wrench_axial_inertia(wb.1));
-        let mass_l = Pair::new(lb.0.mass, lb.1.mass);
-        let it = Pair::new(link_transverse_inertia(lb.0), link_transverse_inertia(lb.1));
-        let q_w = mass_w * ka.s_cw.dot(&(ka.cw_acc - g2)) + iz * ka.theta_ddot;
-        let f_l = (ka.cl_acc - g2) * mass_l;
-        let n_l = ka.omega2_dot * it;
-        let cl = ka.l * Pair::from(0.5);
-        let part = ka.r * (q_w + z_triple(&ka.w, &f_l)) + ka.jbd_t(&(cl.cross(&f_l) + n_l));
+        let leg = Leg::pair(geom, dp, k, (v, v_dot), g)?;
+        let (ka, part) = (&leg.acc, leg.force());
         for (lane, leg) in [i, j].into_iter().enumerate() {
             theta_dot[leg] = ka.theta_dot.get(lane);
             j_ad_t.set_column(leg, &lanes::lane(&ka.r, lane));

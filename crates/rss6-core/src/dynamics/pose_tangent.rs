@@ -5,7 +5,7 @@
 //! two stepped Newton–Euler passes of a central difference.
 
 use super::lanes::{self, Lane, Lanes, Pair};
-use super::leg_state::Leg;
+use super::leg_state::{Leg, LegAcc, LegTerms};
 use super::load::{Environment, LoadAt};
 use super::newton_euler::rigid_forces;
 use super::platform_inertia;
@@ -259,29 +259,36 @@ impl<T: Lane> Leg<T> {
         dth: T,
     ) -> (Vector6<T>, Vector6<T>, T) {
         let Leg {
-            w,
-            l,
-            a,
-            s_w,
-            inv_m,
-            al,
-            r,
-            th_d,
-            w_dot,
-            a_dot,
-            l_dot,
-            m_dot,
-            al_dot,
-            num,
-            th_dd,
-            l_acc,
-            inv_l2,
-            omega2,
-            c2,
+            acc:
+                LegAcc {
+                    w,
+                    l,
+                    a,
+                    r,
+                    theta_dot: th_d,
+                    theta_ddot: th_dd,
+                    inv_l2,
+                    s_cw,
+                    cw_acc,
+                    terms:
+                        LegTerms {
+                            s_w,
+                            inv_m,
+                            al,
+                            w_dot,
+                            a_dot,
+                            l_dot,
+                            m_dot,
+                            al_dot,
+                            num,
+                            l_acc,
+                            omega2,
+                            c2,
+                        },
+                    ..
+                },
             iz,
             it,
-            s_cw,
-            cw_acc,
             mass_w,
             mass_l,
             f_l,

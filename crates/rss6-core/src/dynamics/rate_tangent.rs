@@ -5,7 +5,7 @@
 //! instead of the two evaluations a central difference takes.
 
 use super::lanes::{self, Lane, Lanes, Pair};
-use super::leg_state::Leg;
+use super::leg_state::{Leg, LegAcc, LegTerms};
 use super::load::LoadAt;
 use super::{platform_inertia, z_cross, z_triple};
 use crate::jacobian::LegGeometry;
@@ -119,25 +119,33 @@ impl<T: Lane> Leg<T> {
         d_vd: &Vector6<T>,
     ) -> Vector6<T> {
         let Leg {
-            r,
-            th_d,
-            w,
-            l,
-            a,
-            inv_m,
-            s_w,
-            w_dot,
-            a_dot,
-            l_dot,
-            m_dot,
-            al_dot,
-            omega2,
-            c2,
-            inv_l2,
+            acc:
+                LegAcc {
+                    r,
+                    theta_dot: th_d,
+                    w,
+                    l,
+                    a,
+                    inv_l2,
+                    s_cw,
+                    terms:
+                        LegTerms {
+                            inv_m,
+                            s_w,
+                            w_dot,
+                            a_dot,
+                            l_dot,
+                            m_dot,
+                            al_dot,
+                            omega2,
+                            c2,
+                            ..
+                        },
+                    ..
+                },
             iz,
             it,
             cl,
-            s_cw,
             mass_w,
             mass_l,
             ..
