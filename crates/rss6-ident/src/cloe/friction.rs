@@ -110,45 +110,50 @@ pub(super) fn sensitivity(
 ) -> Result<Sens> {
     let dt = cfg.dt;
     let f = &step.solved;
-    let n = s.columns.len();
     let (gp, gv) = free_rate_jacobians(cfg, p, v, &first, t)?;
-    let jdt = first.j_theta * dt;
-    let mut dg = Sens::zeros(n);
-    mul_add(&mut dg, &f.compliance, s.tau);
-    mul_add(&mut dg, &gp, s.p);
-    mul_add(&mut dg, &gv, s.v);
-    // The mass parameters act through the friction-free acceleration over the tick.
-    mul_add(&mut dg, &jdt, first.fxi);
-    // The active-set system A dτ_f = R.
+    // The active-set system A dτ_f = D dg + s: D = diag(1 stuck, f_v,i slipping), s the Coulomb
+    // and viscous columns of a slipping joint. Solved once for A⁻¹ and W = A⁻¹D (6 × 6), so the
+    // p columns take four 6 × 6 products: d(τ_a − τ_f) = (I − WK) dτ_a − W G_χ dχ − W G_χ̇ dχ̇
+    // − W dt J_θ ∂χ̈/∂Ξ − A⁻¹ s.
     let k = &f.compliance;
     let mut a = Mat6::zeros();
-    let mut r = Sens::zeros(n);
+    let mut d = Vec6::zeros();
     for i in 0..LEGS {
         if f.stuck[i] {
             a.set_row(i, &k.row(i));
-            r.set_row(i, &dg.row(i));
+            d[i] = 1.0;
         } else {
-            let fv = dp.viscous[i].max(0.0);
-            a.set_row(i, &(k.row(i) * fv));
+            d[i] = dp.viscous[i].max(0.0);
+            a.set_row(i, &(k.row(i) * d[i]));
             a[(i, i)] += 1.0;
-            r.set_row(i, &(dg.row(i) * fv));
-            let w = f.rate[i];
-            let sign = sign0(w);
-            for (c, &col) in s.columns.iter().enumerate() {
-                if col == COULOMB + i && dp.coulomb[i] > 0.0 {
-                    r[(i, c)] += sign;
-                } else if col == VISCOUS + i && dp.viscous[i] > 0.0 {
-                    r[(i, c)] += w;
-                }
-            }
         }
     }
-    let lu = a.lu();
-    let s_tf = lu.solve(&r).ok_or_else(|| IdentError::Simulation {
+    let a_inv = a.lu().try_inverse().ok_or_else(|| IdentError::Simulation {
         time: t,
         message: "the implicit friction step's active-set system is singular".into(),
     })?;
-    Ok(s.tau - s_tf)
+    let w = a_inv * Mat6::from_diagonal(&d);
+    let mut out = s.tau.clone();
+    mul_add(&mut out, &-(w * k), s.tau);
+    mul_add(&mut out, &-(w * gp), s.p);
+    mul_add(&mut out, &-(w * gv), s.v);
+    // The mass parameters act through the friction-free acceleration over the tick.
+    mul_add(&mut out, &-(w * (first.j_theta * dt)), first.fxi);
+    for i in (0..LEGS).filter(|&i| !f.stuck[i]) {
+        let rate = f.rate[i];
+        for (c, &col) in s.columns.iter().enumerate() {
+            let source = if col == COULOMB + i && dp.coulomb[i] > 0.0 {
+                sign0(rate)
+            } else if col == VISCOUS + i && dp.viscous[i] > 0.0 {
+                rate
+            } else {
+                continue;
+            };
+            let mut o = out.column_mut(c);
+            o -= a_inv.column(i) * source;
+        }
+    }
+    Ok(out)
 }
 
 /// (∂w₀/∂χ, ∂w₀/∂χ̇) of the free rates w₀ = J_ad(χ) ν, ν = J_s(χ)(χ̇ + dt χ̈) + dt J̇_s(χ, χ̇) χ̇,
