@@ -11,7 +11,8 @@
 //! in turn (`LoopConfig::parallel_stages = false`) instead of ahead on all rayon threads.
 //! `--repeat N`: each loop timing is the median of N runs (default 3). `--per-tick-only`: time
 //! only, alternating, a simulation, the per-tick sensitivities, the per-tick sensitivities
-//! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler), and
+//! taken from a recorded primal run as CLOE runs them after a trial (also for a profiler; with
+//! `--implicit` "per tick" is `StateJacobians::FirstStage`, as CLOE iterates), and
 //! the exact sensitivities from a recorded run, as CLOE computes them at its stop.
 //! `--exact-only`: one simulation, then only the exact sensitivities from one recorded run (for a
 //! profiler, or with `RAYON_NUM_THREADS=1` for the CPU time without the threads' scheduling);
@@ -80,7 +81,13 @@ fn main() {
     });
     let cols = Consistent::a_columns();
     let mut cfg_fast = cfg.clone();
-    cfg_fast.state_jacobians = rss6_ident::StateJacobians::PerTick;
+    // As CLOE iterates after the guess: with the implicit law every derivative of a tick's first
+    // stage serves its four stages, else the state Jacobians once per tick.
+    cfg_fast.state_jacobians = if implicit {
+        rss6_ident::StateJacobians::FirstStage
+    } else {
+        rss6_ident::StateJacobians::PerTick
+    };
     if exact_only || per_tick_recorded_only {
         // Only the exact (or per-tick) sensitivities from a recording (for a profiler).
         let (_, rec) = simulate_loop_recording(&cfg, &truth, &exc).unwrap();

@@ -392,9 +392,12 @@ fn per_tick_iterations_end_where_exact_ones_do() {
         exact.iterations, exact.simulations, exact.converged_by,
         fast.iterations, fast.simulations, fast.converged_by, worst.0, worst.1
     );
-    // Measured: Δ ≤ 2·10⁻⁴ σ, σ equal within 3.2·10⁻⁵ relative; bounds ≈ 3×.
-    assert!(worst.0 < 6e-4, "estimates {:.2e} σ apart", worst.0);
-    assert!(worst.1 < 1e-4, "σ differ by {:.2e}", worst.1);
+    // Measured: Δ ≤ 6.3·10⁻⁴ σ, σ equal within 6.4·10⁻⁵ relative; bounds ≈ 3× (Δ ≤ 2·10⁻⁴ σ
+    // and 3.2·10⁻⁵ before the forty-fifth session, when the iterations after the guess froze only
+    // F_χ, F_χ̇ per tick, not every derivative of the tick's first stage: another path to a stop
+    // inside the same flat region, which the exact check accepts either way).
+    assert!(worst.0 < 2e-3, "estimates {:.2e} σ apart", worst.0);
+    assert!(worst.1 < 2e-4, "σ differ by {:.2e}", worst.1);
 }
 
 /// CLOE decides identifiability on the per-tick sensitivities at the guess when it iterates on

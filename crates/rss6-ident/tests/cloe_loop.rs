@@ -286,11 +286,14 @@ fn sensitivities_from_a_recorded_run_are_the_plain_calls_bit_for_bit() {
     cfg.implicit_friction = true;
     cfg.derivative_filter = 5e-3;
     let cols = [0usize, 4, 33, 54, 64, 66];
-    for per_tick in [false, true] {
+    use rss6_ident::StateJacobians;
+    for mode in [
+        StateJacobians::Exact,
+        StateJacobians::PerTick,
+        StateJacobians::FirstStage,
+    ] {
         let mut c = cfg.clone();
-        if per_tick {
-            c.state_jacobians = rss6_ident::StateJacobians::PerTick;
-        }
+        c.state_jacobians = mode;
         let (plain, rec) = simulate_loop_recording(&cfg, &a, &exc).unwrap();
         assert_eq!(plain.chi, simulate_loop(&cfg, &a, &exc, None).unwrap().chi);
         let want = simulate_loop(&c, &a, &exc, Some(&cols)).unwrap();
@@ -304,6 +307,52 @@ fn sensitivities_from_a_recorded_run_are_the_plain_calls_bit_for_bit() {
 
 /// ≈ 3× the measured worst column error of the per-tick approximation (8.8e-4, release).
 const BOUND_PER_TICK: f64 = 3e-3;
+
+/// The loop CLOE iterates on (implicit stick–slip friction, filtered derivative): the first
+/// stage's derivatives serving all four stages approximate the exact sensitivities as well as the
+/// per-tick state Jacobians do; with the sign law's stiff tick the mode is refused.
+#[test]
+fn first_stage_derivatives_approximate_the_exact_sensitivities_with_the_implicit_law() {
+    use rss6_ident::StateJacobians;
+    let a = truth();
+    let exc = excitation();
+    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
+    cfg.state_jacobians = StateJacobians::FirstStage;
+    let err = simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap_err();
+    assert!(err.to_string().contains("needs implicit_friction"), "{err}");
+    cfg.implicit_friction = true;
+    cfg.derivative_filter = T_F;
+    let mut worst = [0.0_f64; 2];
+    let run = |c: &LoopConfig| {
+        simulate_loop(c, &a, &exc, Some(&cols))
+            .unwrap()
+            .jacobian
+            .unwrap()
+    };
+    cfg.state_jacobians = StateJacobians::Exact;
+    let exact = run(&cfg);
+    for (k, mode) in [StateJacobians::PerTick, StateJacobians::FirstStage]
+        .into_iter()
+        .enumerate()
+    {
+        cfg.state_jacobians = mode;
+        let approx = run(&cfg);
+        for c in 0..cols.len() {
+            let e = exact.column(c);
+            worst[k] = worst[k].max((approx.column(c) - e).norm() / e.norm());
+        }
+    }
+    println!(
+        "implicit law, worst relative column error: per tick {:.2e}, first stage {:.2e}",
+        worst[0], worst[1]
+    );
+    assert!(worst[0] < BOUND_PER_TICK, "{}", worst[0]);
+    assert!(worst[1] < BOUND_FIRST_STAGE, "{}", worst[1]);
+}
+
+/// ≈ 3× the measured worst column error of the first-stage approximation under the implicit law.
+const BOUND_FIRST_STAGE: f64 = 3e-3;
 
 #[test]
 fn friction_too_stiff_for_the_integrator_is_refused_with_the_smallest_smoothing() {

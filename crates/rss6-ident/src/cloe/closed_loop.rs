@@ -546,7 +546,9 @@ impl<'a> Lean<'a> {
         };
         // PerTick: the state Jacobians of stage 1 serve all four stages.
         let frozen = match self.cfg.state_jacobians {
-            StateJacobians::PerTick => StateJac::Frozen(s1.jac.as_ref().map(|j| (j.fp, j.fv))),
+            StateJacobians::PerTick | StateJacobians::FirstStage => {
+                StateJac::Frozen(s1.jac.as_ref().map(|j| (j.fp, j.fv)))
+            }
             StateJacobians::Exact => StateJac::Compute,
         };
         let a1 = s1.a;

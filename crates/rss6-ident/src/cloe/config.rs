@@ -84,7 +84,8 @@ pub struct LoopConfig {
     pub record_pot_angles: bool,
 }
 
-/// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics.
+/// Where the sensitivity recursion evaluates the state Jacobians F_χ, F_χ̇ of the forward dynamics
+/// (and, for [`StateJacobians::FirstStage`], every other derivative of a stage).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StateJacobians {
     /// At every RK4 stage: the exact derivative of the discrete loop (24 forward-dynamics calls per
@@ -94,6 +95,14 @@ pub enum StateJacobians {
     /// Once per tick, at the tick's start, for all four stages (4× fewer calls); an approximation
     /// of the derivative (error measured in `tests/cloe_loop.rs`), for LM iterations.
     PerTick,
+    /// Every derivative of the tick's first stage — F_χ, F_χ̇, ∂χ̈/∂τ and ∂χ̈/∂Ξ — serves all four
+    /// stages, which then need only their accelerations. Only with
+    /// [`LoopConfig::implicit_friction`]: its tick integrates the friction-free model under a held
+    /// torque, so the stages' derivatives differ little (≈ 10⁻³ relative error, as
+    /// [`StateJacobians::PerTick`]); with the sign or smoothed law the joints' viscous friction
+    /// makes the tick stiff, a stage's acceleration moves by tens of per cent within it, and so
+    /// would the inertias' sensitivities (measured up to 0.8 relative): refused there.
+    FirstStage,
 }
 
 impl LoopConfig {
@@ -156,6 +165,13 @@ impl LoopConfig {
         if self.implicit_friction && self.friction_smoothing > 0.0 {
             return Err(IdentError::InvalidInput(
                 "implicit_friction and friction_smoothing > 0 are two friction laws: choose one"
+                    .into(),
+            ));
+        }
+        if self.state_jacobians == StateJacobians::FirstStage && !self.implicit_friction {
+            return Err(IdentError::InvalidInput(
+                "state_jacobians = FirstStage needs implicit_friction: with the sign or smoothed \
+                 friction law a tick is too stiff for one stage's derivatives to serve all four"
                     .into(),
             ));
         }

@@ -25,119 +25,18 @@
 //! Otherwise [`IdentError::NotConverged`] with the cost history.
 
 use super::closed_loop::{simulate_recorded, Recording};
-use super::config::{LoopConfig, LoopParams};
+use super::config::{LoopConfig, LoopParams, StateJacobians};
 use super::consistent::{Consistent, N_PSI};
 use super::hac::{local_long_run_covariance, long_run_covariance};
 use super::lm_step::{lm_step, next_lambda, optimal, shifted, Settle};
 use super::observability::{identifiable_columns, unweighted, weighted_sensitivity, whitening};
-use super::result::{Alias, CloeResult, CloeStop, SETTLE_STEPS};
+use super::options::{CloeData, CloeOptions};
+use super::result::{Alias, CloeResult, CloeStop};
 use crate::error::{IdentError, Result};
 use crate::excitation::base_columns;
 use nalgebra::{DMatrix, DVector};
 use rss6_core::Vec6;
 use rss6_ctrl::Trajectory;
-
-/// Measured frames χ_m (end-effector pose in the base frame through the calibrated ᴼχ_C, ᴱχ_t) at
-/// the ticks where the identification loop consumed them (s from the start of the run).
-#[derive(Debug, Clone, PartialEq)]
-pub struct CloeData {
-    /// Frame times (s).
-    pub t: Vec<f64>,
-    /// χ_m (m, rad).
-    pub measured: Vec<Vec6>,
-}
-
-/// Default [`CloeOptions::hac_lags`]: 30 camera frames (1 s at 30 Hz).
-pub const HAC_LAGS: usize = 30;
-
-/// Options of [`cloe`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct CloeOptions {
-    /// Largest number of Jacobian evaluations (LM iterations).
-    pub max_iterations: usize,
-    /// tol_1 of eq. 5.9: relative change of the cost.
-    pub tol_cost: f64,
-    /// tol_2 of eq. 5.9: relative change of every estimated quantity.
-    pub tol_step: f64,
-    /// Noise std of the measured pose: [position (m), angle (rad)]; the residual weights are 1/σ.
-    /// Default: Table 4.1 (0.0096 mm, 0.0261°).
-    pub noise: [f64; 2],
-    /// The covariance of one camera frame's pose noise (x, y, z m; α, β, γ rad), rows = columns;
-    /// replaces `noise` when given: the residual is whitened frame by frame (W = L⁻¹, Σ = L·Lᵀ), so
-    /// axes whose noise is correlated — a camera's x with its β — are weighted by Σ⁻¹ instead of
-    /// one by one (`rss6.identify.cloe(noise="frames")` estimates it from a first fit's residual).
-    pub noise_covariance: Option<[[f64; 6]; 6]>,
-    /// Relative |R_ii| threshold of the pivoted QR (see the module docs).
-    pub identifiability_threshold: f64,
-    /// Names (see [`Consistent::names`]) to estimate; `None`: every identifiable one. A requested
-    /// name that is not identifiable is an error.
-    pub parameters: Option<Vec<String>>,
-    /// Names held at the guess as known (with `parameters` = `None`, the identifiable set is chosen
-    /// among the others). Closed-loop output error sees Ξ and the drive gains only up to one
-    /// common factor (docs/identification.md, "The scale direction"): holding one known quantity,
-    /// e.g. `lp` from the drive's data sheet, fixes it.
-    pub hold: Vec<String>,
-    /// Relative standard deviation above which an estimate is flagged as poorly identified.
-    pub poor_std: f64,
-    /// Initial LM damping (relative to diag(JᵀJ)).
-    pub lambda0: f64,
-    /// Largest change of any log-parameter per iteration (0.5: a factor 1.65).
-    pub max_log_step: f64,
-    /// Iterate on sensitivities with the state Jacobians evaluated once per tick
-    /// ([`super::StateJacobians::PerTick`], ≈ 10⁻³ relative, ≈ 1.4× cheaper on two cores), from
-    /// the guess on: the identifiability analysis uses the per-tick ones at the guess (their error
-    /// does not move the base set, see [`crate::base_columns`]), the final standard deviations
-    /// always the exact ones. A
-    /// stop found on the per-tick ones is checked on the exact ones at the same estimate (computed
-    /// for the σ anyway): it stands if their LM step predicts Φ to fall by at most one residual
-    /// variance (the *settled* rule's bound, a likelihood ratio below e^0.5), else the iterations
-    /// go on with exact sensitivities; likewise when no damping lowers Φ.
-    pub per_tick_jacobians: bool,
-    /// When no step lowers Φ: converged if every |cos| between the residual and a Jacobian column
-    /// is at most this (first-order optimality), else [`IdentError::NotConverged`].
-    pub tol_gradient: f64,
-    /// Standard deviation of a Gaussian prior on every estimated log-parameter, centred at the
-    /// guess (`Some(1.0)`: a factor e). It adds Σ((ψ − ψ_guess)/σ_prior)² to Φ, so a quantity the
-    /// run hardly sees stays near its prior instead of drifting towards 0 or ∞ along a flat
-    /// direction of the noisy cost; a well-identified one (σ ≪ σ_prior) moves by a fraction
-    /// (σ/σ_prior)² of its distance to the guess. `None`: the pure output error of eq. 5.7
-    /// (noise-free checks).
-    pub prior_log_std: Option<f64>,
-    /// Accepted steps over which the *settled* stopping rule looks back ([`CloeStop::Settled`]);
-    /// 0 turns the rule off. Default [`SETTLE_STEPS`].
-    pub settle_steps: usize,
-    /// Lags (camera frames) of the residual autocovariance behind the sandwich standard deviations
-    /// (see [`CloeResult::relative_std`]); 0: residual frames uncorrelated in time.
-    pub hac_lags: usize,
-    /// Where LM starts instead of the guess (which still centres the prior): identifiability and
-    /// `rms_before` are evaluated there, and quantities left unidentifiable stay there. `None`: the
-    /// guess (multi-start: `rss6.identify.cloe(restarts=…)`).
-    pub initial: Option<LoopParams>,
-}
-
-impl Default for CloeOptions {
-    fn default() -> Self {
-        CloeOptions {
-            max_iterations: 20,
-            tol_cost: 1e-6,
-            tol_step: 1e-5,
-            noise: [0.0096e-3, 0.0261_f64.to_radians()],
-            noise_covariance: None,
-            identifiability_threshold: 1e-3,
-            parameters: None,
-            hold: Vec::new(),
-            poor_std: 0.10,
-            lambda0: 1e-3,
-            max_log_step: 0.5,
-            tol_gradient: 1e-4,
-            per_tick_jacobians: false,
-            prior_log_std: Some(1.0),
-            hac_lags: HAC_LAGS,
-            settle_steps: SETTLE_STEPS,
-            initial: None,
-        }
-    }
-}
 
 struct Eval {
     residual: DVector<f64>,
@@ -202,13 +101,20 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     let a_cols = Consistent::a_columns();
     let mut sims = 0usize;
 
-    let mut cfg_fast = cfg.clone();
-    cfg_fast.state_jacobians = super::StateJacobians::PerTick;
+    // Per-tick sensitivities: at the guess, where identifiability is decided, the state Jacobians
+    // once per tick (`PerTick`); while iterating, with the implicit friction law, every derivative
+    // of a tick's first stage (`FirstStage`: as accurate there, ≈ 20 % cheaper, but it moves
+    // near-parallel columns enough to change the base set's tie-breaks).
+    let mut cfg_tick = cfg.clone();
+    cfg_tick.state_jacobians = StateJacobians::PerTick;
+    let mut cfg_fast = cfg_tick.clone();
+    if cfg.implicit_friction {
+        cfg_fast.state_jacobians = StateJacobians::FirstStage;
+    }
     type Rec = Option<Recording>;
     let evaluate_with =
-        |psi: &[f64], cols: &[usize], fast: bool, rec: Rec, sims: &mut usize| -> Result<Eval> {
+        |psi: &[f64], cols: &[usize], c: &LoopConfig, rec: Rec, sims: &mut usize| -> Result<Eval> {
             let (a, jac) = (cons.params(psi), !cols.is_empty());
-            let c = if fast { &cfg_fast } else { cfg };
             let (run, recording) =
                 simulate_recorded(c, &a, reference, jac.then_some(cols), rec, !jac)?;
             *sims += 1;
@@ -258,7 +164,12 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
     // With per-tick sensitivities on, the ones at the guess are per tick too: identifiability is
     // decided on them (their ≈ 10⁻³ error does not move the base set: `base_columns`' tie rule),
     // and the σ come from the exact ones at the stop.
-    let mut cur = evaluate_with(&psi, &a_cols, options.per_tick_jacobians, None, &mut sims)?;
+    let guess_cfg = if options.per_tick_jacobians {
+        &cfg_tick
+    } else {
+        cfg
+    };
+    let mut cur = evaluate_with(&psi, &a_cols, guess_cfg, None, &mut sims)?;
     // Whether `cur`'s sensitivities are the exact ones (the final σ need them).
     let mut cur_exact = !options.per_tick_jacobians;
     // Set when a stop found on per-tick sensitivities is refused by the exact ones.
@@ -412,10 +323,10 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                         let other = next.as_ref().map(|t| {
                             scope.spawn(|| {
                                 let mut n = 0;
-                                (evaluate_with(t, &[], false, None, &mut n), n)
+                                (evaluate_with(t, &[], cfg, None, &mut n), n)
                             })
                         });
-                        let e = evaluate_with(&trial, &[], false, None, &mut sims);
+                        let e = evaluate_with(&trial, &[], cfg, None, &mut sims);
                         match other.map(|h| h.join()) {
                             Some(Ok((e10, n))) => (e, Some(e10), n),
                             _ => (e, None, 0),
@@ -471,7 +382,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     };
                     if let Some(r) = rule {
                         let per_tick = !cur_exact;
-                        cur = evaluate_with(&psi, &moved, false, rec.clone(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, cfg, rec.clone(), &mut sims)?;
                         cur_exact = true;
                         // A stop found on per-tick sensitivities stands if the exact ones see less
                         // than one residual variance left to gain (the settled rule's bound);
@@ -489,12 +400,18 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     }
                     iterations += 1;
                     if iterations > options.max_iterations {
-                        cur = evaluate_with(&psi, &moved, false, rec.clone(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, cfg, rec.clone(), &mut sims)?;
                         break 'outer;
                     }
                     // Per-tick sensitivities (≈ 10⁻³ relative) until a stop; the exact ones check it.
                     let fast = options.per_tick_jacobians && !exact_only;
-                    cur = evaluate_with(&psi, &moved, fast, rec, &mut sims)?;
+                    cur = evaluate_with(
+                        &psi,
+                        &moved,
+                        if fast { &cfg_fast } else { cfg },
+                        rec,
+                        &mut sims,
+                    )?;
                     cur_exact = !fast;
                     continue 'outer;
                 }
@@ -502,7 +419,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
                     lambda = next_lambda(&gtg, &gtr, lambda, options.max_log_step, &step);
                     if lambda > 1e12 && !cur_exact {
                         // No step of the per-tick sensitivities lowers Φ: try the exact ones.
-                        cur = evaluate_with(&psi, &moved, false, cur.recording.take(), &mut sims)?;
+                        cur = evaluate_with(&psi, &moved, cfg, cur.recording.take(), &mut sims)?;
                         (cur_exact, exact_only, lambda) = (true, true, options.lambda0);
                         iterations += 1;
                         if iterations > options.max_iterations {
@@ -531,7 +448,7 @@ pub fn cloe_observed<T: Trajectory + Sync + ?Sized>(
         });
     };
     if !cur_exact {
-        cur = evaluate_with(&psi, &moved, false, None, &mut sims)?;
+        cur = evaluate_with(&psi, &moved, cfg, None, &mut sims)?;
     }
     // Relative standard deviations from the exact Jacobian and the residual variance.
     let g = cur

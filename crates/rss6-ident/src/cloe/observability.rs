@@ -7,7 +7,7 @@ use rss6_core::Vec6;
 
 use super::config::{LoopConfig, LoopParams};
 use super::consistent::{Consistent, N_PSI};
-use super::estimator::CloeOptions;
+use super::options::CloeOptions;
 use crate::error::{IdentError, Result};
 use crate::excitation::{base_columns, observability_of};
 use rss6_ctrl::Trajectory;

@@ -115,7 +115,9 @@ impl<'a> StageModel<'a> {
         }
         // Sign law (Coulomb's sign held) or implicit (friction-free model).
         let dp = if implicit { &self.dp_nf } else { &self.dp };
-        let Some(columns) = self.columns.as_deref() else {
+        let first_serves = frozen.is_some() && cfg.state_jacobians == StateJacobians::FirstStage;
+        let Some(columns) = self.columns.as_deref().filter(|_| !first_serves) else {
+            // No sensitivities, or the tick's first stage's derivatives serve this one.
             let a = forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
                 .map_err(|e| sim_err(t, e))?;
             return Ok(Stage { a, jac: None });
@@ -128,7 +130,7 @@ impl<'a> StageModel<'a> {
             param_columns: self.param_mask,
             ..JacobianRequest::default()
         };
-        if cfg.state_jacobians == StateJacobians::PerTick {
+        if cfg.state_jacobians != StateJacobians::Exact {
             request.one_sided_step = Some(PER_TICK_H_POSE);
         }
         forward_dynamics_jacobians_with_env(&cfg.kp, dp, p, v, tau, &env, &request, fj)
@@ -222,11 +224,14 @@ impl<'a> StageModel<'a> {
 
 /// The RK4 step of the sensitivities (s_χ, s_χ̇) in `s`, in place in its scratch space: the same
 /// arithmetic, in the same order, as the step of the state (χ̈'s sensitivity at a stage is
-/// fxi + F_χ s_χ + F_χ̇ s_χ̇ + F_τ s_τ, zero for a stage without derivatives).
+/// fxi + F_χ s_χ + F_χ̇ s_χ̇ + F_τ s_τ; a stage without derivatives takes the first stage's
+/// ([`StateJacobians::FirstStage`]), zero when that has none either).
 pub(super) fn propagate(s: &mut SensState, stages: [&Stage; 4], s_tau: &Sens, dt: f64) {
     let [sp, sv, da, acc_p, acc_v] = &mut s.rk4;
     let (sp0, sv0) = (&s.p, &s.v);
-    let stage_da = |da: &mut Sens, st: &Stage, sp: &Sens, sv: &Sens| match &st.jac {
+    let first = stages[0].jac.as_ref();
+    let stage_da = |da: &mut Sens, st: &Stage, sp: &Sens, sv: &Sens| match st.jac.as_ref().or(first)
+    {
         Some(j) => {
             // Column by column in one pass (the products of `mul_add`, the same sums).
             let cols = da.column_iter_mut().zip(j.fxi.column_iter());
