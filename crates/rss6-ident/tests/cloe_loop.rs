@@ -251,26 +251,31 @@ fn sensitivities_match(cfg: &LoopConfig, a: &LoopParams) {
     assert!(worst < 1e-6, "{worst}");
 }
 
+/// The worst relative column error of the sensitivities under `mode` against the exact ones, on
+/// `cfg`'s loop with the truth's parameters (a 1 s run, twelve columns of A of every kind).
+fn worst_column_error(cfg: &LoopConfig, mode: rss6_ident::StateJacobians) -> f64 {
+    let (a, exc) = (truth(), excitation());
+    let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
+    let run = |mode| {
+        let c = LoopConfig {
+            state_jacobians: mode,
+            ..cfg.clone()
+        };
+        simulate_loop(&c, &a, &exc, Some(&cols))
+            .unwrap()
+            .jacobian
+            .unwrap()
+    };
+    let (exact, approx) = (run(rss6_ident::StateJacobians::Exact), run(mode));
+    (0..cols.len())
+        .map(|c| (approx.column(c) - exact.column(c)).norm() / exact.column(c).norm())
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn per_tick_state_jacobians_approximate_the_exact_sensitivities() {
-    let a = truth();
-    let exc = excitation();
-    let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
-    let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
-    let exact = simulate_loop(&cfg, &a, &exc, Some(&cols))
-        .unwrap()
-        .jacobian
-        .unwrap();
-    cfg.state_jacobians = rss6_ident::StateJacobians::PerTick;
-    let approx = simulate_loop(&cfg, &a, &exc, Some(&cols))
-        .unwrap()
-        .jacobian
-        .unwrap();
-    let mut worst: f64 = 0.0;
-    for c in 0..cols.len() {
-        let e = exact.column(c);
-        worst = worst.max((approx.column(c) - e).norm() / e.norm());
-    }
+    let cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
+    let worst = worst_column_error(&cfg, rss6_ident::StateJacobians::PerTick);
     println!("per-tick state Jacobians: worst relative column error {worst:.2e}");
     assert!(worst < BOUND_PER_TICK, "{worst}");
 }
@@ -314,41 +319,17 @@ const BOUND_PER_TICK: f64 = 3e-3;
 #[test]
 fn first_stage_derivatives_approximate_the_exact_sensitivities_with_the_implicit_law() {
     use rss6_ident::StateJacobians;
-    let a = truth();
-    let exc = excitation();
     let mut cfg = LoopConfig::new(KinematicParams::nominal(), home_pose(), 1.0);
-    let cols = [0usize, 1, 3, 4, 7, 32, 33, 54, 61, 64, 65, 66];
     cfg.state_jacobians = StateJacobians::FirstStage;
-    let err = simulate_loop(&cfg, &a, &exc, Some(&cols)).unwrap_err();
+    let err = simulate_loop(&cfg, &truth(), &excitation(), Some(&[0])).unwrap_err();
     assert!(err.to_string().contains("needs implicit_friction"), "{err}");
     cfg.implicit_friction = true;
     cfg.derivative_filter = T_F;
-    let mut worst = [0.0_f64; 2];
-    let run = |c: &LoopConfig| {
-        simulate_loop(c, &a, &exc, Some(&cols))
-            .unwrap()
-            .jacobian
-            .unwrap()
-    };
-    cfg.state_jacobians = StateJacobians::Exact;
-    let exact = run(&cfg);
-    for (k, mode) in [StateJacobians::PerTick, StateJacobians::FirstStage]
-        .into_iter()
-        .enumerate()
-    {
-        cfg.state_jacobians = mode;
-        let approx = run(&cfg);
-        for c in 0..cols.len() {
-            let e = exact.column(c);
-            worst[k] = worst[k].max((approx.column(c) - e).norm() / e.norm());
-        }
-    }
-    println!(
-        "implicit law, worst relative column error: per tick {:.2e}, first stage {:.2e}",
-        worst[0], worst[1]
-    );
-    assert!(worst[0] < BOUND_PER_TICK, "{}", worst[0]);
-    assert!(worst[1] < BOUND_FIRST_STAGE, "{}", worst[1]);
+    let per_tick = worst_column_error(&cfg, StateJacobians::PerTick);
+    let first = worst_column_error(&cfg, StateJacobians::FirstStage);
+    println!("implicit law, worst relative column error: per tick {per_tick:.2e}, first stage {first:.2e}");
+    assert!(per_tick < BOUND_PER_TICK, "{per_tick}");
+    assert!(first < BOUND_FIRST_STAGE, "{first}");
 }
 
 /// ≈ 3× the measured worst column error of the first-stage approximation under the implicit law.
