@@ -49,8 +49,11 @@ use super::friction::{self, sim_err, Sens, StepSens};
 use super::sens_state::{drive_pid_sensitivity, mul_add, SensState};
 
 mod ahead;
+mod recording;
 mod stages;
-use ahead::{Ahead, StageCall, StateJac};
+use ahead::{Ahead, StateJac};
+pub use recording::Recording;
+use recording::{FrictionModel, Recorder};
 use stages::{Stage, StageModel};
 
 /// Simulates the loop of `cfg` with parameters `a` following `reference` (sampled from t = 0).
@@ -66,17 +69,6 @@ pub fn simulate<T: Trajectory + ?Sized>(
     columns: Option<&[usize]>,
 ) -> Result<LoopRun> {
     simulate_recorded(cfg, a, reference, columns, None, false).map(|(run, _)| run)
-}
-
-/// The stage calls of a primal run ([`simulate_recording`]), for a sensitivity run with the same
-/// configuration (but for `state_jacobians`), parameters and reference ([`simulate_from`]).
-#[derive(Clone)]
-pub struct Recording(Arc<[StageCall]>);
-
-impl std::fmt::Debug for Recording {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Recording({} stage calls)", self.0.len())
-    }
 }
 
 /// [`simulate`] without sensitivities that also records its stage calls when the loop would
@@ -137,9 +129,16 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
         && rayon::current_num_threads() > 1;
     let primal = |record: bool| -> Result<(LoopRun, Option<Recording>)> {
         let mut sim = Lean::new(cfg, a, None)?;
-        sim.record = record.then(|| RefCell::new(Vec::new()));
+        sim.record = record.then(|| RefCell::new(Recorder::for_run(cfg)));
         let run = sim.run(reference)?;
-        let rec = sim.record.map(|r| Recording(r.into_inner().into()));
+        let rec = sim.record.map(|r| {
+            let r = r.into_inner();
+            Recording {
+                calls: r.calls.into(),
+                friction: r.friction.into(),
+                model: FrictionModel::of(cfg, &a.dynamics),
+            }
+        });
         Ok((run, rec))
     };
     if !parallel {
@@ -149,14 +148,23 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
         return primal(record);
     }
     // If the primal run fails, the sensitivity run fails the same way in turn.
-    let Some(Recording(calls)) = recording.or_else(|| primal(true).ok().and_then(|(_, r)| r))
+    let Some(Recording {
+        calls,
+        friction,
+        model,
+    }) = recording.or_else(|| primal(true).ok().and_then(|(_, r)| r))
     else {
         return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
+    };
+    let friction = if model == FrictionModel::of(cfg, &a.dynamics) {
+        friction
+    } else {
+        Arc::from([])
     };
     let helper = StageModel::new(cfg, &a.dynamics, cols.clone());
     let shared = ahead::Shared::new(calls);
     let mut sim = Lean::new(cfg, a, cols)?;
-    sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&shared))));
+    sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&shared), friction)));
     // One helper per further core: the loop's own thread evaluates chunks too while it waits.
     let helpers = rayon::current_num_threads().saturating_sub(1).max(1);
     std::thread::scope(|scope| {
@@ -198,8 +206,8 @@ struct Lean<'a> {
     sens: Option<SensState>,
     /// The stage's derivatives, written in place (≈ 4 KB: not moved per stage).
     scratch: RefCell<ForwardJacobians>,
-    /// The primal run: every stage call, in order.
-    record: Option<RefCell<Vec<StageCall>>>,
+    /// The primal run: every stage call and friction step, in order.
+    record: Option<RefCell<Recorder>>,
     /// The sensitivity run: stages evaluated ahead in parallel.
     ahead: Option<RefCell<Ahead>>,
 }
@@ -282,6 +290,7 @@ impl<'a> Lean<'a> {
             inexact_friction: 0,
             stuck_joint_ticks: 0,
             stages_ahead: 0,
+            friction_ahead: 0,
             pot_angles: if cfg.record_pot_angles {
                 vec![self.theta_meas - cfg.dither(0, 0.0)?]
             } else {
@@ -326,7 +335,16 @@ impl<'a> Lean<'a> {
                 self.lean_tick(&tau_sens.0, t, ik_now.as_ref(), &mut out)?;
             } else if cfg.implicit_friction {
                 let (p0, v0) = (self.pose, self.pose_dot);
-                let st = friction::solve(cfg, &self.dp, &p0, &v0, &tau_sens.0, t)?;
+                // The recorded run's friction step at this state and torque, else solved.
+                let recorded = self.ahead.as_ref().and_then(|a| {
+                    a.borrow_mut()
+                        .take_friction(&p0, &v0, &tau_sens.0)
+                        .map(|f| friction::Step::new(&tau_sens.0, f))
+                });
+                let st = match recorded {
+                    Some(st) => st,
+                    None => friction::solve(cfg, &self.dp, &p0, &v0, &tau_sens.0, t)?,
+                };
                 out.count_friction(st.exact, st.stuck);
                 // The first stage at (χ, χ̇, τ_a − τ_f) serves the friction's sensitivity too.
                 let s1 = self.stage(&p0, &v0, &st.net, t, (true, StateJac::Compute), true)?;
@@ -370,6 +388,7 @@ impl<'a> Lean<'a> {
         }
         if let Some(ahead) = &self.ahead {
             out.stages_ahead = ahead.borrow().taken;
+            out.friction_ahead = ahead.borrow().friction_taken;
         }
         Ok(out)
     }

@@ -362,6 +362,9 @@ pub struct LoopRun {
     /// RK4 stages whose derivatives were evaluated ahead in parallel
     /// ([`LoopConfig::parallel_stages`]; 0 when they were evaluated in turn).
     pub stages_ahead: usize,
+    /// Ticks whose implicit friction step was taken from the recorded primal run (same state,
+    /// torque, parameters and configuration) instead of solved again.
+    pub friction_ahead: usize,
     /// The model's noise-free potentiometer angle (drive convention, rad) at each sampling tick —
     /// tick 0 and every `pot_period` after it — before any `pot_dither`: what a model-based
     /// estimate of the robot's potentiometer noise subtracts from the robot's readings. Empty

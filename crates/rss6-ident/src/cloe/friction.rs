@@ -71,12 +71,19 @@ pub(super) fn solve(
 ) -> Result<Step> {
     let env = cfg.environment();
     let f = implicit_friction(&cfg.kp, dp, p, v, tau, &env, cfg.dt).map_err(|e| sim_err(t, e))?;
-    Ok(Step {
-        net: tau - f.torque,
-        stuck: f.stuck.iter().filter(|&&b| b).count(),
-        exact: f.exact,
-        solved: f,
-    })
+    Ok(Step::new(tau, f))
+}
+
+impl Step {
+    /// The tick's step from the core's solution `f` under the held drive torque `tau`.
+    pub(super) fn new(tau: &Vec6, f: FrictionStep) -> Self {
+        Step {
+            net: tau - f.torque,
+            stuck: f.stuck.iter().filter(|&&b| b).count(),
+            exact: f.exact,
+            solved: f,
+        }
+    }
 }
 
 /// The tick's first RK4 stage at (χ, χ̇, τ_a − τ_f) on the friction-free model: χ̈, F_χ, F_χ̇,

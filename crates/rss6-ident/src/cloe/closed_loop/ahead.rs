@@ -13,12 +13,15 @@
 //! bit the one of the sequential run; a call whose inputs differ from the recorded one (which the
 //! loop's determinism rules out, checked anyway) is evaluated in turn.
 
+use super::recording::TickFriction;
 use super::stages::{Stage, StageModel};
 use super::{Lean, StateJacobians};
 use crate::cloe::config::LoopRun;
 use crate::cloe::friction::sim_err;
 use crate::error::Result;
-use rss6_core::{rk4_step_implicit_friction_observed, ForwardJacobians, Mat6, ModelState, Vec6};
+use rss6_core::{
+    rk4_step_implicit_friction_observed, ForwardJacobians, FrictionStep, Mat6, ModelState, Vec6,
+};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
@@ -194,6 +197,11 @@ pub(super) fn help(model: &StageModel, shared: &Shared) {
 /// The loop's side: the chunk it is on and the stages taken.
 pub(super) struct Ahead {
     shared: Arc<Shared>,
+    /// The recorded run's friction steps, and the next one's index.
+    friction: Arc<[TickFriction]>,
+    next_friction: usize,
+    /// Friction steps taken from the recording.
+    pub(super) friction_taken: usize,
     next: usize,
     /// Index of `ready[0]`.
     start: usize,
@@ -209,14 +217,37 @@ impl Drop for Ahead {
 }
 
 impl Ahead {
-    pub(super) fn new(shared: Arc<Shared>) -> Self {
+    pub(super) fn new(shared: Arc<Shared>, friction: Arc<[TickFriction]>) -> Self {
         Ahead {
             shared,
+            friction,
+            next_friction: 0,
+            friction_taken: 0,
             next: 0,
             start: 0,
             ready: Vec::new(),
             taken: 0,
         }
+    }
+
+    /// The recorded run's next friction step, if it was solved at this state (χ, χ̇) and drive
+    /// torque (bit for bit; the loop's determinism makes it so while the runs agree). The
+    /// sensitivity run then need not solve it again.
+    pub(super) fn take_friction(
+        &mut self,
+        p: &Vec6,
+        v: &Vec6,
+        drive: &Vec6,
+    ) -> Option<FrictionStep> {
+        let k = self.next_friction;
+        self.next_friction += 1;
+        let step = self
+            .friction
+            .get(k)
+            .filter(|f| f.p == *p && f.v == *v && f.drive == *drive)
+            .map(|f| f.step);
+        self.friction_taken += usize::from(step.is_some());
+        step
     }
 
     /// The stage of the loop's next call `call`, from the chunks evaluated ahead; while the chunk
@@ -285,7 +316,7 @@ impl Lean<'_> {
             free_rates,
         };
         if let Some(rec) = &self.record {
-            rec.borrow_mut().push(call);
+            rec.borrow_mut().calls.push(call);
         }
         let frozen = match state {
             StateJac::Compute => None,
@@ -349,7 +380,14 @@ impl Lean<'_> {
             // As `friction::solve` and `Self::rk4` call `Self::stage`: the first stage with its
             // state Jacobians and free rates, all under τ_a − τ_f.
             let net = tau - f.torque;
-            rec.borrow_mut()
+            let mut rec = rec.borrow_mut();
+            rec.friction.push(TickFriction {
+                p: self.pose,
+                v: self.pose_dot,
+                drive: *tau,
+                step: f,
+            });
+            rec.calls
                 .extend(stages.iter().enumerate().map(|(i, &(p, v))| StageCall {
                     p,
                     v,
@@ -394,6 +432,8 @@ mod tests {
         in_turn.parallel_stages = false;
         let seq = simulate(&in_turn, &a, &exc, Some(&cols)).unwrap();
         assert_eq!((run.stages_ahead, seq.stages_ahead), (1200, 0));
+        // Every tick's friction step from the recording too, bit for bit the one solved in turn.
+        assert_eq!((run.friction_ahead, seq.friction_ahead), (300, 0));
         assert!(run.chi == plain.chi && run.chi == seq.chi);
         assert!(run.jacobian == seq.jacobian);
         // Another viscous friction: the trajectory parts from the recording.
@@ -406,6 +446,8 @@ mod tests {
             run.stages_ahead
         );
         assert!(run.stages_ahead < 1200);
+        // Its friction steps were solved with the other viscous friction: none is taken.
+        assert_eq!(run.friction_ahead, 0);
         assert!(run.jacobian == seq.jacobian);
     }
 }
