@@ -34,7 +34,7 @@ class Validation:
     model (the guess), ``excitations`` and ``data`` of each trajectory. On a simulated robot also
     ``rms_true`` and ``rms_true_initial`` (n, 6): the same RMS against the robot's noise-free pose
     at the frame times instead of the camera's χ_m — the model's own error, without the camera
-    noise that bounds ``rms`` from below (NaN rows on a real robot)."""
+    noise that bounds ``rms`` from below (None on a real robot)."""
 
     rms: F64
     rms_initial: F64
