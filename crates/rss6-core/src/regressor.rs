@@ -16,7 +16,7 @@ use crate::error::{check_finite, CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::params::{KinematicParams, N_DYN};
 use crate::pose::{twist_jacobian, twist_jacobian_dot};
-use crate::types::{Mat6, Vec3, Vec6, LEGS};
+use crate::types::{Mat3, Mat6, Vec3, Vec6, LEGS};
 use nalgebra::SMatrix;
 
 /// A 6 × 64 regressor Γ (eq. 5.1): rows are joints (or twist components), columns follow Ξ.
@@ -57,17 +57,12 @@ fn body_columns_at(
     let js = twist_jacobian(pose);
     let v = js * pose_dot;
     let v_dot = js * pose_ddot + twist_jacobian_dot(pose, pose_dot) * pose_dot;
-    let omega = Vec3::new(v[3], v[4], v[5]);
-    let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
-    let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
     gamma.columns_mut(0, 4 * (1 + 2 * LEGS)).fill(0.0);
-    // Platform: m → [Ë − g; 0]; I_k → [0; r_k (r_k·ω̇) + (ω × r_k)(r_k·ω)], r_k = column k of R.
-    let lin = e_ddot - g;
-    put(gamma, 0, &Vec6::new(lin[0], lin[1], lin[2], 0.0, 0.0, 0.0));
-    for k in 0..3 {
-        let rk: Vec3 = geom.rot.column(k).into_owned();
-        let n = rk * rk.dot(&omega_dot) + omega.cross(&rk) * rk.dot(&omega);
-        put(gamma, 1 + k, &Vec6::new(0.0, 0.0, 0.0, n[0], n[1], n[2]));
+    for (k, c) in platform_columns(&geom.rot, &v, &v_dot, g)
+        .iter()
+        .enumerate()
+    {
+        put(gamma, k, c);
     }
     let mut theta_dot = Vec6::zeros();
     for i in 0..LEGS {
@@ -83,6 +78,22 @@ fn body_columns_at(
         put(gamma, cl + 2, &half);
     }
     Ok(theta_dot)
+}
+
+/// The platform's columns of Γ_g at the twist v, its rate v̇ and gravity g (R the platform's
+/// rotation): m → [Ë − g; 0]; I_k → [0; r_k (r_k·ω̇) + (ω × r_k)(r_k·ω)], r_k = column k of R.
+pub(crate) fn platform_columns(rot: &Mat3, v: &Vec6, v_dot: &Vec6, g: &Vec3) -> [Vec6; 4] {
+    let omega = Vec3::new(v[3], v[4], v[5]);
+    let e_ddot = Vec3::new(v_dot[0], v_dot[1], v_dot[2]);
+    let omega_dot = Vec3::new(v_dot[3], v_dot[4], v_dot[5]);
+    let lin = e_ddot - g;
+    let mut c = [Vec6::new(lin[0], lin[1], lin[2], 0.0, 0.0, 0.0); 4];
+    for k in 0..3 {
+        let rk: Vec3 = rot.column(k).into_owned();
+        let n = rk * rk.dot(&omega_dot) + omega.cross(&rk) * rk.dot(&omega);
+        c[1 + k] = Vec6::new(0.0, 0.0, 0.0, n[0], n[1], n[2]);
+    }
+    c
 }
 
 /// Actuator-torque regressor Γ (6 × 64) with τ_a = Γ(χ, χ̇, χ̈)·Ξ, g = [`GRAVITY`]. χ in m and rad,
@@ -154,21 +165,6 @@ pub fn regressor_tau_g(
         &geom.j_ad()?,
         &theta_dot,
     ))
-}
-
-/// Γ_g (as [`regressor_tau_g`]) at a known geometry with gravity `g`, written into `gamma`; the
-/// state already checked.
-pub(crate) fn regressor_tau_g_into(
-    geom: &LegGeometry,
-    j_ad: &Mat6,
-    pose_dot: &Vec6,
-    pose_ddot: &Vec6,
-    g: &Vec3,
-    gamma: &mut Regressor,
-) -> Result<()> {
-    let theta_dot = body_columns_at(geom, pose_dot, pose_ddot, g, gamma)?;
-    twist_friction_columns(gamma, j_ad, &theta_dot);
-    Ok(())
 }
 
 /// Γ_g's friction columns: J_adᵀ e_i sign(θ̇_i) and J_adᵀ e_i θ̇_i.

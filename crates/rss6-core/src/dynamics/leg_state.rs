@@ -109,15 +109,7 @@ impl Leg<Pair> {
         g: &Vec3,
     ) -> Result<Self> {
         let (i, j) = (2 * k, 2 * k + 1);
-        let ((wi, li, ai), (mi, l2i)) = leg_vectors(geom, i)?;
-        let ((wj, lj, aj), (mj, l2j)) = leg_vectors(geom, j)?;
-        let vectors = (
-            Lanes::zip(&wi, &wj),
-            Lanes::zip(&li, &lj),
-            Lanes::zip(&ai, &aj),
-        );
-        let inverses = (Pair::new(mi, mj), Pair::new(l2i, l2j));
-        let acc = LegAcc::from_vectors(vectors, inverses, &v.splat(), &v_dot.splat());
+        let acc = LegAcc::pair(geom, k, (v, v_dot))?;
         let (wi, wj) = (&dp.wrenches[i], &dp.wrenches[j]);
         let (li, lj) = (&dp.links[i], &dp.links[j]);
         let wrench = (
@@ -129,6 +121,57 @@ impl Leg<Pair> {
             Pair::new(link_transverse_inertia(li), link_transverse_inertia(lj)),
         );
         Ok(Leg::from_acc(acc, wrench, link, &g.splat()))
+    }
+}
+
+/// Legs' body columns of Γ_g by factors (column i of a matrix, entry i of a vector: leg i): the
+/// wrench's mass and axial-inertia columns are r_i `q`_i and r_i θ̈_i, the link's mass column
+/// `f_cl`, its I_x and I_y columns `half` each (the same arithmetic as
+/// [`crate::regressor::regressor_tau_g`]'s); θ̇ for the friction columns.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LegColumns {
+    pub(crate) q: Vec6,
+    pub(crate) theta_ddot: Vec6,
+    pub(crate) theta_dot: Vec6,
+    pub(crate) f_cl: Mat6,
+    pub(crate) half: Mat6,
+}
+
+impl LegColumns {
+    pub(crate) fn zeros() -> Self {
+        LegColumns {
+            q: Vec6::zeros(),
+            theta_ddot: Vec6::zeros(),
+            theta_dot: Vec6::zeros(),
+            f_cl: Mat6::zeros(),
+            half: Mat6::zeros(),
+        }
+    }
+
+    /// Every leg's at the twist v, its rate v̇ and gravity g, two legs at a time.
+    pub(crate) fn at(geom: &LegGeometry, (v, v_dot): (&Vec6, &Vec6), g: &Vec3) -> Result<Self> {
+        let mut c = LegColumns::zeros();
+        for k in 0..LEGS / 2 {
+            c.add_pair(k, &LegAcc::pair(geom, k, (v, v_dot))?, g);
+        }
+        Ok(c)
+    }
+
+    /// Legs 2k and 2k + 1 from their accelerations (side by side).
+    #[inline(always)]
+    pub(crate) fn add_pair(&mut self, k: usize, acc: &LegAcc<Pair>, g: &Vec3) {
+        let g = g.splat();
+        let q = acc.s_cw.dot(&(acc.cw_acc - g));
+        let f_cl = acc.jbu_t(&(acc.cl_acc - g));
+        let half = acc.jbd_t(&acc.omega2_dot) * Pair::from(0.5);
+        for lane in 0..2 {
+            let i = 2 * k + lane;
+            self.q[i] = q.get(lane);
+            self.theta_ddot[i] = acc.theta_ddot.get(lane);
+            self.theta_dot[i] = acc.theta_dot.get(lane);
+            self.f_cl.set_column(i, &lanes::lane(&f_cl, lane));
+            self.half.set_column(i, &lanes::lane(&half, lane));
+        }
     }
 }
 
@@ -175,6 +218,27 @@ pub(crate) struct LegTerms<T: Lane> {
     pub(crate) l_acc: Vector3<T>,
     pub(crate) omega2: Vector3<T>,
     pub(crate) c2: T,
+}
+
+impl LegAcc<Pair> {
+    /// Legs 2k and 2k + 1's accelerations side by side at the twist v and its rate v̇.
+    #[inline(always)]
+    pub(crate) fn pair(geom: &LegGeometry, k: usize, (v, v_dot): (&Vec6, &Vec6)) -> Result<Self> {
+        let ((wi, li, ai), (mi, l2i)) = leg_vectors(geom, 2 * k)?;
+        let ((wj, lj, aj), (mj, l2j)) = leg_vectors(geom, 2 * k + 1)?;
+        let vectors = (
+            Lanes::zip(&wi, &wj),
+            Lanes::zip(&li, &lj),
+            Lanes::zip(&ai, &aj),
+        );
+        let inverses = (Pair::new(mi, mj), Pair::new(l2i, l2j));
+        Ok(LegAcc::from_vectors(
+            vectors,
+            inverses,
+            &v.splat(),
+            &v_dot.splat(),
+        ))
+    }
 }
 
 impl<T: Lane> LegAcc<T> {

@@ -1,7 +1,7 @@
 //! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
 //! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
 
-use super::leg_state::{add_leg_forces, Leg};
+use super::leg_state::{add_leg_forces, Leg, LegColumns};
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
 use super::pose_tangent::{stepped_pose_columns, PoseTangents};
@@ -209,7 +209,7 @@ pub fn inverse_dynamics_derivatives_with_env(
     let singular = || CoreError::Singular(SingularKind::TypeII);
     let tau0 = lu.solve(&f0).ok_or_else(singular)?;
     let t = derivatives_at(
-        kp, &geom, &j_theta, dp, pose_dot, pose_ddot, env, &tau0, None, None,
+        kp, &geom, &j_theta, dp, pose_dot, pose_ddot, env, &tau0, None, None, None,
     )?;
     // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
     let mut d_pose = lu.solve(&t.pose).ok_or_else(singular)?;
@@ -248,7 +248,7 @@ pub(super) struct ForceTangents {
 /// platform joints of χ + h e_k with the joint angles θ + h J_θ e_k — the IK linearised along the
 /// step, which has the IK's own derivative. The χ̇ columns are the exact tangent of
 /// `rate_tangent`. The caller maps the columns (one LU of J_adᵀ, or the forward dynamics' own
-/// factor).
+/// factor). With `legs`: also the legs' regressor columns from the same leg states.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn derivatives_at(
     kp: &KinematicParams,
@@ -261,6 +261,7 @@ pub(super) fn derivatives_at(
     tau_rigid: &Vec6,
     one_sided_step: Option<f64>,
     twist: Option<&Vec6>,
+    mut legs: Option<&mut LegColumns>,
 ) -> Result<ForceTangents> {
     let pose = &geom.pose;
     let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
@@ -280,6 +281,9 @@ pub(super) fn derivatives_at(
             t.add_pair(k, &pair, j_theta, tau_rigid);
         }
         vel.add_pair(&pair);
+        if let Some(c) = legs.as_deref_mut() {
+            c.add_pair(k, &pair.acc, g);
+        }
     }
     let (b_pose, d_rate_pose, d_rates) = match (exact, one_sided_step) {
         (Some(t), _) => t.finish(),

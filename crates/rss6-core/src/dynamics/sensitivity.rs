@@ -11,15 +11,16 @@
 //! Cholesky factor of the twist-space M the forward dynamics already has (through the 6 × 6
 //! K = J_s⁻¹M⁻¹, one product per column of Ξ, and only for the columns requested).
 
+use super::leg_state::LegColumns;
 use super::load::Environment;
 use super::newton_euler::{derivatives_at, forward_at};
-use super::{check_finite, check_state};
+use super::{check_finite, check_state, sign0, twist_and_rate};
 use crate::error::{CoreError, Result};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
 use crate::pose::twist_jacobian;
-use crate::regressor::{regressor_tau_g_into, Regressor};
-use crate::types::{Mat6, Vec6};
+use crate::regressor::{platform_columns, Regressor};
+use crate::types::{Mat6, Vec6, LEGS};
 
 /// What [`forward_dynamics_jacobians_with_env`] computes beyond χ̈, J_θ, ∂χ̈/∂τ_a and ∂χ̈/∂Ξ.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -137,28 +138,15 @@ pub fn forward_dynamics_jacobians_with_env(
     out.pose_ddot = f.chi_ddot;
     out.j_theta = j_ad * twist_jacobian(pose);
     // K = J_s⁻¹M⁻¹ once; then ∂χ̈/∂τ_a = K J_adᵀ and ∂χ̈/∂Ξ = −K Γ_g, column by column.
-    let k = f.js_inv * f.chol.inverse();
+    let k = js_inv_m_inv(&f.js_inv, &f.chol);
     out.d_torque = k * f.j_ad_t;
-    regressor_tau_g_into(
-        &geom,
-        &j_ad,
-        pose_dot,
-        &f.chi_ddot,
-        &env.gravity,
-        &mut out.d_params,
-    )?;
-    for (c, mut col) in out.d_params.column_iter_mut().enumerate() {
-        if (request.param_columns.checked_shr(c as u32)).is_some_and(|m| m & 1 == 1) {
-            let x: Vec6 = -(k * &col);
-            col.copy_from(&x);
-        } else {
-            col.fill(0.0);
-        }
-    }
     (out.d_state, out.d_rates) = (None, None);
-    if request.state {
+    // The legs' regressor columns from the leg states the tangents form anyway (or on their own).
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, &f.chi_ddot);
+    let mut legs = LegColumns::zeros();
+    let tangents = if request.state {
         let nu = request.rate_step.map(|h| f.v + f.v_dot * h);
-        let t = derivatives_at(
+        Some(derivatives_at(
             kp,
             &geom,
             &out.j_theta,
@@ -169,7 +157,21 @@ pub fn forward_dynamics_jacobians_with_env(
             &f.tau_rigid,
             request.one_sided_step,
             nu.as_ref(),
-        )?;
+            Some(&mut legs),
+        )?)
+    } else {
+        legs = LegColumns::at(&geom, (&v, &v_dot), &env.gravity)?;
+        None
+    };
+    let platform = platform_columns(&geom.rot, &v, &v_dot, &env.gravity);
+    param_columns(
+        &mut out.d_params,
+        request.param_columns,
+        (&k, &out.d_torque),
+        &platform,
+        &legs,
+    );
+    if let Some(t) = tangents {
         // ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ_a/∂x with ∂τ_a/∂x = J_adᵀ⁻¹ ∂f/∂x + f_v ∂θ̇/∂x: the force
         // columns through K = M̃⁻¹J_θᵀJ_adᵀ⁻¹ directly, no factor of J_adᵀ; the viscous ones
         // (if any) through M̃⁻¹J_θᵀ.
@@ -189,4 +191,81 @@ pub fn forward_dynamics_jacobians_with_env(
         out.d_rates = t.rates;
     }
     Ok(())
+}
+
+/// K = J_s⁻¹M⁻¹ from the Cholesky factor L of M (M⁻¹ = L⁻ᵀL⁻¹, L⁻¹ by forward substitution:
+/// ≈ 100 products where nalgebra's general `inverse` solves six columns twice) and J_s⁻¹ =
+/// diag(I, J_e⁻¹) (only its lower block multiplies).
+fn js_inv_m_inv(js_inv: &Mat6, chol: &nalgebra::Cholesky<f64, nalgebra::U6>) -> Mat6 {
+    // Only L's lower triangle is read (`l_dirty` leaves the upper one as it was).
+    let l = chol.l_dirty();
+    let mut li = Mat6::zeros();
+    for j in 0..6 {
+        let d = 1.0 / l[(j, j)];
+        li[(j, j)] = d;
+        for i in j + 1..6 {
+            let mut s = 0.0;
+            for k in j..i {
+                s += l[(i, k)] * li[(k, j)];
+            }
+            li[(i, j)] = -s / l[(i, i)];
+        }
+    }
+    let mut m_inv = Mat6::zeros();
+    for j in 0..6 {
+        for i in j..6 {
+            let mut s = 0.0;
+            for k in i..6 {
+                s += li[(k, i)] * li[(k, j)];
+            }
+            m_inv[(i, j)] = s;
+            m_inv[(j, i)] = s;
+        }
+    }
+    let je_inv = js_inv.fixed_view::<3, 3>(3, 3);
+    let lower = je_inv * m_inv.fixed_rows::<3>(3);
+    m_inv.fixed_rows_mut::<3>(3).copy_from(&lower);
+    m_inv
+}
+
+/// ∂χ̈/∂Ξ = −K Γ_g on the columns of `mask` (the others zero), K = J_s⁻¹M⁻¹, from the platform's
+/// columns of Γ_g and the legs' factors. A wrench's and a friction column of Γ_g is J_adᵀ e_i times
+/// a scalar, so its K product is column i of K J_adᵀ = ∂χ̈/∂τ_a (`d_torque`) times that scalar; a
+/// link's I_x and I_y columns are equal (one product).
+fn param_columns(
+    out: &mut Regressor,
+    mask: u64,
+    (k, d_torque): (&Mat6, &Mat6),
+    platform: &[Vec6; 4],
+    legs: &LegColumns,
+) {
+    let on = |c: usize| mask.checked_shr(c as u32).is_some_and(|m| m & 1 == 1);
+    // A slice fill (one memset): nalgebra's element iterator costs ≈ 12 instructions an entry.
+    out.as_mut_slice().fill(0.0);
+    // Column c is written, and its product formed, only if the mask asks for it.
+    macro_rules! put {
+        ($c:expr, $x:expr) => {
+            if on($c) {
+                out.set_column($c, &$x);
+            }
+        };
+    }
+    for (c, col) in platform.iter().enumerate() {
+        put!(c, -(k * col));
+    }
+    for i in 0..LEGS {
+        let t = d_torque.column(i);
+        let (cw, cl) = (4 * (1 + i), 4 * (7 + i));
+        put!(cw, t * -legs.q[i]);
+        put!(cw + 3, t * -legs.theta_ddot[i]);
+        put!(cl, -(k * legs.f_cl.column(i)));
+        if on(cl + 1) || on(cl + 2) {
+            let h: Vec6 = -(k * legs.half.column(i));
+            put!(cl + 1, h);
+            put!(cl + 2, h);
+        }
+        let td = legs.theta_dot[i];
+        put!(52 + i, t * -sign0(td));
+        put!(58 + i, t * -td);
+    }
 }

@@ -566,7 +566,7 @@ impl<'a> Lean<'a> {
         // PerTick: the state Jacobians of stage 1 serve all four stages.
         let frozen = match self.cfg.state_jacobians {
             StateJacobians::PerTick | StateJacobians::FirstStage => {
-                StateJac::Frozen(s1.jac.as_ref().map(|j| (j.fp, j.fv)))
+                StateJac::Frozen(s1.jac.as_deref().map(|j| (j.fp, j.fv)))
             }
             StateJacobians::Exact => StateJac::Compute,
         };

@@ -19,9 +19,6 @@ pub(super) struct SensState {
     pub command: Sens,
     pub v_integral: Sens,
     pub last_frame: Option<Sens>,
-    /// Scratch space of the RK4 step's sensitivities (stage χ, χ̇, χ̈ and the two weighted sums),
-    /// allocated once per run.
-    pub rk4: [Sens; 5],
 }
 
 impl SensState {
@@ -37,7 +34,6 @@ impl SensState {
             command: z(),
             v_integral: z(),
             last_frame: None,
-            rk4: [z(), z(), z(), z(), z()],
             columns,
             pot_scale,
         }
@@ -64,36 +60,40 @@ pub(super) fn drive_pid_sensitivity(
     unclamped: &[bool; LEGS],
     terms: &[(f64, f64, f64); LEGS],
 ) -> Sens {
-    let s_e = &s.command - &s.theta_meas;
-    let s_de = &s_e - &s.prev_error;
-    let mut s_d = match (primed, t_f > 0.0) {
-        (false, _) => Sens::zeros(s_e.ncols()),
-        (true, false) => s_de * (gains.ld / dt),
-        (true, true) => (&s.prev_derivative * t_f + s_de * gains.ld) / (t_f + dt),
-    };
     let col = |a: usize| s.columns.iter().position(|&c| c == a);
     let (c_lp, c_li, c_ld) = (col(N_DYN), col(N_DYN + 1), col(N_DYN + 2));
-    if let Some(c) = c_ld {
+    // Entry by entry in place (the same sums, in the same order, as the block operations
+    // ∂e = ∂U − ∂θ_m, ∂D, ∂I = ∂I + ∂e dt, ∂τ = l_p ∂e + l_i ∂I + ∂D): no temporary blocks.
+    let mut s_tau = Sens::zeros(s.command.ncols());
+    for c in 0..s_tau.ncols() {
+        let e: Vec6 = s.command.column(c) - s.theta_meas.column(c);
+        let de = e - s.prev_error.column(c);
+        let mut d = match (primed, t_f > 0.0) {
+            (false, _) => Vec6::zeros(),
+            (true, false) => de * (gains.ld / dt),
+            (true, true) => (s.prev_derivative.column(c) * t_f + de * gains.ld) / (t_f + dt),
+        };
+        if c_ld == Some(c) {
+            d += Vec6::from_fn(|i, _| terms[i].1);
+        }
+        let integral = s.integral.column(c) + e * dt;
+        let mut tau = e * gains.lp + integral * gains.li + d;
         for (i, term) in terms.iter().enumerate() {
-            s_d[(i, c)] += term.1;
-        }
-    }
-    let s_int = &s.integral + &s_e * dt;
-    let mut s_tau = &s_e * gains.lp + &s_int * gains.li + &s_d;
-    for i in 0..LEGS {
-        if unclamped[i] {
-            if let Some(c) = c_lp {
-                s_tau[(i, c)] += terms[i].0;
+            if unclamped[i] {
+                if c_lp == Some(c) {
+                    tau[i] += term.0;
+                }
+                if c_li == Some(c) {
+                    tau[i] += term.2;
+                }
+                s.integral[(i, c)] = integral[i];
+            } else {
+                tau[i] = 0.0;
             }
-            if let Some(c) = c_li {
-                s_tau[(i, c)] += terms[i].2;
-            }
-            s.integral.set_row(i, &s_int.row(i));
-        } else {
-            s_tau.row_mut(i).fill(0.0);
         }
+        s_tau.set_column(c, &tau);
+        s.prev_error.set_column(c, &e);
+        s.prev_derivative.set_column(c, &d);
     }
-    s.prev_error = s_e;
-    s.prev_derivative = s_d;
     s_tau
 }

@@ -329,7 +329,7 @@ impl Lean<'_> {
             };
             if let Some(stage) = taken {
                 let mut stage = stage?;
-                if let (Some(jac), Some((fp, fv))) = (stage.jac.as_mut(), frozen) {
+                if let (Some(jac), Some((fp, fv))) = (stage.jac.as_deref_mut(), frozen) {
                     (jac.fp, jac.fv) = (fp, fv);
                 }
                 return Ok(stage);
