@@ -1,6 +1,7 @@
 //! The vector (Newton–Euler) path: body accelerations leg by leg, mapped back through the transposed
 //! Jacobians (eq. 3.45–3.47) — [`inverse_dynamics`] and [`forward_dynamics`] without forming M̃ or C̃.
 
+use super::lanes::Pair;
 use super::leg_state::{add_leg_forces, Leg, LegColumns};
 use super::load::{Environment, LoadAt};
 use super::matrices::twist_mass_matrix;
@@ -208,8 +209,10 @@ pub fn inverse_dynamics_derivatives_with_env(
     let lu = j0.lu();
     let singular = || CoreError::Singular(SingularKind::TypeII);
     let tau0 = lu.solve(&f0).ok_or_else(singular)?;
+    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let rates = (&v, &v_dot);
     let t = derivatives_at(
-        kp, &geom, &j_theta, dp, pose_dot, pose_ddot, env, &tau0, None, None, None,
+        kp, &geom, &j_theta, dp, pose_dot, pose_ddot, rates, env, &tau0, None, None, None,
     )?;
     // τ_a = J_adᵀ⁻¹ f + f_c sign(θ̇) + f_v θ̇ (Coulomb's sign held at θ̇).
     let mut d_pose = lu.solve(&t.pose).ok_or_else(singular)?;
@@ -248,7 +251,8 @@ pub(super) struct ForceTangents {
 /// platform joints of χ + h e_k with the joint angles θ + h J_θ e_k — the IK linearised along the
 /// step, which has the IK's own derivative. The χ̇ columns are the exact tangent of
 /// `rate_tangent`. The caller maps the columns (one LU of J_adᵀ, or the forward dynamics' own
-/// factor). With `legs`: also the legs' regressor columns from the same leg states.
+/// factor). `rates`: (v, v̇) = [`twist_and_rate`] at the state. With `legs`: also the legs'
+/// regressor columns from the same leg states.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn derivatives_at(
     kp: &KinematicParams,
@@ -257,6 +261,7 @@ pub(super) fn derivatives_at(
     dp: &DynamicParams,
     pose_dot: &Vec6,
     pose_ddot: &Vec6,
+    rates: (&Vec6, &Vec6),
     env: &Environment,
     tau_rigid: &Vec6,
     one_sided_step: Option<f64>,
@@ -265,30 +270,35 @@ pub(super) fn derivatives_at(
 ) -> Result<ForceTangents> {
     let pose = &geom.pose;
     let load = env.load.as_ref().map(|l| LoadAt::new(l, &geom.rot));
-    let (v, v_dot) = twist_and_rate(pose, pose_dot, pose_ddot);
+    let (v, v_dot) = rates;
     // Columns of ∂f − ∂J_adᵀ τ_rigid (pose), with ∂θ̇ for the viscous term: the exact tangent
     // or forward differences from the state; the χ̇ columns are the force's exact tangent at this
     // geometry. The tangents take the legs two at a time.
     let g = &env.gravity;
-    let mut exact = one_sided_step
-        .is_none()
-        .then(|| PoseTangents::new(geom, dp, load.as_ref(), (pose_dot, pose_ddot), g, twist));
     let (dv, dvd) = twist_rate_directions(pose, pose_dot);
-    let mut vel = RateTangents::new(geom, dp, load.as_ref(), &v, (&dv, &dvd));
-    for k in 0..LEGS / 2 {
-        let pair = Leg::pair(geom, dp, k, (&v, &v_dot), g)?;
-        if let Some(t) = exact.as_mut() {
-            t.add_pair(k, &pair, j_theta, tau_rigid);
-        }
-        vel.add_pair(&pair);
+    let mut vel = RateTangents::new(geom, dp, load.as_ref(), v, (&dv, &dvd));
+    let mut each_pair = |k: usize, pair: &Leg<Pair>| {
+        vel.add_pair(pair);
         if let Some(c) = legs.as_deref_mut() {
             c.add_pair(k, &pair.acc, g);
         }
-    }
-    let (b_pose, d_rate_pose, d_rates) = match (exact, one_sided_step) {
-        (Some(t), _) => t.finish(),
-        (None, h) => {
-            let h = h.unwrap_or_default();
+    };
+    // (The exact tangents built in place, not moved through an `Option`: ≈ 2.5 KB.)
+    let (b_pose, d_rate_pose, d_rates) = match one_sided_step {
+        None => {
+            let state = (pose_dot, pose_ddot);
+            let mut t = PoseTangents::new(geom, dp, load.as_ref(), state, rates, g, twist);
+            for k in 0..LEGS / 2 {
+                let pair = Leg::pair(geom, dp, k, (v, v_dot), g)?;
+                t.add_pair(k, &pair, j_theta, tau_rigid);
+                each_pair(k, &pair);
+            }
+            t.finish()
+        }
+        Some(h) => {
+            for k in 0..LEGS / 2 {
+                each_pair(k, &Leg::pair(geom, dp, k, (v, v_dot), g)?);
+            }
             stepped_pose_columns(
                 kp,
                 geom,

@@ -10,7 +10,7 @@ use super::load::{Environment, LoadAt};
 use super::newton_euler::rigid_forces;
 use super::platform_inertia;
 use super::rate_tangent::{bottom, stack, top};
-use super::{twist_and_rate, z_cross, z_triple};
+use super::{z_cross, z_triple};
 use crate::error::Result;
 use crate::jacobian::LegGeometry;
 use crate::params::DynamicParams;
@@ -121,17 +121,22 @@ impl PoseTangents {
         dp: &DynamicParams,
         load: Option<&LoadAt>,
         (pose_dot, pose_ddot): (&Vec6, &Vec6),
+        (v, v_dot): (&Vec6, &Vec6),
         g: &Vec3,
         twist: Option<&Vec6>,
     ) -> Self {
-        let (v, v_dot) = twist_and_rate(&geom.pose, pose_dot, pose_ddot);
-        let (e_dot, omega) = (top(&v), bottom(&v));
-        let omega_dot = bottom(&v_dot);
+        let (e_dot, omega) = (top(v), bottom(v));
+        let omega_dot = bottom(v_dot);
         let dirs = directions(&geom.pose, pose_dot, pose_ddot);
         let ip = platform_inertia(&geom.rot, &dp.platform);
         let (ip_omega, ip_omega_dot) = (ip * omega, ip * omega_dot);
         let mut b = Mat6::zeros();
         for (c, d) in dirs.iter().enumerate() {
+            if c < 3 && load.is_none() {
+                // A translation moves neither the orientation nor the twist: the platform's
+                // force does not change (its terms are all zero products).
+                continue;
+            }
             let (d_omega, d_omega_dot) = (bottom(&d.v), bottom(&d.v_dot));
             // ∂I_p = [δφ]× I_p − I_p [δφ]×, applied to vectors only.
             let d_ip = |x: &Vec3, ip_x: &Vec3| d.phi.cross(ip_x) - ip * d.phi.cross(x);
@@ -142,7 +147,7 @@ impl PoseTangents {
                 + omega.cross(&(d_ip(&omega, &ip_omega) + ip * d_omega));
             let mut f = stack(&f_lin, &f_ang);
             if let Some(load) = load {
-                f += load.force_pose_tangent(&v, &v_dot, g, &d.phi, &d.v, &d.v_dot);
+                f += load.force_pose_tangent(v, v_dot, g, &d.phi, &d.v, &d.v_dot);
             }
             b.set_column(c, &f);
         }
@@ -408,6 +413,7 @@ impl<T: Lane> Leg<T> {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
+    use super::super::twist_and_rate;
     use super::*;
     use crate::types::Vec3;
     use rand::{Rng, SeedableRng};
@@ -472,9 +478,9 @@ mod tests {
                     let one = leg.direction::<false, false>(&body, &d, dth[2 * k + lane]);
                     let two = pair.direction::<false, false>(&body2, &split(&d), dth2);
                     assert_eq!(one.0, lanes::lane(&two.0, lane));
-                    let one = leg.column(&body.e_dot, &body.omega, &dv, &dvd);
+                    let one = leg.column::<true, true>(&body.e_dot, &body.omega, &dv, &dvd);
                     let (e2, w2) = (body.e_dot.splat(), body.omega.splat());
-                    let two = pair.column(&e2, &w2, &dv.splat(), &dvd.splat());
+                    let two = pair.column::<true, true>(&e2, &w2, &dv.splat(), &dvd.splat());
                     assert_eq!(one, lanes::lane(&two, lane));
                     assert!(one.amax() > 0.0);
                     checked += 1;

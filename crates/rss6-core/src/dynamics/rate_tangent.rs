@@ -99,7 +99,13 @@ impl RateTangents {
         for c in 0..6 {
             let d_v = self.dv.column(c).into_owned().splat();
             let d_vd = self.dvd.column(c).into_owned().splat();
-            let d_f = leg.column(&self.e_dot, &self.omega, &d_v, &d_vd);
+            // χ̇'s first three move only Ė, its last three only ω and ω̇ (J_s = diag(I, J_e), J̇_s
+            // likewise): each column skips the other's zero terms (the same sums).
+            let d_f = if c < 3 {
+                leg.column::<true, false>(&self.e_dot, &self.omega, &d_v, &d_vd)
+            } else {
+                leg.column::<false, true>(&self.e_dot, &self.omega, &d_v, &d_vd)
+            };
             for lane in 0..2 {
                 let mut col = self.out.column_mut(c);
                 col += lanes::lane(&d_f, lane);
@@ -110,8 +116,11 @@ impl RateTangents {
 
 impl<T: Lane> Leg<T> {
     /// The leg's part of column (d_v, d_vd) of ∂f/∂χ̇ at the platform's twist (`e_dot`, `omega`).
+    /// `LIN`: d_v moves only Ė; `ANG`: d_v moves only ω and d_vd only ω̇ (χ̇'s columns: J_s and
+    /// J̇_s are block-diagonal, J̇_s zero on Ė); both: any direction. A term a column makes zero
+    /// is left out, which changes no sum.
     #[inline(always)]
-    pub(super) fn column(
+    pub(super) fn column<const LIN: bool, const ANG: bool>(
         &self,
         e_dot: &Vector3<T>,
         omega: &Vector3<T>,
@@ -153,26 +162,52 @@ impl<T: Lane> Leg<T> {
         let (theta_dot, inv_m, m_dot, ll, inv_l2) = (*th_d, *inv_m, *m_dot, *c2, *inv_l2);
         let half = T::from(0.5);
         let (d_e_dot, d_omega) = (top(d_v), bottom(d_v));
-        let (d_e_ddot, d_omega_dot) = (top(d_vd), bottom(d_vd));
-        let d_theta_dot = r.dot(d_v);
+        let d_omega_dot = bottom(d_vd);
+        let (r_lin, r_ang) = (top(r), bottom(r));
+        let d_theta_dot = match (LIN, ANG) {
+            (true, false) => r_lin.dot(&d_e_dot),
+            (false, true) => r_ang.dot(&d_omega),
+            _ => r.dot(d_v),
+        };
         let d_w_dot = s_w * d_theta_dot;
         let d_a_dot = d_omega.cross(a);
-        let d_l_dot = d_e_dot + d_a_dot - d_w_dot;
+        let d_l_dot = match (LIN, ANG) {
+            (true, false) => d_e_dot - d_w_dot,
+            (false, true) => d_a_dot - d_w_dot,
+            _ => d_e_dot + d_a_dot - d_w_dot,
+        };
         let d_m_dot = d_w_dot[0] * l[1] - d_w_dot[1] * l[0] + w[0] * d_l_dot[1] - w[1] * d_l_dot[0];
-        let d_al_dot = d_a_dot.cross(l) + a.cross(&d_l_dot);
-        let d_theta_ddot = r.dot(d_vd)
-            + (d_l_dot.dot(e_dot)
-                + l_dot.dot(&d_e_dot)
-                + d_al_dot.dot(omega)
-                + al_dot.dot(&d_omega)
-                - d_m_dot * theta_dot
-                - m_dot * d_theta_dot)
-                * inv_m;
+        let d_al_dot = if ANG {
+            d_a_dot.cross(l) + a.cross(&d_l_dot)
+        } else {
+            a.cross(&d_l_dot)
+        };
+        let mut num = d_l_dot.dot(e_dot);
+        if LIN {
+            num += l_dot.dot(&d_e_dot);
+        }
+        num += d_al_dot.dot(omega);
+        if ANG {
+            num += al_dot.dot(&d_omega);
+        }
+        num = num - d_m_dot * theta_dot - m_dot * d_theta_dot;
+        let d_theta_ddot = match (LIN, ANG) {
+            (true, false) => num * inv_m,
+            (false, true) => r_ang.dot(&d_omega_dot) + num * inv_m,
+            _ => r.dot(d_vd) + num * inv_m,
+        };
         let d_t_acc =
             s_w * d_theta_ddot + z_cross(&d_w_dot) * theta_dot + z_cross(w_dot) * d_theta_dot;
-        let d_l_acc =
-            d_e_ddot + d_omega_dot.cross(a) + d_omega.cross(a_dot) + omega.cross(&d_a_dot)
-                - d_t_acc;
+        let d_l_acc = match (LIN, ANG) {
+            (true, false) => -d_t_acc,
+            (false, true) => {
+                d_omega_dot.cross(a) + d_omega.cross(a_dot) + omega.cross(&d_a_dot) - d_t_acc
+            }
+            _ => {
+                top(d_vd) + d_omega_dot.cross(a) + d_omega.cross(a_dot) + omega.cross(&d_a_dot)
+                    - d_t_acc
+            }
+        };
         let d_omega2 = l.cross(&d_l_dot) * inv_l2;
         let d_omega2_dot = l.cross(&d_l_acc) * inv_l2
             - d_omega2 * ll

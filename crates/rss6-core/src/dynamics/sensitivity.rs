@@ -153,6 +153,7 @@ pub fn forward_dynamics_jacobians_with_env(
             dp,
             pose_dot,
             &f.chi_ddot,
+            (&v, &v_dot),
             env,
             &f.tau_rigid,
             request.one_sided_step,

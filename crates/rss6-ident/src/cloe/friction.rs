@@ -24,7 +24,6 @@
 //! derivative of sign(θ̇) is: both are events of measure zero in A.
 
 use super::config::LoopConfig;
-use super::sens_state::mul_add;
 use crate::error::{IdentError, Result};
 use nalgebra::{Dyn, OMatrix, U6};
 use rss6_core::{
@@ -140,12 +139,22 @@ pub(super) fn sensitivity(
         message: "the implicit friction step's active-set system is singular".into(),
     })?;
     let w = a_inv * Mat6::from_diagonal(&d);
-    let mut out = s.tau.clone();
-    mul_add(&mut out, &-(w * k), s.tau);
-    mul_add(&mut out, &-(w * gp), s.p);
-    mul_add(&mut out, &-(w * gv), s.v);
+    let (m_tau, m_p, m_v) = (-(w * k), -(w * gp), -(w * gv));
     // The mass parameters act through the friction-free acceleration over the tick.
-    mul_add(&mut out, &-(w * (first.j_theta * dt)), first.fxi);
+    let m_xi = -(w * (first.j_theta * dt));
+    let mut out = s.tau.clone();
+    // Column by column in one pass (the sums of four block products, in their order); the
+    // friction and gain columns of ∂χ̈/∂Ξ are zero under this law (their product is skipped).
+    for (c, &col) in s.columns.iter().enumerate() {
+        let mut o: Vec6 = out.column(c).into_owned();
+        o += m_tau * s.tau.column(c);
+        o += m_p * s.p.column(c);
+        o += m_v * s.v.column(c);
+        if col < COULOMB {
+            o += m_xi * first.fxi.column(c);
+        }
+        out.set_column(c, &o);
+    }
     for i in (0..LEGS).filter(|&i| !f.stuck[i]) {
         let rate = f.rate[i];
         for (c, &col) in s.columns.iter().enumerate() {
