@@ -97,26 +97,68 @@ pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
 
 /// The Euler-rate Jacobian J_e(α, β) with ω = J_e·[α̇, β̇, γ̇] (eq. 3.22); ω in the base frame.
 pub fn euler_rate_jacobian(alpha: f64, beta: f64) -> Mat3 {
-    let (sa, ca) = (sin(alpha), cos(alpha));
-    let (sb, cb) = (sin(beta), cos(beta));
-    Mat3::new(1.0, 0.0, sb, 0.0, ca, -cb * sa, 0.0, sa, cb * ca)
+    RateTrig::new(alpha, beta).je()
 }
 
 /// Time derivative J̇_e given the Euler angles and their rates.
 pub fn euler_rate_jacobian_dot(alpha: f64, beta: f64, alpha_dot: f64, beta_dot: f64) -> Mat3 {
-    let (sa, ca) = (sin(alpha), cos(alpha));
-    let (sb, cb) = (sin(beta), cos(beta));
-    Mat3::new(
-        0.0,
-        0.0,
-        cb * beta_dot,
-        0.0,
-        -sa * alpha_dot,
-        sb * sa * beta_dot - cb * ca * alpha_dot,
-        0.0,
-        ca * alpha_dot,
-        -sb * ca * beta_dot - cb * sa * alpha_dot,
-    )
+    RateTrig::new(alpha, beta).je_dot(alpha_dot, beta_dot)
+}
+
+/// sin and cos of the Euler angles α, β: all that J_e, J̇_e and their derivatives read of the
+/// pose, computed once for the several matrices a derivative needs (the same values, so the same
+/// matrices bit for bit).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RateTrig {
+    pub(crate) sa: f64,
+    pub(crate) ca: f64,
+    pub(crate) sb: f64,
+    pub(crate) cb: f64,
+}
+
+impl RateTrig {
+    pub(crate) fn new(alpha: f64, beta: f64) -> Self {
+        RateTrig {
+            sa: sin(alpha),
+            ca: cos(alpha),
+            sb: sin(beta),
+            cb: cos(beta),
+        }
+    }
+
+    /// Of the pose's α and β.
+    pub(crate) fn of(pose: &Vec6) -> Self {
+        RateTrig::new(pose[3], pose[4])
+    }
+
+    /// J_e ([`euler_rate_jacobian`]).
+    pub(crate) fn je(&self) -> Mat3 {
+        let RateTrig { sa, ca, sb, cb } = *self;
+        Mat3::new(1.0, 0.0, sb, 0.0, ca, -cb * sa, 0.0, sa, cb * ca)
+    }
+
+    /// J̇_e at the rates α̇, β̇ ([`euler_rate_jacobian_dot`]).
+    pub(crate) fn je_dot(&self, alpha_dot: f64, beta_dot: f64) -> Mat3 {
+        let RateTrig { sa, ca, sb, cb } = *self;
+        Mat3::new(
+            0.0,
+            0.0,
+            cb * beta_dot,
+            0.0,
+            -sa * alpha_dot,
+            sb * sa * beta_dot - cb * ca * alpha_dot,
+            0.0,
+            ca * alpha_dot,
+            -sb * ca * beta_dot - cb * sa * alpha_dot,
+        )
+    }
+
+    /// J_s = diag(I₃, J_e) ([`twist_jacobian`]).
+    pub(crate) fn js(&self) -> Mat6 {
+        let mut js = Mat6::identity();
+        js.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.je());
+        js
+    }
 }
 
 /// J_s = diag(I₃, J_e): maps χ̇ to the twist v_E = [Ė; ω] (eq. 3.23).

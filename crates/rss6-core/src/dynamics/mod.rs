@@ -100,7 +100,7 @@ pub use self::sensitivity::{
 
 use crate::error::{check_finite, Result};
 use crate::params::{Body, DynamicParams};
-use crate::pose::{euler_rate_jacobian, euler_rate_jacobian_dot};
+use crate::pose::RateTrig;
 use crate::types::{Mat3, Vec3, Vec6};
 use lanes::Lane;
 use nalgebra::Vector3;
@@ -172,8 +172,18 @@ pub(super) fn z_triple<T: Lane>(u: &Vector3<T>, v: &Vector3<T>) -> T {
 /// v_E = J_s χ̇ and v̇_E = J_s χ̈ + J̇_s χ̇ (eq. 3.23, 5.12) with 3 × 3 blocks only (J_s = diag(I, J_e)).
 #[inline]
 pub(super) fn twist_and_rate(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> (Vec6, Vec6) {
-    let je = euler_rate_jacobian(pose[3], pose[4]);
-    let je_dot = euler_rate_jacobian_dot(pose[3], pose[4], pose_dot[3], pose_dot[4]);
+    twist_and_rate_with(&RateTrig::of(pose), pose_dot, pose_ddot)
+}
+
+/// [`twist_and_rate`] from the pose's [`RateTrig`].
+#[inline]
+pub(super) fn twist_and_rate_with(
+    trig: &RateTrig,
+    pose_dot: &Vec6,
+    pose_ddot: &Vec6,
+) -> (Vec6, Vec6) {
+    let je = trig.je();
+    let je_dot = trig.je_dot(pose_dot[3], pose_dot[4]);
     let phi_dot = Vec3::new(pose_dot[3], pose_dot[4], pose_dot[5]);
     let phi_ddot = Vec3::new(pose_ddot[3], pose_ddot[4], pose_ddot[5]);
     let w = je * phi_dot;

@@ -12,7 +12,7 @@ use super::{platform_inertia, GRAVITY};
 use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
-use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse};
+use crate::pose::{twist_jacobian, twist_jacobian_dot, twist_jacobian_inverse, RateTrig};
 use crate::types::{Mat6, Vec3, Vec6, LEGS};
 
 /// Σ_k J_kᵀ (M_k v̇_k + gyroscopic − m_k g): the twist-space generalised force, i.e. J_adᵀ(τ_a − τ_f).
@@ -275,7 +275,8 @@ pub(super) fn derivatives_at(
     // or forward differences from the state; the χ̇ columns are the force's exact tangent at this
     // geometry. The tangents take the legs two at a time.
     let g = &env.gravity;
-    let (dv, dvd) = twist_rate_directions(pose, pose_dot);
+    let trig = RateTrig::of(pose);
+    let (dv, dvd) = twist_rate_directions(&trig, pose_dot);
     let mut vel = RateTangents::new(geom, dp, load.as_ref(), v, (&dv, &dvd));
     let mut each_pair = |k: usize, pair: &Leg<Pair>| {
         vel.add_pair(pair);
@@ -287,7 +288,7 @@ pub(super) fn derivatives_at(
     let (b_pose, d_rate_pose, d_rates) = match one_sided_step {
         None => {
             let state = (pose_dot, pose_ddot);
-            let mut t = PoseTangents::new(geom, dp, load.as_ref(), state, rates, g, twist);
+            let mut t = PoseTangents::new(geom, dp, load.as_ref(), state, rates, &trig, g, twist);
             for k in 0..LEGS / 2 {
                 let pair = Leg::pair(geom, dp, k, (v, v_dot), g)?;
                 t.add_pair(k, &pair, j_theta, tau_rigid);

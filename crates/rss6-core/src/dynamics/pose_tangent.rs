@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::jacobian::LegGeometry;
 use crate::params::DynamicParams;
 use crate::params::KinematicParams;
-use crate::pose::euler_rate_jacobian;
+use crate::pose::RateTrig;
 use crate::types::{Mat3, Mat6, Vec3, Vec6};
 use nalgebra::{Vector3, Vector6};
 
@@ -30,9 +30,8 @@ struct Direction<T: Lane> {
 }
 
 /// ∂J_e/∂α and ∂J_e/∂β.
-fn euler_rate_jacobian_partials(alpha: f64, beta: f64) -> (Mat3, Mat3) {
-    let (sa, ca) = (libm::sin(alpha), libm::cos(alpha));
-    let (sb, cb) = (libm::sin(beta), libm::cos(beta));
+fn euler_rate_jacobian_partials(trig: &RateTrig) -> (Mat3, Mat3) {
+    let RateTrig { sa, ca, sb, cb } = *trig;
     (
         Mat3::new(0.0, 0.0, 0.0, 0.0, -sa, -cb * ca, 0.0, ca, -cb * sa),
         Mat3::new(0.0, 0.0, cb, 0.0, 0.0, sb * sa, 0.0, 0.0, -sb * ca),
@@ -40,9 +39,8 @@ fn euler_rate_jacobian_partials(alpha: f64, beta: f64) -> (Mat3, Mat3) {
 }
 
 /// ∂J̇_e/∂α and ∂J̇_e/∂β at rates α̇, β̇.
-fn euler_rate_jacobian_dot_partials(alpha: f64, beta: f64, ad: f64, bd: f64) -> (Mat3, Mat3) {
-    let (sa, ca) = (libm::sin(alpha), libm::cos(alpha));
-    let (sb, cb) = (libm::sin(beta), libm::cos(beta));
+fn euler_rate_jacobian_dot_partials(trig: &RateTrig, ad: f64, bd: f64) -> (Mat3, Mat3) {
+    let RateTrig { sa, ca, sb, cb } = *trig;
     (
         Mat3::new(
             0.0,
@@ -69,12 +67,11 @@ fn euler_rate_jacobian_dot_partials(alpha: f64, beta: f64, ad: f64, bd: f64) -> 
     )
 }
 
-fn directions(pose: &Vec6, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction<f64>; 6] {
-    let (al, be) = (pose[3], pose[4]);
-    let je = euler_rate_jacobian(al, be);
+fn directions(trig: &RateTrig, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction<f64>; 6] {
+    let je = trig.je();
     let (pd, pdd) = (bottom(pose_dot), bottom(pose_ddot));
-    let (ja, jb) = euler_rate_jacobian_partials(al, be);
-    let (jda, jdb) = euler_rate_jacobian_dot_partials(al, be, pose_dot[3], pose_dot[4]);
+    let (ja, jb) = euler_rate_jacobian_partials(trig);
+    let (jda, jdb) = euler_rate_jacobian_dot_partials(trig, pose_dot[3], pose_dot[4]);
     let zero = Vec3::zeros();
     core::array::from_fn(|k| {
         if k < 3 {
@@ -122,12 +119,13 @@ impl PoseTangents {
         load: Option<&LoadAt>,
         (pose_dot, pose_ddot): (&Vec6, &Vec6),
         (v, v_dot): (&Vec6, &Vec6),
+        trig: &RateTrig,
         g: &Vec3,
         twist: Option<&Vec6>,
     ) -> Self {
         let (e_dot, omega) = (top(v), bottom(v));
         let omega_dot = bottom(v_dot);
-        let dirs = directions(&geom.pose, pose_dot, pose_ddot);
+        let dirs = directions(trig, pose_dot, pose_ddot);
         let ip = platform_inertia(&geom.rot, &dp.platform);
         let (ip_omega, ip_omega_dot) = (ip * omega, ip * omega_dot);
         let mut b = Mat6::zeros();

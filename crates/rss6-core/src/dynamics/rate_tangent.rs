@@ -10,7 +10,7 @@ use super::load::LoadAt;
 use super::{platform_inertia, z_cross, z_triple};
 use crate::jacobian::LegGeometry;
 use crate::params::DynamicParams;
-use crate::pose::{euler_rate_jacobian_dot, twist_jacobian};
+use crate::pose::RateTrig;
 use crate::types::{Mat6, Vec6};
 use nalgebra::{Vector3, Vector6};
 
@@ -29,14 +29,13 @@ pub(super) fn stack<T: Lane>(a: &Vector3<T>, b: &Vector3<T>) -> Vector6<T> {
     Vector6::new(a[0], a[1], a[2], b[0], b[1], b[2])
 }
 
-/// (∂v/∂χ̇, ∂v̇/∂χ̇) at (χ, χ̇): J_s, and the χ̇ derivative of v̇ = J_s χ̈ + J̇_s(χ̇) χ̇ (J̇_e is
+/// (∂v/∂χ̇, ∂v̇/∂χ̇) at (χ, χ̇) (`trig` of χ): J_s, and the χ̇ derivative of v̇ = J_s χ̈ + J̇_s(χ̇) χ̇ (J̇_e is
 /// linear in α̇, β̇, so this is exact).
-pub(super) fn twist_rate_directions(pose: &Vec6, pose_dot: &Vec6) -> (Mat6, Mat6) {
-    let (al, be) = (pose[3], pose[4]);
+pub(super) fn twist_rate_directions(trig: &RateTrig, pose_dot: &Vec6) -> (Mat6, Mat6) {
     let phi_dot = bottom(pose_dot);
-    let je_dot = euler_rate_jacobian_dot(al, be, pose_dot[3], pose_dot[4]);
-    let d_alpha = euler_rate_jacobian_dot(al, be, 1.0, 0.0) * phi_dot;
-    let d_beta = euler_rate_jacobian_dot(al, be, 0.0, 1.0) * phi_dot;
+    let je_dot = trig.je_dot(pose_dot[3], pose_dot[4]);
+    let d_alpha = trig.je_dot(1.0, 0.0) * phi_dot;
+    let d_beta = trig.je_dot(0.0, 1.0) * phi_dot;
     let mut dvd = Mat6::zeros();
     for k in 0..3 {
         let mut c = je_dot.column(k).into_owned();
@@ -47,7 +46,7 @@ pub(super) fn twist_rate_directions(pose: &Vec6, pose_dot: &Vec6) -> (Mat6, Mat6
         }
         dvd.fixed_view_mut::<3, 1>(3, 3 + k).copy_from(&c);
     }
-    (twist_jacobian(pose), dvd)
+    (trig.js(), dvd)
 }
 
 /// ∂f/∂χ̇ for f the twist-space force of the rigid bodies and the load (the `f` of

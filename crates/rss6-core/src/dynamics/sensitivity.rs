@@ -14,11 +14,11 @@
 use super::leg_state::LegColumns;
 use super::load::Environment;
 use super::newton_euler::{derivatives_at, forward_at};
-use super::{check_finite, check_state, sign0, twist_and_rate};
+use super::{check_finite, check_state, sign0, twist_and_rate_with};
 use crate::error::{CoreError, Result};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
-use crate::pose::twist_jacobian;
+use crate::pose::RateTrig;
 use crate::regressor::{platform_columns, Regressor};
 use crate::types::{Mat6, Vec6, LEGS};
 
@@ -136,13 +136,14 @@ pub fn forward_dynamics_jacobians_with_env(
     let f = forward_at(&geom, dp, pose_dot, tau_a, env)?;
     let j_ad = f.j_ad_t.transpose();
     out.pose_ddot = f.chi_ddot;
-    out.j_theta = j_ad * twist_jacobian(pose);
+    let trig = RateTrig::of(pose);
+    out.j_theta = j_ad * trig.js();
     // K = J_s⁻¹M⁻¹ once; then ∂χ̈/∂τ_a = K J_adᵀ and ∂χ̈/∂Ξ = −K Γ_g, column by column.
     let k = js_inv_m_inv(&f.js_inv, &f.chol);
     out.d_torque = k * f.j_ad_t;
     (out.d_state, out.d_rates) = (None, None);
     // The legs' regressor columns from the leg states the tangents form anyway (or on their own).
-    let (v, v_dot) = twist_and_rate(pose, pose_dot, &f.chi_ddot);
+    let (v, v_dot) = twist_and_rate_with(&trig, pose_dot, &f.chi_ddot);
     let mut legs = LegColumns::zeros();
     let tangents = if request.state {
         let nu = request.rate_step.map(|h| f.v + f.v_dot * h);
