@@ -288,7 +288,8 @@ pub(super) fn derivatives_at(
     let (b_pose, d_rate_pose, d_rates) = match one_sided_step {
         None => {
             let state = (pose_dot, pose_ddot);
-            let mut t = PoseTangents::new(geom, dp, load.as_ref(), state, rates, &trig, g, twist);
+            let at = (v, v_dot, &trig);
+            let mut t = PoseTangents::new(geom, dp, load.as_ref(), state, at, g, twist);
             for k in 0..LEGS / 2 {
                 let pair = Leg::pair(geom, dp, k, (v, v_dot), g)?;
                 t.add_pair(k, &pair, j_theta, tau_rigid);

@@ -118,8 +118,7 @@ impl PoseTangents {
         dp: &DynamicParams,
         load: Option<&LoadAt>,
         (pose_dot, pose_ddot): (&Vec6, &Vec6),
-        (v, v_dot): (&Vec6, &Vec6),
-        trig: &RateTrig,
+        (v, v_dot, trig): (&Vec6, &Vec6, &RateTrig),
         g: &Vec3,
         twist: Option<&Vec6>,
     ) -> Self {
