@@ -104,10 +104,13 @@ fn directions(trig: &RateTrig, pose_dot: &Vec6, pose_ddot: &Vec6) -> [Direction<
 /// ∂(J_ad ν) at ν held: the platform's and the load's part from [`Self::new`], each pair of legs'
 /// from [`Self::add_pair`] (legs 0 to 5 in turn), the sums from [`Self::finish`].
 pub(super) struct PoseTangents {
-    dirs: [Direction<f64>; 6],
+    /// The directions in both lanes.
+    dirs: [Direction<Pair>; 6],
     body: Body<Pair>,
     nu: Option<Vector6<Pair>>,
     b: Mat6,
+    /// The legs' columns summed lane by lane (legs 0, 2, 4 and 1, 3, 5), added to `b` at the end.
+    legs: [Vector6<Pair>; 6],
     d_theta_dot: Mat6,
     d_rates: Option<Mat6>,
 }
@@ -149,7 +152,13 @@ impl PoseTangents {
             b.set_column(c, &f);
         }
         PoseTangents {
-            dirs,
+            dirs: dirs.map(|d| Direction {
+                e: d.e.splat(),
+                phi: d.phi.splat(),
+                v: d.v.splat(),
+                v_dot: d.v_dot.splat(),
+            }),
+            legs: [Vector6::zeros(); 6],
             body: Body {
                 v: v.splat(),
                 v_dot: v_dot.splat(),
@@ -171,12 +180,6 @@ impl PoseTangents {
         let (i, j) = (2 * k, 2 * k + 1);
         let tau = Pair::new(tau_rigid[i], tau_rigid[j]);
         for (c, d) in self.dirs.iter().enumerate() {
-            let d = &Direction {
-                e: d.e.splat(),
-                phi: d.phi.splat(),
-                v: d.v.splat(),
-                v_dot: d.v_dot.splat(),
-            };
             let dth = Pair::new(j_theta[(i, c)], j_theta[(j, c)]);
             // The translations move neither the orientation nor the twist; the yaw turns the
             // platform at an unchanged twist: their zero terms skipped (the sums are the same).
@@ -185,11 +188,9 @@ impl PoseTangents {
                 5 => leg.direction::<true, false>(&self.body, d, dth),
                 _ => leg.direction::<true, true>(&self.body, d, dth),
             };
-            let t = df - dr * tau;
+            self.legs[c] += df - dr * tau;
             let dr_nu = self.nu.map(|nu| dr.dot(&nu));
             for (lane, leg) in [i, j].into_iter().enumerate() {
-                let mut col = self.b.column_mut(c);
-                col += lanes::lane(&t, lane);
                 self.d_theta_dot[(leg, c)] = d_th_d.get(lane);
                 if let (Some(out), Some(x)) = (self.d_rates.as_mut(), dr_nu) {
                     out[(leg, c)] = x.get(lane);
@@ -199,7 +200,11 @@ impl PoseTangents {
     }
 
     /// (∂f − ∂J_adᵀ τ_rigid, ∂θ̇, ∂(J_ad ν) if asked).
-    pub(super) fn finish(self) -> (Mat6, Mat6, Option<Mat6>) {
+    pub(super) fn finish(mut self) -> (Mat6, Mat6, Option<Mat6>) {
+        for (c, t) in self.legs.iter().enumerate() {
+            let mut col = self.b.column_mut(c);
+            col += lanes::lane(t, 0) + lanes::lane(t, 1);
+        }
         (self.b, self.d_theta_dot, self.d_rates)
     }
 }
