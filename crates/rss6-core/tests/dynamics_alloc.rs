@@ -91,7 +91,7 @@ fn dynamics_hot_paths_do_not_allocate() {
                 1e-3,
                 &env,
                 None,
-                |p, _| last = p[0],
+                |p, _, _, _| last = p[0],
             )
             .unwrap()
             .0

@@ -99,7 +99,8 @@ fn bad_input_is_a_typed_error() {
 
 /// The one-call tick equals `implicit_friction` then RK4 of the friction-free model, bit for bit,
 /// with and without the angles of the last IK, while joints slip, stick and reverse; its observed
-/// variant reports the four stage states the two calls' RK4 evaluates.
+/// variant reports the four stage states the two calls' RK4 evaluates, with their IK angles and
+/// accelerations.
 #[test]
 fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
     let (kp, dp) = (KinematicParams::nominal(), with_friction());
@@ -124,17 +125,26 @@ fn the_one_call_tick_is_the_two_calls_bit_for_bit() {
             assert_eq!(g, f, "tick {k}");
             // The observed variant: the same step, and the four stage states at which the two
             // calls' RK4 evaluates the friction-free model.
+            // Each stage's IK angles and acceleration too: IK's and the forward dynamics', bit for
+            // bit.
             let mut seen = Vec::new();
-            let (obs, h) =
-                rk4_step_implicit_friction_observed(&kp, &dp, &s, &tau, DT, &env, known, |p, v| {
-                    seen.push((*p, *v))
-                })
-                .unwrap();
+            let (obs, h) = rk4_step_implicit_friction_observed(
+                &kp,
+                &dp,
+                &s,
+                &tau,
+                DT,
+                &env,
+                known,
+                |p, v, th, a| seen.push([*p, *v, *th, *a].map(|x| x.map(f64::to_bits))),
+            )
+            .unwrap();
             assert_eq!((obs, h), (one, g), "tick {k}");
             let mut at = Vec::new();
             rk4_step_by(&s, DT, |p, v| {
-                at.push((*p, *v));
-                forward_dynamics_with_env(&kp, &nf, p, v, &(tau - f.torque), &env)
+                let a = forward_dynamics_with_env(&kp, &nf, p, v, &(tau - f.torque), &env)?;
+                at.push([*p, *v, ik(&kp, p)?, a].map(|x| x.map(f64::to_bits)));
+                Ok(a)
             })
             .unwrap();
             assert_eq!(seen, at, "tick {k}");

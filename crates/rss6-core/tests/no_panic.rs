@@ -209,9 +209,11 @@ proptest! {
             prop_assert_eq!(from.map(|a| a.map(f64::to_bits)), one.map(|a| a.map(f64::to_bits)));
         }
         let _ = forward_dynamics_by_joint_rates_from(&kp, &dp, &p, &pd, &env, Some(&pdd), |td| td * h);
-        for one_sided in [false, true] {
+        // Known angles and acceleration: any values, no panic.
+        for (one_sided, known) in [(false, false), (true, false), (false, true)] {
             let req = JacobianRequest {
                 state: true, rate_step: Some(h), one_sided_step: one_sided.then_some(h), param_columns: k.to_bits(),
+                theta: known.then_some(pdd), pose_ddot: known.then_some(pd * h),
             };
             let mut fj = ForwardJacobians::default();
             let _ = forward_dynamics_jacobians_with_env(&kp, &dp, &p, &pd, &pdd, &env, &req, &mut fj);
@@ -252,7 +254,7 @@ proptest! {
         let plain = rk4_step_implicit_friction(&kp, &dp, &s, &tau, dt, &env, theta.as_ref());
         let mut stages = 0;
         let observed = rk4_step_implicit_friction_observed(
-            &kp, &dp, &s, &tau, dt, &env, theta.as_ref(), |_, _| stages += 1);
+            &kp, &dp, &s, &tau, dt, &env, theta.as_ref(), |_, _, _, _| stages += 1);
         // The same outcome, bit for bit (errors too); four stages observed when it succeeds.
         prop_assert_eq!(format!("{plain:?}"), format!("{observed:?}"));
         prop_assert!(observed.is_err() || stages == 4);

@@ -46,7 +46,7 @@
 use super::integration::{rk4_step_by, ModelState};
 use super::load::Environment;
 use super::newton_euler::{
-    accel_from, factor, forward_dynamics_with_env, solve6, twist_dynamics_at, TwistDynamics,
+    accel_from, chi_ddot_at, factor, solve6, twist_dynamics_at, TwistDynamics,
 };
 use super::{check_finite, check_state};
 use crate::error::{CoreError, Result};
@@ -160,18 +160,20 @@ pub fn rk4_step_implicit_friction(
     env: &Environment,
     theta: Option<&Vec6>,
 ) -> Result<(ModelState, FrictionStep)> {
-    rk4_step_implicit_friction_observed(kp, dp, state, tau_a, dt, env, theta, |_, _| {})
+    rk4_step_implicit_friction_observed(kp, dp, state, tau_a, dt, env, theta, |_, _, _, _| {})
 }
 
-/// [`rk4_step_implicit_friction`], calling `stage_state(χ, χ̇)` with each RK4 stage's state in order
-/// (four calls when the step succeeds; all four stages are under τ_a − τ_f, the step's
-/// [`FrictionStep::torque`] taken from τ_a): what a caller needs to evaluate the same stages
-/// again, e.g. with their parameter derivatives. The result is bit for bit
-/// [`rk4_step_implicit_friction`]'s.
+/// [`rk4_step_implicit_friction`], calling `stage(χ, χ̇, θ, χ̈)` with each RK4 stage's state, its
+/// joint angles θ = IK(χ) and its acceleration, in order (four calls when the step succeeds; all
+/// four stages are under τ_a − τ_f, the step's [`FrictionStep::torque`] taken from τ_a, on the
+/// friction-free model): what a caller needs to evaluate the same stages again, e.g. with their
+/// derivatives ([`crate::JacobianRequest::theta`], [`crate::JacobianRequest::pose_ddot`]). χ̈ is
+/// [`crate::forward_dynamics_with_env`]'s at (χ, χ̇, τ_a − τ_f) bit for bit, and the step is bit
+/// for bit [`rk4_step_implicit_friction`]'s.
 ///
 /// Errors: as [`rk4_step_implicit_friction`].
 #[allow(clippy::too_many_arguments)]
-pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
+pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6, &Vec6, &Vec6)>(
     kp: &KinematicParams,
     dp: &DynamicParams,
     state: &ModelState,
@@ -179,7 +181,7 @@ pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
     dt: f64,
     env: &Environment,
     theta: Option<&Vec6>,
-    mut stage_state: F,
+    mut stage: F,
 ) -> Result<(ModelState, FrictionStep)> {
     env.check()?;
     let geom = LegGeometry::at_pose_from(kp, &state.pose, theta)?;
@@ -190,15 +192,20 @@ pub fn rk4_step_implicit_friction_observed<F: FnMut(&Vec6, &Vec6)>(
     let net = tau_a - f.torque;
     check_state(&state.pose_dot, &net)?;
     let first = accel_from(&geom, &td, &chol, &dp_nf, &state.pose_dot, &net)?.chi_ddot;
-    // rk4_step_by evaluates its stages in order: the first is the one computed above.
-    let mut stage = 0u8;
+    // rk4_step_by evaluates its stages in order: the first is the one computed above; the others
+    // are `forward_dynamics_with_env`'s steps (its checks, IK, `chi_ddot_at`), θ kept.
+    let mut k = 0u8;
     let next = rk4_step_by(state, dt, |p, v| {
-        stage_state(p, v);
-        stage = stage.saturating_add(1);
-        if stage == 1 {
+        k = k.saturating_add(1);
+        if k == 1 {
+            stage(p, v, &geom.theta, &first);
             Ok(first)
         } else {
-            forward_dynamics_with_env(kp, &dp_nf, p, v, &net, env)
+            check_state(v, &net)?;
+            let g = LegGeometry::at_pose(kp, p)?;
+            let a = chi_ddot_at(&g, &dp_nf, v, &net, env)?;
+            stage(p, v, &g.theta, &a);
+            Ok(a)
         }
     })?;
     Ok((next, f))

@@ -269,9 +269,7 @@ impl<T: Lane> LegAcc<T> {
     ) -> Self {
         let (e_dot, omega) = (top(v), bottom(v));
         let (e_ddot, omega_dot) = (top(v_dot), bottom(v_dot));
-        let al = a.cross(&l);
-        let r = stack(&l, &al) * inv_m;
-        let theta_dot = r.dot(v);
+        let (al, r, theta_dot) = rate_row(&l, &a, inv_m, v);
         let s_w = z_cross(&w);
         let w_dot = s_w * theta_dot;
         let a_dot = omega.cross(&a);
@@ -317,6 +315,38 @@ impl<T: Lane> LegAcc<T> {
             },
         }
     }
+}
+
+/// a × l, the row J_ad,i = [l; a × l]/m and θ̇_i = J_ad,i v of a leg (or two) at the twist v.
+#[inline(always)]
+fn rate_row<T: Lane>(
+    l: &Vector3<T>,
+    a: &Vector3<T>,
+    inv_m: T,
+    v: &Vector6<T>,
+) -> (Vector3<T>, Vector6<T>, T) {
+    let al = a.cross(l);
+    let r = stack(l, &al) * inv_m;
+    let theta_dot = r.dot(v);
+    (al, r, theta_dot)
+}
+
+/// J_adᵀ (its columns the rows J_ad,i) and θ̇ at the twist v: the same values, bit for bit, as
+/// [`add_leg_forces`] writes (two legs at a time, the same arithmetic), without the forces.
+pub(super) fn joint_rates(geom: &LegGeometry, v: &Vec6) -> Result<(Mat6, Vec6)> {
+    let (mut j_ad_t, mut theta_dot) = (Mat6::zeros(), Vec6::zeros());
+    let v2 = v.splat();
+    for k in 0..LEGS / 2 {
+        let ((_, li, ai), (mi, _)) = leg_vectors(geom, 2 * k)?;
+        let ((_, lj, aj), (mj, _)) = leg_vectors(geom, 2 * k + 1)?;
+        let (l, a) = (Lanes::zip(&li, &lj), Lanes::zip(&ai, &aj));
+        let (_, r, td) = rate_row(&l, &a, Pair::new(mi, mj), &v2);
+        for (lane, leg) in [2 * k, 2 * k + 1].into_iter().enumerate() {
+            theta_dot[leg] = td.get(lane);
+            j_ad_t.set_column(leg, &lanes::lane(&r, lane));
+        }
+    }
+    Ok((j_ad_t, theta_dot))
 }
 
 /// A leg's vectors (w, l, a) and (1/m, 1/‖l‖²).

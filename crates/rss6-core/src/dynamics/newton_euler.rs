@@ -379,9 +379,6 @@ pub fn forward_dynamics_with_env(
 /// The forward dynamics at a known geometry, with what the sensitivities reuse.
 pub(super) struct ForwardAt {
     pub chi_ddot: Vec6,
-    /// The twist v = J_s χ̇ and its rate v̇.
-    pub v: Vec6,
-    pub v_dot: Vec6,
     pub j_ad_t: Mat6,
     pub js_inv: Mat6,
     pub chol: nalgebra::Cholesky<f64, nalgebra::U6>,
@@ -437,8 +434,6 @@ pub(super) fn forward_from(
     let a = accel_from(geom, td, &chol, dp, pose_dot, tau_a)?;
     Ok(ForwardAt {
         chi_ddot: a.chi_ddot,
-        v: td.v,
-        v_dot: a.v_dot,
         j_ad_t: td.j_ad_t,
         js_inv: a.js_inv,
         chol,
@@ -449,7 +444,6 @@ pub(super) fn forward_from(
 /// The acceleration of [`forward_from`] and what it derives on the way.
 pub(super) struct Accel {
     pub chi_ddot: Vec6,
-    pub v_dot: Vec6,
     pub js_inv: Mat6,
     pub tau_rigid: Vec6,
 }
@@ -473,7 +467,6 @@ pub(super) fn accel_from(
     check_finite(chi_ddot.as_slice())?;
     Ok(Accel {
         chi_ddot,
-        v_dot,
         js_inv,
         tau_rigid,
     })
@@ -486,8 +479,6 @@ pub(super) struct TwistDynamics {
     pub bias: Vec6,
     pub theta_dot: Vec6,
     pub j_ad_t: Mat6,
-    /// The twist v = J_s χ̇.
-    pub v: Vec6,
 }
 
 /// The [`TwistDynamics`] at a known geometry (the environment already checked).
@@ -511,6 +502,5 @@ pub(super) fn twist_dynamics_at(
         bias,
         theta_dot,
         j_ad_t,
-        v,
     })
 }

@@ -11,14 +11,15 @@
 //! Cholesky factor of the twist-space M the forward dynamics already has (through the 6 × 6
 //! K = J_s⁻¹M⁻¹, one product per column of Ξ, and only for the columns requested).
 
-use super::leg_state::LegColumns;
-use super::load::Environment;
+use super::leg_state::{joint_rates, LegColumns};
+use super::load::{Environment, LoadAt};
+use super::matrices::twist_mass_matrix;
 use super::newton_euler::{derivatives_at, forward_at};
-use super::{check_finite, check_state, sign0, twist_and_rate_with};
-use crate::error::{CoreError, Result};
+use super::{check_finite, check_state, joint_friction, sign0, twist_and_rate_with};
+use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
-use crate::pose::RateTrig;
+use crate::pose::{twist_jacobian_inverse, RateTrig};
 use crate::regressor::{platform_columns, Regressor};
 use crate::types::{Mat6, Vec6, LEGS};
 
@@ -39,6 +40,16 @@ pub struct JacobianRequest {
     pub one_sided_step: Option<f64>,
     /// The columns of ∂χ̈/∂Ξ wanted, bit k for column k (default: all); the others are zero.
     pub param_columns: u64,
+    /// The joint angles θ = IK(χ) when already known ([`crate::ik`] at this pose, e.g. from the
+    /// simulation step that visited the state): one inverse kinematics less. Angles that do not
+    /// close the legs are refused, as by [`crate::rk4_step_implicit_friction`].
+    pub theta: Option<Vec6>,
+    /// χ̈ at this state when already known: [`forward_dynamics_with_env`](super::forward_dynamics_with_env)'s
+    /// at the same inputs, bit for bit (e.g. the simulation step's stage acceleration). The forward
+    /// dynamics' solve is then skipped (the mass matrix is still formed) and every output is the
+    /// same, bit for bit, as without it. A χ̈ from other inputs gives derivatives at a state the
+    /// dynamics do not have: the caller's risk.
+    pub pose_ddot: Option<Vec6>,
 }
 
 impl Default for JacobianRequest {
@@ -49,6 +60,8 @@ impl Default for JacobianRequest {
             rate_step: None,
             one_sided_step: None,
             param_columns: u64::MAX,
+            theta: None,
+            pose_ddot: None,
         }
     }
 }
@@ -132,11 +145,23 @@ pub fn forward_dynamics_jacobians_with_env(
             "the finite-difference step must be finite and > 0, the rate step finite",
         ));
     }
-    let geom = LegGeometry::at_pose(kp, pose)?;
-    let f = forward_at(&geom, dp, pose_dot, tau_a, env)?;
+    let geom = LegGeometry::at_pose_from(kp, pose, request.theta.as_ref())?;
+    let trig = RateTrig::of(pose);
+    let f = match &request.pose_ddot {
+        None => {
+            let f = forward_at(&geom, dp, pose_dot, tau_a, env)?;
+            Known {
+                chi_ddot: f.chi_ddot,
+                j_ad_t: f.j_ad_t,
+                js_inv: f.js_inv,
+                chol: f.chol,
+                tau_rigid: f.tau_rigid,
+            }
+        }
+        Some(a) => known_acceleration(&geom, &trig, dp, pose_dot, tau_a, env, a)?,
+    };
     let j_ad = f.j_ad_t.transpose();
     out.pose_ddot = f.chi_ddot;
-    let trig = RateTrig::of(pose);
     out.j_theta = j_ad * trig.js();
     // K = J_s⁻¹M⁻¹ once; then ∂χ̈/∂τ_a = K J_adᵀ and ∂χ̈/∂Ξ = −K Γ_g, column by column.
     let k = js_inv_m_inv(&f.js_inv, &f.chol);
@@ -146,7 +171,7 @@ pub fn forward_dynamics_jacobians_with_env(
     let (v, v_dot) = twist_and_rate_with(&trig, pose_dot, &f.chi_ddot);
     let mut legs = LegColumns::zeros();
     let tangents = if request.state {
-        let nu = request.rate_step.map(|h| f.v + f.v_dot * h);
+        let nu = request.rate_step.map(|h| v + v_dot * h);
         Some(derivatives_at(
             kp,
             &geom,
@@ -270,4 +295,43 @@ fn param_columns(
         put!(52 + i, t * -sign0(td));
         put!(58 + i, t * -td);
     }
+}
+
+/// What the derivatives need of the forward dynamics at the state.
+struct Known {
+    chi_ddot: Vec6,
+    j_ad_t: Mat6,
+    js_inv: Mat6,
+    chol: nalgebra::Cholesky<f64, nalgebra::U6>,
+    tau_rigid: Vec6,
+}
+
+/// [`Known`] from a known χ̈ (see [`JacobianRequest::pose_ddot`]): the mass matrix and its factor,
+/// J_s⁻¹, J_adᵀ and the friction at θ̇ formed as the forward dynamics forms them (the same values,
+/// bit for bit), no solve.
+fn known_acceleration(
+    geom: &LegGeometry,
+    trig: &RateTrig,
+    dp: &DynamicParams,
+    pose_dot: &Vec6,
+    tau_a: &Vec6,
+    env: &Environment,
+    chi_ddot: &Vec6,
+) -> Result<Known> {
+    check_finite(chi_ddot.as_slice())?;
+    let v = trig.js() * pose_dot;
+    let (j_ad_t, theta_dot) = joint_rates(geom, &v)?;
+    let mut m = twist_mass_matrix(geom, dp)?;
+    if let Some(load) = &env.load {
+        LoadAt::new(load, &geom.rot).add_mass(&mut m);
+    }
+    Ok(Known {
+        chi_ddot: *chi_ddot,
+        j_ad_t,
+        js_inv: twist_jacobian_inverse(&geom.pose)?,
+        chol: m
+            .cholesky()
+            .ok_or(CoreError::Singular(SingularKind::Matrix))?,
+        tau_rigid: tau_a - joint_friction(dp, &theta_dot),
+    })
 }

@@ -135,6 +135,7 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
             let r = r.into_inner();
             Recording {
                 calls: r.calls.into(),
+                known: r.known.into(),
                 friction: r.friction.into(),
                 model: FrictionModel::of(cfg, &a.dynamics),
             }
@@ -150,19 +151,21 @@ pub(crate) fn simulate_recorded<T: Trajectory + ?Sized>(
     // If the primal run fails, the sensitivity run fails the same way in turn.
     let Some(Recording {
         calls,
+        known,
         friction,
         model,
     }) = recording.or_else(|| primal(true).ok().and_then(|(_, r)| r))
     else {
         return Ok((Lean::new(cfg, a, cols)?.run(reference)?, None));
     };
-    let friction = if model == FrictionModel::of(cfg, &a.dynamics) {
-        friction
+    // The friction steps, angles and accelerations serve only the model they were computed with.
+    let (friction, known) = if model == FrictionModel::of(cfg, &a.dynamics) {
+        (friction, known)
     } else {
-        Arc::from([])
+        (Arc::from([]), Arc::from([]))
     };
     let helper = StageModel::new(cfg, &a.dynamics, cols.clone());
-    let shared = ahead::Shared::new(calls);
+    let shared = ahead::Shared::new(calls, known);
     let mut sim = Lean::new(cfg, a, cols)?;
     sim.ahead = Some(RefCell::new(Ahead::new(Arc::clone(&shared), friction)));
     // One helper per further core: the loop's own thread evaluates chunks too while it waits.

@@ -13,7 +13,7 @@
 //! bit the one of the sequential run; a call whose inputs differ from the recorded one (which the
 //! loop's determinism rules out, checked anyway) is evaluated in turn.
 
-use super::recording::TickFriction;
+use super::recording::{StageKnown, TickFriction};
 use super::stages::{Stage, StageModel};
 use super::{Lean, StateJacobians};
 use crate::cloe::config::LoopRun;
@@ -63,13 +63,21 @@ type Block = Vec<Option<Result<Stage>>>;
 
 /// Evaluates one chunk of calls. The state Jacobians of a frozen stage are zero (the consumer puts
 /// the tick's in).
-fn evaluate(model: &StageModel, fj: &mut ForwardJacobians, calls: &[StageCall]) -> Block {
+/// `known`: the calls' recorded angles and accelerations (as many, or none).
+fn evaluate(
+    model: &StageModel,
+    fj: &mut ForwardJacobians,
+    calls: &[StageCall],
+    known: &[Option<StageKnown>],
+) -> Block {
     calls
         .iter()
-        .map(|c| {
+        .enumerate()
+        .map(|(k, c)| {
             let state = c.first || model.cfg.state_jacobians == StateJacobians::Exact;
             let frozen = (!state).then(|| (Mat6::zeros(), Mat6::zeros()));
-            Some(model.stage(fj, &c.p, &c.v, &c.tau, c.t, frozen, c.free_rates))
+            let known = known.get(k).and_then(Option::as_ref);
+            Some(model.stage(fj, &c.p, &c.v, &c.tau, c.t, frozen, c.free_rates, known))
         })
         .collect()
 }
@@ -78,6 +86,7 @@ fn evaluate(model: &StageModel, fj: &mut ForwardJacobians, calls: &[StageCall]) 
 /// the next chunk to claim and the chunk the loop is on.
 pub(super) struct Shared {
     calls: Arc<[StageCall]>,
+    known: Arc<[Option<StageKnown>]>,
     slots: Vec<Mutex<Option<Block>>>,
     next: AtomicUsize,
     consumed: AtomicUsize,
@@ -94,10 +103,11 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Shared {
-    pub(super) fn new(calls: Arc<[StageCall]>) -> Arc<Self> {
+    pub(super) fn new(calls: Arc<[StageCall]>, known: Arc<[Option<StageKnown>]>) -> Arc<Self> {
         let n = calls.len().div_ceil(CHUNK);
         Arc::new(Shared {
             calls,
+            known,
             slots: (0..n).map(|_| Mutex::new(None)).collect(),
             next: AtomicUsize::new(0),
             consumed: AtomicUsize::new(0),
@@ -108,9 +118,13 @@ impl Shared {
         })
     }
 
-    fn chunk(&self, k: usize) -> &[StageCall] {
+    /// Chunk k's calls and their recorded angles and accelerations (none if not recorded).
+    fn chunk(&self, k: usize) -> (&[StageCall], &[Option<StageKnown>]) {
         let end = ((k + 1) * CHUNK).min(self.calls.len());
-        self.calls.get(k * CHUNK..end).unwrap_or(&[])
+        (
+            self.calls.get(k * CHUNK..end).unwrap_or(&[]),
+            self.known.get(k * CHUNK..end).unwrap_or(&[]),
+        )
     }
 
     /// The next unclaimed chunk within [`LOOKAHEAD`] of the loop, claimed; `None` if there is none.
@@ -179,7 +193,8 @@ pub(super) fn help(model: &StageModel, shared: &Shared) {
     let mut fj = ForwardJacobians::default();
     while !shared.stop.load(Ordering::Acquire) {
         if let Some(k) = shared.claim() {
-            let block = evaluate(model, &mut fj, shared.chunk(k));
+            let (calls, known) = shared.chunk(k);
+            let block = evaluate(model, &mut fj, calls, known);
             shared.put(k, block);
         } else {
             let next = shared.next.load(Ordering::Acquire);
@@ -276,7 +291,8 @@ impl Ahead {
                 sh.consumed.store(c, Ordering::Release);
                 sh.notify();
             } else if let Some(k) = sh.claim() {
-                let block = evaluate(model, fj, sh.chunk(k));
+                let (calls, known) = sh.chunk(k);
+                let block = evaluate(model, fj, calls, known);
                 if k == c {
                     (self.start, self.ready) = (c * CHUNK, block);
                     sh.consumed.store(c, Ordering::Release);
@@ -316,7 +332,9 @@ impl Lean<'_> {
             free_rates,
         };
         if let Some(rec) = &self.record {
-            rec.borrow_mut().calls.push(call);
+            let mut rec = rec.borrow_mut();
+            rec.calls.push(call);
+            rec.known.push(None);
         }
         let frozen = match state {
             StateJac::Compute => None,
@@ -336,7 +354,8 @@ impl Lean<'_> {
             }
         }
         let mut fj = self.scratch.borrow_mut();
-        self.model.stage(&mut fj, p, v, tau, t, frozen, free_rates)
+        self.model
+            .stage(&mut fj, p, v, tau, t, frozen, free_rates, None)
     }
 
     /// One tick of a primal run with implicit friction:
@@ -357,7 +376,7 @@ impl Lean<'_> {
             pose_dot: self.pose_dot,
         };
         let env = cfg.environment();
-        let mut stages = [(Vec6::zeros(), Vec6::zeros()); 4];
+        let mut stages = [(Vec6::zeros(), Vec6::zeros(), (Vec6::zeros(), Vec6::zeros())); 4];
         let mut k = 0;
         let (next, f) = rk4_step_implicit_friction_observed(
             &cfg.kp,
@@ -367,9 +386,9 @@ impl Lean<'_> {
             cfg.dt,
             &env,
             theta,
-            |p, v| {
+            |p, v, theta, a| {
                 if let Some(s) = stages.get_mut(k) {
-                    *s = (*p, *v);
+                    *s = (*p, *v, (*theta, *a));
                 }
                 k += 1;
             },
@@ -388,7 +407,7 @@ impl Lean<'_> {
                 step: f,
             });
             rec.calls
-                .extend(stages.iter().enumerate().map(|(i, &(p, v))| StageCall {
+                .extend(stages.iter().enumerate().map(|(i, &(p, v, _))| StageCall {
                     p,
                     v,
                     tau: net,
@@ -396,6 +415,7 @@ impl Lean<'_> {
                     first: i == 0,
                     free_rates: i == 0,
                 }));
+            rec.known.extend(stages.iter().map(|s| Some(s.2)));
         }
         self.set_state(next.pose, next.pose_dot, t + cfg.dt)
     }
@@ -436,6 +456,16 @@ mod tests {
         assert_eq!((run.friction_ahead, seq.friction_ahead), (300, 0));
         assert!(run.chi == plain.chi && run.chi == seq.chi);
         assert!(run.jacobian == seq.jacobian);
+        // The exact sensitivities from the same recording (its stages' IK angles and
+        // accelerations taken too) are the sequential run's, bit for bit.
+        let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
+        let (exact, _) = simulate_recorded(&cfg, &a, &exc, Some(&cols), rec, false).unwrap();
+        let mut exact_in_turn = cfg.clone();
+        exact_in_turn.parallel_stages = false;
+        let exact_seq = simulate(&exact_in_turn, &a, &exc, Some(&cols)).unwrap();
+        assert_eq!((exact.stages_ahead, exact_seq.stages_ahead), (1200, 0));
+        assert!(exact.chi == plain.chi && exact.chi == exact_seq.chi);
+        assert!(exact.jacobian.is_some() && exact.jacobian == exact_seq.jacobian);
         // Another viscous friction: the trajectory parts from the recording.
         let mut other = a;
         other.dynamics.viscous[2] *= 1.5;

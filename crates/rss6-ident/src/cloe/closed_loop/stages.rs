@@ -3,6 +3,7 @@
 use super::super::config::{LoopConfig, StateJacobians};
 use super::super::friction::{central_jacobians, sim_err, Sens, COULOMB};
 use super::super::sens_state::SensState;
+use super::recording::StageKnown;
 use crate::error::{IdentError, Result};
 use nalgebra::{SMatrix, SVector};
 use rss6_core::{
@@ -96,7 +97,9 @@ impl<'a> StageModel<'a> {
     /// implicit law `tau` is τ_a − τ_f and the model is friction-free. `frozen`: state Jacobians
     /// to use instead of computing them; `free_rates`: also the pose derivative of the joint
     /// rates one tick ahead (the implicit friction's first stage, see [`super::friction`]).
-    /// `fj`: scratch space for the core call (≈ 4 KB, one per thread).
+    /// `fj`: scratch space for the core call (≈ 4 KB, one per thread). `known`: the state's IK
+    /// angles and acceleration as a primal run of the same model computed them (the derivatives
+    /// then compute neither again; the results are the same bit for bit).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn stage(
         &self,
@@ -107,6 +110,7 @@ impl<'a> StageModel<'a> {
         t: f64,
         frozen: Option<(Mat6, Mat6)>,
         free_rates: bool,
+        known: Option<&StageKnown>,
     ) -> Result<Stage> {
         let cfg = self.cfg;
         let env = cfg.environment();
@@ -130,6 +134,8 @@ impl<'a> StageModel<'a> {
             state: frozen.is_none(),
             rate_step: free_rates.then_some(cfg.dt),
             param_columns: self.param_mask,
+            theta: known.map(|k| k.0),
+            pose_ddot: known.map(|k| k.1),
             ..JacobianRequest::default()
         };
         if cfg.state_jacobians != StateJacobians::Exact {
