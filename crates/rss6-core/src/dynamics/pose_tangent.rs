@@ -151,13 +151,14 @@ impl PoseTangents {
             }
             b.set_column(c, &f);
         }
-        PoseTangents {
-            dirs: dirs.map(|d| Direction {
-                e: d.e.splat(),
-                phi: d.phi.splat(),
-                v: d.v.splat(),
-                v_dot: d.v_dot.splat(),
-            }),
+        let zero = Direction {
+            e: Vector3::zeros(),
+            phi: Vector3::zeros(),
+            v: Vector6::zeros(),
+            v_dot: Vector6::zeros(),
+        };
+        let mut t = PoseTangents {
+            dirs: [zero; 6],
             legs: [Vector6::zeros(); 6],
             body: Body {
                 v: v.splat(),
@@ -171,7 +172,15 @@ impl PoseTangents {
             b,
             d_theta_dot: Mat6::zeros(),
             d_rates: twist.map(|_| Mat6::zeros()),
+        };
+        // In place (an array `map` copies the ≈ 2.3 KB it builds).
+        for (two, d) in t.dirs.iter_mut().zip(&dirs) {
+            two.e = d.e.splat();
+            two.phi = d.phi.splat();
+            two.v = d.v.splat();
+            two.v_dot = d.v_dot.splat();
         }
+        t
     }
 
     /// Adds legs 2k and 2k + 1 (`leg`, side by side): their joint angles move by J_θ e_c along

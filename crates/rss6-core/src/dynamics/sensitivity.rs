@@ -170,9 +170,10 @@ pub fn forward_dynamics_jacobians_with_env(
     // The legs' regressor columns from the leg states the tangents form anyway (or on their own).
     let (v, v_dot) = twist_and_rate_with(&trig, pose_dot, &f.chi_ddot);
     let mut legs = LegColumns::zeros();
-    let tangents = if request.state {
+    if request.state {
         let nu = request.rate_step.map(|h| v + v_dot * h);
-        Some(derivatives_at(
+        // (Used in place: moved through an `Option` the ≈ 1.4 KB of tangents would be copied.)
+        let t = derivatives_at(
             kp,
             &geom,
             &out.j_theta,
@@ -185,20 +186,7 @@ pub fn forward_dynamics_jacobians_with_env(
             request.one_sided_step,
             nu.as_ref(),
             Some(&mut legs),
-        )?)
-    } else {
-        legs = LegColumns::at(&geom, (&v, &v_dot), &env.gravity)?;
-        None
-    };
-    let platform = platform_columns(&geom.rot, &v, &v_dot, &env.gravity);
-    param_columns(
-        &mut out.d_params,
-        request.param_columns,
-        (&k, &out.d_torque),
-        &platform,
-        &legs,
-    );
-    if let Some(t) = tangents {
+        )?;
         // ∂χ̈/∂x = −M̃⁻¹J_θᵀ ∂τ_a/∂x with ∂τ_a/∂x = J_adᵀ⁻¹ ∂f/∂x + f_v ∂θ̇/∂x: the force
         // columns through K = M̃⁻¹J_θᵀJ_adᵀ⁻¹ directly, no factor of J_adᵀ; the viscous ones
         // (if any) through M̃⁻¹J_θᵀ.
@@ -216,7 +204,17 @@ pub fn forward_dynamics_jacobians_with_env(
         }
         out.d_state = Some((d_pose, d_vel));
         out.d_rates = t.rates;
+    } else {
+        legs = LegColumns::at(&geom, (&v, &v_dot), &env.gravity)?;
     }
+    let platform = platform_columns(&geom.rot, &v, &v_dot, &env.gravity);
+    param_columns(
+        &mut out.d_params,
+        request.param_columns,
+        (&k, &out.d_torque),
+        &platform,
+        &legs,
+    );
     Ok(())
 }
 
