@@ -456,6 +456,18 @@ mod tests {
         assert_eq!((run.friction_ahead, seq.friction_ahead), (300, 0));
         assert!(run.chi == plain.chi && run.chi == seq.chi);
         assert!(run.jacobian == seq.jacobian);
+        // So are the first-stage sensitivities CLOE iterates on, whose other three stages take
+        // only the recorded acceleration.
+        let mut first = cfg.clone();
+        first.state_jacobians = crate::StateJacobians::FirstStage;
+        let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
+        let (fast, _) = simulate_recorded(&first, &a, &exc, Some(&cols), rec, false).unwrap();
+        let mut first_in_turn = first.clone();
+        first_in_turn.parallel_stages = false;
+        let fast_seq = simulate(&first_in_turn, &a, &exc, Some(&cols)).unwrap();
+        assert_eq!((fast.stages_ahead, fast_seq.stages_ahead), (1200, 0));
+        assert!(fast.chi == plain.chi && fast.chi == fast_seq.chi);
+        assert!(fast.jacobian.is_some() && fast.jacobian == fast_seq.jacobian);
         // The exact sensitivities from the same recording (its stages' IK angles and
         // accelerations taken too) are the sequential run's, bit for bit.
         let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();

@@ -123,9 +123,13 @@ impl<'a> StageModel<'a> {
         let dp = if implicit { &self.dp_nf } else { &self.dp };
         let first_serves = frozen.is_some() && cfg.state_jacobians == StateJacobians::FirstStage;
         let Some(columns) = self.columns.as_deref().filter(|_| !first_serves) else {
-            // No sensitivities, or the tick's first stage's derivatives serve this one.
-            let a = forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
-                .map_err(|e| sim_err(t, e))?;
+            // No sensitivities, or the tick's first stage's derivatives serve this one: only χ̈,
+            // which a recording of this model already holds (the same bits).
+            let a = match known {
+                Some(&(_, a)) => a,
+                None => forward_dynamics_with_env(&cfg.kp, dp, p, v, tau, &env)
+                    .map_err(|e| sim_err(t, e))?,
+            };
             return Ok(Stage { a, jac: None });
         };
         // Per tick the state Jacobians are an approximation already (≈ 10⁻³): one-sided pose
