@@ -153,6 +153,20 @@ impl RateTrig {
         )
     }
 
+    /// J_s⁻¹ ([`twist_jacobian_inverse`]); fails at cos β = 0.
+    pub(crate) fn js_inv(&self) -> Result<Mat6> {
+        let je_inv = self
+            .je()
+            .try_inverse()
+            .ok_or(CoreError::Singular(SingularKind::Euler))?;
+        if self.cb.abs() < 1e-9 {
+            return Err(CoreError::Singular(SingularKind::Euler));
+        }
+        let mut js = Mat6::identity();
+        js.fixed_view_mut::<3, 3>(3, 3).copy_from(&je_inv);
+        Ok(js)
+    }
+
     /// J_s = diag(I₃, J_e) ([`twist_jacobian`]).
     pub(crate) fn js(&self) -> Mat6 {
         let mut js = Mat6::identity();
@@ -184,15 +198,7 @@ pub fn twist_jacobian_dot(pose: &Vec6, pose_dot: &Vec6) -> Mat6 {
 
 /// Inverse of J_s; fails at the Euler singularity cos β = 0.
 pub fn twist_jacobian_inverse(pose: &Vec6) -> Result<Mat6> {
-    let je_inv = euler_rate_jacobian(pose[3], pose[4])
-        .try_inverse()
-        .ok_or(CoreError::Singular(SingularKind::Euler))?;
-    if cos(pose[4]).abs() < 1e-9 {
-        return Err(CoreError::Singular(SingularKind::Euler));
-    }
-    let mut js = Mat6::identity();
-    js.fixed_view_mut::<3, 3>(3, 3).copy_from(&je_inv);
-    Ok(js)
+    RateTrig::of(pose).js_inv()
 }
 
 /// Twist v_E = J_s·χ̇ (eq. 3.23).

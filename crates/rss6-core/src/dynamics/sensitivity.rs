@@ -19,7 +19,7 @@ use super::{check_finite, check_state, joint_friction, sign0, twist_and_rate_wit
 use crate::error::{CoreError, Result, SingularKind};
 use crate::jacobian::LegGeometry;
 use crate::params::{DynamicParams, KinematicParams};
-use crate::pose::{twist_jacobian_inverse, RateTrig};
+use crate::pose::RateTrig;
 use crate::regressor::{platform_columns, Regressor};
 use crate::types::{Mat6, Vec6, LEGS};
 
@@ -326,7 +326,7 @@ fn known_acceleration(
     Ok(Known {
         chi_ddot: *chi_ddot,
         j_ad_t,
-        js_inv: twist_jacobian_inverse(&geom.pose)?,
+        js_inv: trig.js_inv()?,
         chol: m
             .cholesky()
             .ok_or(CoreError::Singular(SingularKind::Matrix))?,

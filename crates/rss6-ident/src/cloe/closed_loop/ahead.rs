@@ -457,27 +457,22 @@ mod tests {
         assert!(run.chi == plain.chi && run.chi == seq.chi);
         assert!(run.jacobian == seq.jacobian);
         // So are the first-stage sensitivities CLOE iterates on, whose other three stages take
-        // only the recorded acceleration.
-        let mut first = cfg.clone();
-        first.state_jacobians = crate::StateJacobians::FirstStage;
-        let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
-        let (fast, _) = simulate_recorded(&first, &a, &exc, Some(&cols), rec, false).unwrap();
-        let mut first_in_turn = first.clone();
-        first_in_turn.parallel_stages = false;
-        let fast_seq = simulate(&first_in_turn, &a, &exc, Some(&cols)).unwrap();
-        assert_eq!((fast.stages_ahead, fast_seq.stages_ahead), (1200, 0));
-        assert!(fast.chi == plain.chi && fast.chi == fast_seq.chi);
-        assert!(fast.jacobian.is_some() && fast.jacobian == fast_seq.jacobian);
-        // The exact sensitivities from the same recording (its stages' IK angles and
-        // accelerations taken too) are the sequential run's, bit for bit.
-        let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
-        let (exact, _) = simulate_recorded(&cfg, &a, &exc, Some(&cols), rec, false).unwrap();
-        let mut exact_in_turn = cfg.clone();
-        exact_in_turn.parallel_stages = false;
-        let exact_seq = simulate(&exact_in_turn, &a, &exc, Some(&cols)).unwrap();
-        assert_eq!((exact.stages_ahead, exact_seq.stages_ahead), (1200, 0));
-        assert!(exact.chi == plain.chi && exact.chi == exact_seq.chi);
-        assert!(exact.jacobian.is_some() && exact.jacobian == exact_seq.jacobian);
+        // only the recorded acceleration, and the exact ones (each stage's IK angles and
+        // acceleration taken from the recording too).
+        for jacobians in [
+            crate::StateJacobians::FirstStage,
+            crate::StateJacobians::Exact,
+        ] {
+            let mut with = cfg.clone();
+            with.state_jacobians = jacobians;
+            let (_, rec) = simulate_recorded(&cfg, &a, &exc, None, None, true).unwrap();
+            let (ahead, _) = simulate_recorded(&with, &a, &exc, Some(&cols), rec, false).unwrap();
+            with.parallel_stages = false;
+            let seq = simulate(&with, &a, &exc, Some(&cols)).unwrap();
+            assert_eq!((ahead.stages_ahead, seq.stages_ahead), (1200, 0));
+            assert!(ahead.chi == plain.chi && ahead.chi == seq.chi);
+            assert!(ahead.jacobian.is_some() && ahead.jacobian == seq.jacobian);
+        }
         // Another viscous friction: the trajectory parts from the recording.
         let mut other = a;
         other.dynamics.viscous[2] *= 1.5;
