@@ -16,7 +16,8 @@
 //! the exact sensitivities from a recorded run, as CLOE computes them at its stop.
 //! `--exact-only`: one simulation, then only the exact sensitivities from one recorded run (for a
 //! profiler, or with `RAYON_NUM_THREADS=1` for the CPU time without the threads' scheduling);
-//! `--per-tick-recorded-only`: the same for the per-tick sensitivities CLOE iterates on.
+//! `--per-tick-recorded-only`: the same for the per-tick sensitivities CLOE iterates on;
+//! `--simulation-only`: only the simulations (for a profiler: the ratio's denominator).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rss6_core::{home_pose, KinematicParams};
@@ -38,6 +39,7 @@ fn main() {
     let per_tick_only = args.iter().any(|a| a == "--per-tick-only");
     let exact_only = args.iter().any(|a| a == "--exact-only");
     let per_tick_recorded_only = args.iter().any(|a| a == "--per-tick-recorded-only");
+    let simulation_only = args.iter().any(|a| a == "--simulation-only");
     let repeat: usize = args
         .iter()
         .position(|a| a == "--repeat")
@@ -79,6 +81,10 @@ fn main() {
     let t_sim = time(&|| {
         simulate_loop(&cfg, &truth, &exc, None).unwrap();
     });
+    if simulation_only {
+        println!("one simulation {t_sim:.3} s");
+        return;
+    }
     let cols = Consistent::a_columns();
     let mut cfg_fast = cfg.clone();
     // As CLOE iterates after the guess: with the implicit law every derivative of a tick's first
